@@ -286,7 +286,7 @@ fn string(s: &mut TokenStream, what: &str) -> Result<String> {
 }
 
 fn number(s: &mut TokenStream, what: &str) -> Result<f64> {
-    let t = s.expect(what)?;
+    let t = s.expect(&format!("a number for {what}"))?;
     if t.kind == TokenKind::Word
         && let Some(v) = parse_f64(s.bytes(&t))
     {

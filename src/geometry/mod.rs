@@ -1,0 +1,3 @@
+//! Mesh file formats.
+
+pub mod ply;

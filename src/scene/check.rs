@@ -1,0 +1,215 @@
+//! Reads every entity of a description through its settings reader without building
+//! anything heavy: what `nimbus check` reports.
+
+use std::collections::BTreeMap;
+
+use nimbus_parser::{Entity, Error, ParameterDictionary, SceneDescription, ShapeEntity, Warning};
+
+use super::camera::{CameraSettings, Projection};
+use super::film::FilmSettings;
+use super::filter::FilterSettings;
+use super::lights::{AreaLightSettings, LightSettings};
+use super::materials::MaterialSettings;
+use super::media::MediumSettings;
+use super::sampler::SamplerSettings;
+use super::shapes::{ShapeKind, ShapeSettings};
+use super::textures::TextureSettings;
+use crate::geometry::ply::read_ply;
+use crate::integrators::IntegratorSettings;
+
+/// What `nimbus check` found.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SceneCheck {
+    /// Camera summary (`perspective, fov 45°`).
+    pub camera: String,
+    /// Film resolution.
+    pub resolution: [u32; 2],
+    /// Output file named by the film.
+    pub filename: String,
+    /// Sampler summary.
+    pub sampler: String,
+    /// Samples per pixel.
+    pub spp: u32,
+    /// Integrator name.
+    pub integrator: String,
+    /// The integrator's parameters as written (`maxdepth 20`).
+    pub integrator_params: Vec<String>,
+    /// Shapes by type (instanced object shapes included once).
+    pub shapes: BTreeMap<String, usize>,
+    /// Triangles in all meshes (each instanced mesh counted once).
+    pub triangles: u64,
+    /// Object instances.
+    pub instances: usize,
+    /// Lights by type (area lights as `area (diffuse)`).
+    pub lights: BTreeMap<String, usize>,
+    /// Media by type.
+    pub media: BTreeMap<String, usize>,
+    /// Materials by type (named and anonymous that shapes use or define).
+    pub materials: BTreeMap<String, usize>,
+    /// Textures by class.
+    pub textures: BTreeMap<String, usize>,
+    /// Files read.
+    pub files: Vec<String>,
+    /// Everything suspicious: the parser's warnings, unsupported features that have a
+    /// stand-in, and parameters nothing reads.
+    pub warnings: Vec<Warning>,
+}
+
+fn unused(params: &ParameterDictionary, warnings: &mut Vec<Warning>) {
+    warnings.extend(params.report_unused());
+}
+
+fn describe_param(p: &nimbus_parser::Param) -> String {
+    use nimbus_parser::ParamValues::*;
+    let values: Vec<String> = match &p.values {
+        Ints(v) => v.iter().take(4).map(|x| x.to_string()).collect(),
+        Floats(v) => v.iter().take(4).map(|x| x.to_string()).collect(),
+        Strings(v) => v.iter().take(4).map(|x| format!("\"{x}\"")).collect(),
+        Bools(v) => v.iter().take(4).map(|x| x.to_string()).collect(),
+    };
+    let more = if p.values.len() > 4 { " ..." } else { "" };
+    format!("{} {}{more}", p.name, values.join(" "))
+}
+
+fn shape_triangles(shape: &ShapeEntity, settings: &ShapeSettings<'_>) -> Result<u64, Error> {
+    Ok(match &settings.kind {
+        ShapeKind::TriangleMesh(m) => m.indices.len() as u64 / 3,
+        ShapeKind::BilinearMesh(m) => m.indices.len() as u64 / 2,
+        ShapeKind::PlyMesh(path) => {
+            let mesh = read_ply(path)
+                .map_err(|e| Error::new(&shape.entity.loc, format!("plymesh: {e}")))?;
+            mesh.indices.len() as u64 / 3
+        }
+        _ => 0,
+    })
+}
+
+/// Reads every entity of `scene` through its settings reader. Errors stop at the first; the
+/// result lists warnings, including every parameter no reader used.
+pub fn check_scene(scene: &SceneDescription) -> Result<SceneCheck, Error> {
+    let mut warnings = scene.warnings.clone();
+
+    let camera = CameraSettings::from_entity(&scene.camera)?;
+    unused(&scene.camera.entity.params, &mut warnings);
+    let film = FilmSettings::from_entity(&scene.film)?;
+    unused(&scene.film.params, &mut warnings);
+    FilterSettings::from_entity(&scene.filter)?;
+    unused(&scene.filter.params, &mut warnings);
+    let sampler = SamplerSettings::from_entity(&scene.sampler, scene.options.seed, &mut warnings)?;
+    unused(&scene.sampler.params, &mut warnings);
+    IntegratorSettings::from_entity(&scene.integrator, None)?;
+    unused(&scene.integrator.params, &mut warnings);
+    if scene.accelerator.name != "bvh" && scene.accelerator.name != "kdtree" {
+        return Err(Error::new(
+            &scene.accelerator.loc,
+            format!(
+                "unknown accelerator \"{}\" (bvh or kdtree)",
+                scene.accelerator.name
+            ),
+        ));
+    }
+    // nimbus always builds a BVH; the accelerator's tuning parameters have no counterpart.
+    for p in scene.accelerator.params.iter() {
+        warnings.push(Warning::new(
+            &p.loc,
+            format!(
+                "accelerator parameter \"{}\" is ignored (nimbus builds its own BVH)",
+                p.name
+            ),
+        ));
+    }
+
+    let mut shapes = BTreeMap::new();
+    let mut triangles = 0;
+    let object_shapes = scene
+        .instance_definitions
+        .iter()
+        .flat_map(|d| d.shapes.iter());
+    for shape in scene.shapes.iter().chain(object_shapes) {
+        let settings = ShapeSettings::from_entity(shape)?;
+        triangles += shape_triangles(shape, &settings)?;
+        unused(&shape.entity.params, &mut warnings);
+        *shapes.entry(shape.entity.name.clone()).or_insert(0) += 1;
+    }
+
+    let mut lights = BTreeMap::new();
+    for light in &scene.lights {
+        LightSettings::from_entity(light)?;
+        unused(&light.entity.params, &mut warnings);
+        *lights.entry(light.entity.name.clone()).or_insert(0) += 1;
+    }
+    for area in &scene.area_lights {
+        AreaLightSettings::from_entity(area)?;
+        unused(&area.params, &mut warnings);
+        *lights.entry(format!("area ({})", area.name)).or_insert(0) += 1;
+    }
+
+    let mut materials = BTreeMap::new();
+    let mut material = |e: &Entity, warnings: &mut Vec<Warning>| -> Result<(), Error> {
+        let before = warnings.len();
+        MaterialSettings::from_entity(e, warnings)?;
+        // A material reported as unsupported has no reader for its parameters.
+        if warnings.len() == before {
+            unused(&e.params, warnings);
+        }
+        *materials.entry(e.name.clone()).or_insert(0) += 1;
+        Ok(())
+    };
+    // Material 0 is pbrt-v4's implicit default; count it only if a shape uses it.
+    let uses_default = scene
+        .shapes
+        .iter()
+        .any(|s| s.material == nimbus_parser::MaterialRef::Index(0));
+    for (i, m) in scene.materials.iter().enumerate() {
+        if i > 0 || uses_default {
+            material(m, &mut warnings)?;
+        }
+    }
+    for m in &scene.named_materials {
+        material(&m.entity, &mut warnings)?;
+    }
+
+    let mut textures = BTreeMap::new();
+    for t in &scene.textures {
+        let before = warnings.len();
+        TextureSettings::from_entity(t, &mut warnings)?;
+        if warnings.len() == before {
+            unused(&t.entity.params, &mut warnings);
+        }
+        *textures.entry(t.entity.name.clone()).or_insert(0) += 1;
+    }
+
+    let mut media = BTreeMap::new();
+    for m in &scene.media {
+        MediumSettings::from_entity(m)?;
+        unused(&m.entity.params, &mut warnings);
+        *media.entry(m.entity.name.clone()).or_insert(0) += 1;
+    }
+
+    let camera_text = match camera.projection {
+        Projection::Perspective { fov } => format!("{}, fov {fov}°", scene.camera.entity.name),
+        Projection::Orthographic => scene.camera.entity.name.clone(),
+    };
+    let camera_text = match &scene.camera.medium {
+        Some(m) => format!("{camera_text}, inside medium \"{m}\""),
+        None => camera_text,
+    };
+    Ok(SceneCheck {
+        camera: camera_text,
+        resolution: film.resolution,
+        filename: film.filename,
+        sampler: scene.sampler.name.clone(),
+        spp: sampler.pixel_samples,
+        integrator: scene.integrator.name.clone(),
+        integrator_params: scene.integrator.params.iter().map(describe_param).collect(),
+        shapes,
+        triangles,
+        instances: scene.instances.len(),
+        lights,
+        media,
+        materials,
+        textures,
+        files: scene.files.clone(),
+        warnings,
+    })
+}

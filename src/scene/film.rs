@@ -1,0 +1,133 @@
+//! Film settings (pbrt-v4's `rgb` film and its `cie1931` sensor).
+
+use nimbus_parser::{ColorSpace, Entity, Error};
+
+use super::values::checked_float;
+
+/// Everything a film entity specifies.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FilmSettings {
+    /// Full image resolution.
+    pub resolution: [u32; 2],
+    /// Crop window in NDC \[xmin, xmax, ymin, ymax\].
+    pub crop_window: Option<[f32; 4]>,
+    /// Pixel bounds \[x0, x1, y0, y1\] (overrides the crop window).
+    pub pixel_bounds: Option<[i32; 4]>,
+    /// Output file name as written in the scene.
+    pub filename: String,
+    /// Sensor diagonal in mm (used by realistic cameras only).
+    pub diagonal: f32,
+    /// Clamp on each sample's RGB components.
+    pub max_component_value: f32,
+    /// Write half floats.
+    pub save_fp16: bool,
+    /// Sensor ISO: the imaging ratio is exposure time × ISO / 100.
+    pub iso: f32,
+    /// White balance temperature (0: none).
+    pub white_balance: f32,
+    /// Color space of the output.
+    pub color_space: ColorSpace,
+}
+
+impl FilmSettings {
+    /// Reads a film entity. Only the `rgb` film is supported; `sensor` must be `cie1931`.
+    pub fn from_entity(e: &Entity) -> Result<FilmSettings, Error> {
+        if e.name != "rgb" {
+            return Err(Error::new(
+                &e.loc,
+                format!(
+                    "film \"{}\" is not supported by nimbus (it has \"rgb\")",
+                    e.name
+                ),
+            ));
+        }
+        let p = &e.params;
+        let x = p.get_one_int("xresolution", 1280)?;
+        let y = p.get_one_int("yresolution", 720)?;
+        if x <= 0 || y <= 0 {
+            return Err(Error::new(
+                &e.loc,
+                format!("film resolution {x}x{y} must be positive"),
+            ));
+        }
+        let crop_window = match p.get_floats("cropwindow")? {
+            [] => None,
+            [a, b, c, d] => {
+                if !(0.0..=1.0).contains(a)
+                    || !(0.0..=1.0).contains(b)
+                    || !(0.0..=1.0).contains(c)
+                    || !(0.0..=1.0).contains(d)
+                    || a >= b
+                    || c >= d
+                {
+                    return Err(Error::new(
+                        p.loc("cropwindow").unwrap_or(&e.loc),
+                        "\"cropwindow\" must be xmin < xmax, ymin < ymax within [0, 1]",
+                    ));
+                }
+                Some([*a, *b, *c, *d])
+            }
+            v => {
+                return Err(Error::new(
+                    p.loc("cropwindow").unwrap_or(&e.loc),
+                    format!("\"cropwindow\" takes 4 values, not {}", v.len()),
+                ));
+            }
+        };
+        let pixel_bounds = match p.get_ints("pixelbounds")? {
+            [] => None,
+            [a, b, c, d] => {
+                if a >= b || c >= d {
+                    return Err(Error::new(
+                        p.loc("pixelbounds").unwrap_or(&e.loc),
+                        "\"pixelbounds\" is empty (need x0 < x1 and y0 < y1)",
+                    ));
+                }
+                Some([*a, *b, *c, *d])
+            }
+            v => {
+                return Err(Error::new(
+                    p.loc("pixelbounds").unwrap_or(&e.loc),
+                    format!("\"pixelbounds\" takes 4 values, not {}", v.len()),
+                ));
+            }
+        };
+        let filename = p.get_one_string("filename", "pbrt.exr")?.to_string();
+        let diagonal = p.get_one_float("diagonal", 35.0)?;
+        let max_component_value = checked_float(
+            p,
+            "maxcomponentvalue",
+            f32::INFINITY,
+            |v| v > 0.0,
+            "must be positive",
+        )?;
+        let save_fp16 = p.get_one_bool("savefp16", true)?;
+        let iso = checked_float(p, "iso", 100.0, |v| v > 0.0, "ISO must be positive")?;
+        let white_balance = p.get_one_float("whitebalance", 0.0)?;
+        let sensor = p.get_one_string("sensor", "cie1931")?;
+        if sensor != "cie1931" {
+            return Err(Error::new(
+                p.loc("sensor").unwrap_or(&e.loc),
+                format!("sensor \"{sensor}\" is not supported by nimbus (it has \"cie1931\")"),
+            ));
+        }
+        if white_balance != 0.0 {
+            return Err(Error::new(
+                p.loc("whitebalance").unwrap_or(&e.loc),
+                "white balancing (\"whitebalance\") is not supported by nimbus",
+            ));
+        }
+        Ok(FilmSettings {
+            resolution: [x as u32, y as u32],
+            crop_window,
+            pixel_bounds,
+            filename,
+            diagonal,
+            max_component_value,
+            save_fp16,
+            iso,
+            white_balance,
+            color_space: e.color_space,
+        })
+    }
+}

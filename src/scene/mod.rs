@@ -1,0 +1,18 @@
+//! From description to scene objects. Each entity kind has a settings reader that takes its
+//! parameters with pbrt-v4's names and defaults, validates them, and leaves unknown ones to
+//! be reported; rendering builds on these settings.
+
+pub mod camera;
+pub mod film;
+pub mod filter;
+pub mod lights;
+pub mod materials;
+pub mod media;
+pub mod sampler;
+pub mod shapes;
+pub mod textures;
+pub mod values;
+
+mod check;
+
+pub use check::{SceneCheck, check_scene};

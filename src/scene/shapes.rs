@@ -1,0 +1,285 @@
+//! Shape settings with pbrt-v4's parameter names and defaults. Mesh arrays are borrowed from
+//! the scene description, not copied.
+
+use std::path::PathBuf;
+
+use nimbus_parser::{Error, FileLoc, ShapeEntity};
+
+use super::values::{FloatInput, checked_float, float_input};
+
+/// A triangle or bilinear-patch mesh given inline.
+#[derive(Clone, Debug, PartialEq)]
+pub struct InlineMesh<'a> {
+    /// Vertex positions (object space).
+    pub positions: &'a [[f32; 3]],
+    /// Vertex indices: 3 per triangle, or 4 per bilinear patch.
+    pub indices: Vec<u32>,
+    /// Per-vertex normals (empty if none).
+    pub normals: &'a [[f32; 3]],
+    /// Per-vertex texture coordinates (empty if none).
+    pub uvs: &'a [[f32; 2]],
+}
+
+/// What a shape is.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ShapeKind<'a> {
+    /// `sphere`
+    Sphere {
+        /// Radius.
+        radius: f32,
+        /// Lower z clip.
+        zmin: f32,
+        /// Upper z clip.
+        zmax: f32,
+        /// Sweep in degrees.
+        phimax: f32,
+    },
+    /// `disk`
+    Disk {
+        /// Height along z.
+        height: f32,
+        /// Outer radius.
+        radius: f32,
+        /// Inner radius.
+        inner_radius: f32,
+        /// Sweep in degrees.
+        phimax: f32,
+    },
+    /// `cylinder`
+    Cylinder {
+        /// Radius.
+        radius: f32,
+        /// Lower z.
+        zmin: f32,
+        /// Upper z.
+        zmax: f32,
+        /// Sweep in degrees.
+        phimax: f32,
+    },
+    /// `trianglemesh`
+    TriangleMesh(InlineMesh<'a>),
+    /// `bilinearmesh` (split into two triangles per patch)
+    BilinearMesh(InlineMesh<'a>),
+    /// `plymesh`
+    PlyMesh(PathBuf),
+    /// `objmesh` (nimbus extension: a Wavefront OBJ file)
+    ObjMesh(PathBuf),
+    /// `gltfmesh` (nimbus extension: a glTF 2.0 file)
+    GltfMesh(PathBuf),
+}
+
+/// Everything a shape entity specifies.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ShapeSettings<'a> {
+    /// The geometry.
+    pub kind: ShapeKind<'a>,
+    /// Alpha (cut-out) value or texture; 1 means opaque.
+    pub alpha: FloatInput,
+}
+
+fn file_param(shape: &ShapeEntity, kind: &str) -> Result<PathBuf, Error> {
+    let p = &shape.entity.params;
+    let Some(name) = p.get_opt_string("filename")? else {
+        return Err(Error::new(
+            &shape.entity.loc,
+            format!("{kind}: missing \"string filename\""),
+        ));
+    };
+    let loc: &FileLoc = p.loc("filename").unwrap_or(&shape.entity.loc);
+    let path = loc.resolve(name);
+    if !path.is_file() {
+        return Err(Error::new(
+            loc,
+            format!("{kind}: cannot find file \"{name}\" ({})", path.display()),
+        ));
+    }
+    Ok(path)
+}
+
+fn inline_mesh<'a>(shape: &'a ShapeEntity, per_face: usize) -> Result<InlineMesh<'a>, Error> {
+    let e = &shape.entity;
+    let p = &e.params;
+    let positions = p.get_point3s("P")?;
+    if positions.is_empty() {
+        return Err(Error::new(
+            &e.loc,
+            format!("{}: vertex positions \"P\" are missing", e.name),
+        ));
+    }
+    let raw = p.get_ints("indices")?;
+    let indices: Vec<u32> = if raw.is_empty() {
+        if positions.len() == per_face {
+            (0..per_face as u32).collect()
+        } else {
+            return Err(Error::new(
+                &e.loc,
+                format!("{}: vertex indices \"indices\" are missing", e.name),
+            ));
+        }
+    } else {
+        let loc = p.loc("indices").unwrap_or(&e.loc);
+        if raw.len() % per_face != 0 {
+            return Err(Error::new(
+                loc,
+                format!(
+                    "{}: {} indices is not a multiple of {per_face}",
+                    e.name,
+                    raw.len()
+                ),
+            ));
+        }
+        let mut out = Vec::with_capacity(raw.len());
+        for &i in raw {
+            if i < 0 || i as usize >= positions.len() {
+                return Err(Error::new(
+                    loc,
+                    format!(
+                        "{}: index {i} out of range (there are {} vertices)",
+                        e.name,
+                        positions.len()
+                    ),
+                ));
+            }
+            out.push(i as u32);
+        }
+        out
+    };
+    let normals = p.get_normals("N")?;
+    if !normals.is_empty() && normals.len() != positions.len() {
+        return Err(Error::new(
+            p.loc("N").unwrap_or(&e.loc),
+            format!(
+                "{}: {} normals for {} vertices",
+                e.name,
+                normals.len(),
+                positions.len()
+            ),
+        ));
+    }
+    let uvs = p.get_point2s("uv")?;
+    if !uvs.is_empty() && uvs.len() != positions.len() {
+        return Err(Error::new(
+            p.loc("uv").unwrap_or(&e.loc),
+            format!(
+                "{}: {} uvs for {} vertices",
+                e.name,
+                uvs.len(),
+                positions.len()
+            ),
+        ));
+    }
+    if per_face == 3 {
+        let s = p.get_vector3s("S")?;
+        if !s.is_empty() && s.len() != positions.len() {
+            return Err(Error::new(
+                p.loc("S").unwrap_or(&e.loc),
+                format!(
+                    "{}: {} tangents for {} vertices",
+                    e.name,
+                    s.len(),
+                    positions.len()
+                ),
+            ));
+        }
+    }
+    let face_indices = p.get_ints("faceIndices")?;
+    if !face_indices.is_empty() && face_indices.len() != indices.len() / per_face {
+        return Err(Error::new(
+            p.loc("faceIndices").unwrap_or(&e.loc),
+            format!(
+                "{}: {} face indices for {} faces",
+                e.name,
+                face_indices.len(),
+                indices.len() / per_face
+            ),
+        ));
+    }
+    Ok(InlineMesh {
+        positions,
+        indices,
+        normals,
+        uvs,
+    })
+}
+
+impl<'a> ShapeSettings<'a> {
+    /// Reads a shape entity. Shapes nimbus lacks (curve, loopsubdiv, ...) are reported by name.
+    pub fn from_entity(shape: &'a ShapeEntity) -> Result<ShapeSettings<'a>, Error> {
+        let e = &shape.entity;
+        let p = &e.params;
+        let positive = |v: f32| v > 0.0;
+        let phimax = |p: &nimbus_parser::ParameterDictionary| -> Result<f32, Error> {
+            checked_float(
+                p,
+                "phimax",
+                360.0,
+                |v| v > 0.0 && v <= 360.0,
+                "phimax must be in (0, 360] degrees",
+            )
+        };
+        let kind = match e.name.as_str() {
+            "sphere" => {
+                let radius =
+                    checked_float(p, "radius", 1.0, positive, "the radius must be positive")?;
+                let zmin = p.get_one_float("zmin", -radius)?;
+                let zmax = p.get_one_float("zmax", radius)?;
+                ShapeKind::Sphere {
+                    radius,
+                    zmin,
+                    zmax,
+                    phimax: phimax(p)?,
+                }
+            }
+            "disk" => ShapeKind::Disk {
+                height: p.get_one_float("height", 0.0)?,
+                radius: checked_float(p, "radius", 1.0, positive, "the radius must be positive")?,
+                inner_radius: checked_float(
+                    p,
+                    "innerradius",
+                    0.0,
+                    |v| v >= 0.0,
+                    "the inner radius cannot be negative",
+                )?,
+                phimax: phimax(p)?,
+            },
+            "cylinder" => ShapeKind::Cylinder {
+                radius: checked_float(p, "radius", 1.0, positive, "the radius must be positive")?,
+                zmin: p.get_one_float("zmin", -1.0)?,
+                zmax: p.get_one_float("zmax", 1.0)?,
+                phimax: phimax(p)?,
+            },
+            "trianglemesh" => ShapeKind::TriangleMesh(inline_mesh(shape, 3)?),
+            "bilinearmesh" => ShapeKind::BilinearMesh(inline_mesh(shape, 4)?),
+            "plymesh" => {
+                if let Some(d) = p.get_texture("displacement")? {
+                    return Err(Error::new(
+                        p.loc("displacement").unwrap_or(&e.loc),
+                        format!(
+                            "plymesh displacement (texture \"{d}\") is not supported by nimbus"
+                        ),
+                    ));
+                }
+                p.get_one_float("edgelength", 1.0)?;
+                ShapeKind::PlyMesh(file_param(shape, "plymesh")?)
+            }
+            "objmesh" => ShapeKind::ObjMesh(file_param(shape, "objmesh")?),
+            "gltfmesh" => ShapeKind::GltfMesh(file_param(shape, "gltfmesh")?),
+            other => {
+                return Err(Error::new(
+                    &e.loc,
+                    format!(
+                        "shape \"{other}\" is not supported by nimbus (it has sphere, disk, cylinder, trianglemesh, bilinearmesh, plymesh, and the extensions objmesh and gltfmesh)"
+                    ),
+                ));
+            }
+        };
+        let alpha = float_input(p, "alpha")?.unwrap_or(FloatInput::Value(1.0));
+        if alpha != FloatInput::Value(1.0) {
+            return Err(Error::new(
+                p.loc("alpha").unwrap_or(&e.loc),
+                "alpha cut-outs (\"alpha\") are not supported by nimbus",
+            ));
+        }
+        Ok(ShapeSettings { kind, alpha })
+    }
+}

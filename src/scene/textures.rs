@@ -1,0 +1,216 @@
+//! Texture settings with pbrt-v4's parameter names and defaults. Texture classes nimbus lacks
+//! are reported by name and evaluate to a constant.
+
+use std::path::PathBuf;
+
+use nimbus_parser::{Error, TextureEntity, TextureValue, Warning};
+
+use super::values::{FloatInput, SpectrumInput, SpectrumSpec, float_input, spectrum_input};
+
+/// How surface points map to texture coordinates.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Mapping {
+    /// (u, v) scaled and offset.
+    Uv {
+        /// u scale.
+        su: f32,
+        /// v scale.
+        sv: f32,
+        /// u offset.
+        du: f32,
+        /// v offset.
+        dv: f32,
+    },
+    /// Spherical coordinates about the texture space origin.
+    Spherical,
+    /// Cylindrical coordinates about the texture space z axis.
+    Cylindrical,
+    /// Projection onto two vectors.
+    Planar {
+        /// First axis.
+        v1: [f32; 3],
+        /// Second axis.
+        v2: [f32; 3],
+        /// u offset.
+        du: f32,
+        /// v offset.
+        dv: f32,
+    },
+}
+
+/// A value a texture blends: a constant or another texture, float or spectrum.
+#[derive(Clone, Debug, PartialEq)]
+pub enum TexInput {
+    /// For float textures.
+    Float(FloatInput),
+    /// For spectrum textures.
+    Spectrum(SpectrumInput),
+}
+
+/// What a texture is.
+#[derive(Clone, Debug, PartialEq)]
+pub enum TextureKind {
+    /// `constant`
+    Constant(TexInput),
+    /// `scale`: `tex` × `scale`
+    Scale {
+        /// The value scaled.
+        tex: TexInput,
+        /// The (float) scale.
+        scale: FloatInput,
+    },
+    /// `mix`: lerp(`amount`, `tex1`, `tex2`)
+    Mix {
+        /// Value at amount 0.
+        tex1: TexInput,
+        /// Value at amount 1.
+        tex2: TexInput,
+        /// Blend.
+        amount: FloatInput,
+    },
+    /// `checkerboard` (2D)
+    Checkerboard {
+        /// Value on even squares.
+        tex1: TexInput,
+        /// Value on odd squares.
+        tex2: TexInput,
+        /// Mapping.
+        mapping: Mapping,
+    },
+    /// `imagemap`
+    ImageMap {
+        /// The image.
+        filename: PathBuf,
+        /// Multiplier.
+        scale: f32,
+        /// 1 - value.
+        invert: bool,
+        /// `repeat`, `black` or `clamp`.
+        wrap: String,
+        /// Color encoding of 8-bit images (`sRGB`, `linear`, `gamma g`).
+        encoding: String,
+        /// Mapping.
+        mapping: Mapping,
+    },
+    /// A texture class nimbus lacks; evaluates to 0.5.
+    Unsupported(String),
+}
+
+/// Everything a texture entity specifies.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TextureSettings {
+    /// The texture.
+    pub kind: TextureKind,
+}
+
+fn mapping(t: &TextureEntity) -> Result<Mapping, Error> {
+    let p = &t.entity.params;
+    Ok(match p.get_one_string("mapping", "uv")? {
+        "uv" => Mapping::Uv {
+            su: p.get_one_float("uscale", 1.0)?,
+            sv: p.get_one_float("vscale", 1.0)?,
+            du: p.get_one_float("udelta", 0.0)?,
+            dv: p.get_one_float("vdelta", 0.0)?,
+        },
+        "spherical" => Mapping::Spherical,
+        "cylindrical" => Mapping::Cylindrical,
+        "planar" => Mapping::Planar {
+            v1: p.get_one_vector3("v1", [1.0, 0.0, 0.0])?,
+            v2: p.get_one_vector3("v2", [0.0, 1.0, 0.0])?,
+            du: p.get_one_float("udelta", 0.0)?,
+            dv: p.get_one_float("vdelta", 0.0)?,
+        },
+        other => {
+            return Err(Error::new(
+                p.loc("mapping").unwrap_or(&t.entity.loc),
+                format!("unknown texture mapping \"{other}\""),
+            ));
+        }
+    })
+}
+
+fn input(t: &TextureEntity, name: &str, default: f32) -> Result<TexInput, Error> {
+    let p = &t.entity.params;
+    Ok(match t.value {
+        TextureValue::Float => {
+            TexInput::Float(float_input(p, name)?.unwrap_or(FloatInput::Value(default)))
+        }
+        TextureValue::Spectrum => TexInput::Spectrum(
+            spectrum_input(p, name)?
+                .unwrap_or(SpectrumInput::Value(SpectrumSpec::Rgb([default; 3]))),
+        ),
+    })
+}
+
+impl TextureSettings {
+    /// Reads a texture entity.
+    pub fn from_entity(
+        t: &TextureEntity,
+        warnings: &mut Vec<Warning>,
+    ) -> Result<TextureSettings, Error> {
+        let e = &t.entity;
+        let p = &e.params;
+        let kind = match e.name.as_str() {
+            "constant" => TextureKind::Constant(input(t, "value", 1.0)?),
+            "scale" => TextureKind::Scale {
+                tex: input(t, "tex", 1.0)?,
+                scale: float_input(p, "scale")?.unwrap_or(FloatInput::Value(1.0)),
+            },
+            "mix" => TextureKind::Mix {
+                tex1: input(t, "tex1", 0.0)?,
+                tex2: input(t, "tex2", 1.0)?,
+                amount: float_input(p, "amount")?.unwrap_or(FloatInput::Value(0.5)),
+            },
+            "checkerboard" => {
+                let dim = p.get_one_int("dimension", 2)?;
+                if dim != 2 {
+                    return Err(Error::new(
+                        p.loc("dimension").unwrap_or(&e.loc),
+                        format!(
+                            "checkerboard dimension {dim} is not supported by nimbus (it has 2)"
+                        ),
+                    ));
+                }
+                TextureKind::Checkerboard {
+                    tex1: input(t, "tex1", 1.0)?,
+                    tex2: input(t, "tex2", 0.0)?,
+                    mapping: mapping(t)?,
+                }
+            }
+            "imagemap" => {
+                let Some(name) = p.get_opt_string("filename")? else {
+                    return Err(Error::new(&e.loc, "imagemap: missing \"string filename\""));
+                };
+                let loc = p.loc("filename").unwrap_or(&e.loc);
+                let filename = loc.resolve(name);
+                if !filename.is_file() {
+                    return Err(Error::new(
+                        loc,
+                        format!(
+                            "imagemap: cannot find image \"{name}\" ({})",
+                            filename.display()
+                        ),
+                    ));
+                }
+                p.get_one_string("filter", "bilinear")?;
+                p.get_one_float("maxanisotropy", 8.0)?;
+                TextureKind::ImageMap {
+                    filename,
+                    scale: p.get_one_float("scale", 1.0)?,
+                    invert: p.get_one_bool("invert", false)?,
+                    wrap: p.get_one_string("wrap", "repeat")?.to_string(),
+                    encoding: p.get_one_string("encoding", "sRGB")?.to_string(),
+                    mapping: mapping(t)?,
+                }
+            }
+            other => {
+                warnings.push(Warning::new(
+                    &e.loc,
+                    format!("texture \"{other}\" is not supported by nimbus; it evaluates to 0.5"),
+                ));
+                TextureKind::Unsupported(other.to_string())
+            }
+        };
+        Ok(TextureSettings { kind })
+    }
+}

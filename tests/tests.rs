@@ -1,0 +1,4 @@
+//! End-to-end tests of the `nimbus` binary and library.
+
+mod check;
+mod common;

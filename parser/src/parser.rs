@@ -286,7 +286,7 @@ fn string(s: &mut TokenStream, what: &str) -> Result<String> {
 }
 
 fn number(s: &mut TokenStream, what: &str) -> Result<f64> {
-    let t = s.expect(&format!("a number for {what}"))?;
+    let t = s.expect_with(|| format!("a number for {what}"))?;
     if t.kind == TokenKind::Word
         && let Some(v) = parse_f64(s.bytes(&t))
     {
@@ -398,11 +398,11 @@ fn parameter_values(
     name: &str,
     loc: &FileLoc,
 ) -> Result<ParamValues> {
-    let first = s.expect(&format!("a value for parameter \"{name}\""))?;
+    let first = s.expect_with(|| format!("a value for parameter \"{name}\""))?;
     let mut acc = Acc::Empty;
     if first.kind == TokenKind::Open {
         loop {
-            let t = s.expect(&format!("']' to close the values of \"{name}\""))?;
+            let t = s.expect_with(|| format!("']' to close the values of \"{name}\""))?;
             if t.kind == TokenKind::Close {
                 break;
             }

@@ -100,18 +100,18 @@ impl TokenStream {
                 "file is UTF-16 encoded; pbrt scene files must be UTF-8",
             ));
         }
-        // A UTF-8 byte order mark carries no meaning: skip it.
-        let pos = if data.starts_with(&[0xef, 0xbb, 0xbf]) {
-            3
-        } else {
-            0
-        };
+        // A UTF-8 byte order mark carries no meaning: drop it, so that it counts in no
+        // column.
+        let mut data = data;
+        if data.starts_with(&[0xef, 0xbb, 0xbf]) {
+            data.drain(..3);
+        }
         let source = u32::try_from(self.sources.len())
             .map_err(|_| Error::new(&loc, "too many source files"))?;
         self.sources.push(Source { name, data });
         self.stack.push(Cursor {
             source,
-            pos,
+            pos: 0,
             line: 1,
             line_start: 0,
         });
@@ -222,11 +222,18 @@ impl TokenStream {
 
     /// The next token, which must exist; `what` names what was expected for the error.
     pub fn expect(&mut self, what: &str) -> Result<Token> {
+        self.expect_with(|| what.to_string())
+    }
+
+    /// Like [`TokenStream::expect`], building the description only if it is needed (the
+    /// value loops call this once per number).
+    #[inline]
+    pub fn expect_with(&mut self, what: impl FnOnce() -> String) -> Result<Token> {
         match self.next()? {
             Some(t) => Ok(t),
             None => Err(Error::new(
                 &self.end_loc(),
-                format!("premature end of file: expected {what}"),
+                format!("premature end of file: expected {}", what()),
             )),
         }
     }

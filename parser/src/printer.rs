@@ -101,7 +101,13 @@ pub fn directive_to_string(d: &Directive) -> String {
             let _ = write!(out, " {} {}", quote(inside), quote(outside));
         }
         Directive::Option(n, v) => {
-            let _ = write!(out, " {} {v}", quote(n));
+            // A string value is kept decoded between quotes (no bare word contains '"'):
+            // quote its contents again so escapes survive.
+            let value = match v.strip_prefix('"').and_then(|s| s.strip_suffix('"')) {
+                Some(inner) => quote(inner),
+                None => v.clone(),
+            };
+            let _ = write!(out, " {} {value}", quote(n));
         }
         Directive::Texture {
             name,

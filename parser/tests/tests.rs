@@ -1,0 +1,7 @@
+//! The parser's test suite, one binary with a module per topic.
+
+mod common;
+mod directives;
+mod errors;
+mod params;
+mod roundtrip;

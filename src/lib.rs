@@ -5,8 +5,11 @@
 //! parameter names and defaults); integrators render from there.
 #![deny(missing_docs)]
 
+pub mod color;
 pub mod geometry;
 pub mod integrators;
+pub mod math;
+pub mod sampling;
 pub mod scene;
 pub mod spectra;
 

@@ -2,7 +2,7 @@
 
 use std::path::{Path, PathBuf};
 
-use glam::{DMat4, DVec3};
+use glam::DMat4;
 use nimbus_parser::{Directive, Error, SceneDescription, directives_of_str, load_str};
 
 /// The file name test scenes parsed from strings are given.
@@ -114,15 +114,6 @@ pub fn assert_mat_close(actual: DMat4, expected: DMat4) {
     assert!(
         ok,
         "matrices differ:\nactual   {actual:?}\nexpected {expected:?}"
-    );
-}
-
-/// Asserts that two points agree to within `1e-9`.
-#[track_caller]
-pub fn assert_vec_close(actual: DVec3, expected: DVec3) {
-    assert!(
-        (actual - expected).length() < 1e-9,
-        "points differ: actual {actual:?}, expected {expected:?}"
     );
 }
 

@@ -1,7 +1,11 @@
-//! The parser's test suite, one binary with a module per topic.
+//! The parser's test suite: one test binary, a module per topic.
 
 mod common;
 mod directives;
 mod errors;
+mod files;
 mod params;
+mod reference_scenes;
 mod roundtrip;
+mod scene;
+mod transforms;

@@ -516,3 +516,148 @@ fn transform_begin_is_a_deprecated_attribute_begin() {
         ["t.pbrt:3:1: TransformBegin/TransformEnd are deprecated: use AttributeBegin/AttributeEnd"]
     );
 }
+
+/// A statement of a generated world block.
+#[derive(Clone, Debug)]
+enum Item {
+    Translate([i8; 3]),
+    ReverseOrientation,
+    Material,
+    AreaLight,
+    Shape,
+    Block(Vec<Item>),
+}
+
+fn items() -> impl proptest::strategy::Strategy<Value = Vec<Item>> {
+    use proptest::prelude::*;
+    let leaf = prop_oneof![
+        any::<[i8; 3]>().prop_map(Item::Translate),
+        Just(Item::ReverseOrientation),
+        Just(Item::Material),
+        Just(Item::AreaLight),
+        Just(Item::Shape),
+        Just(Item::Shape),
+    ];
+    let item = leaf.prop_recursive(4, 48, 6, |inner| {
+        proptest::collection::vec(inner, 0..6).prop_map(Item::Block)
+    });
+    proptest::collection::vec(item, 0..10)
+}
+
+/// What the graphics state should give each shape.
+#[derive(Clone, Debug, PartialEq)]
+struct Expected {
+    translation: [f64; 3],
+    reverse: bool,
+    material: usize,
+    area_light: Option<usize>,
+}
+
+#[derive(Clone)]
+struct State {
+    translation: [f64; 3],
+    reverse: bool,
+    material: usize,
+    area_light: bool,
+}
+
+/// Writes `items` as pbrt text and works out, independently of the builder, what each shape
+/// should get.
+fn model(
+    items: &[Item],
+    state: &mut State,
+    text: &mut String,
+    materials: &mut usize,
+    area_lights: &mut usize,
+    shapes: &mut Vec<Expected>,
+) {
+    for item in items {
+        match item {
+            Item::Translate(d) => {
+                text.push_str(&format!("Translate {} {} {}\n", d[0], d[1], d[2]));
+                for (t, d) in state.translation.iter_mut().zip(d) {
+                    *t += f64::from(*d);
+                }
+            }
+            Item::ReverseOrientation => {
+                text.push_str("ReverseOrientation\n");
+                state.reverse = !state.reverse;
+            }
+            Item::Material => {
+                text.push_str("Material \"conductor\"\n");
+                state.material = *materials;
+                *materials += 1;
+            }
+            Item::AreaLight => {
+                text.push_str("AreaLightSource \"diffuse\"\n");
+                state.area_light = true;
+            }
+            Item::Shape => {
+                text.push_str("Shape \"sphere\"\n");
+                let area_light = state.area_light.then(|| {
+                    *area_lights += 1;
+                    *area_lights - 1
+                });
+                shapes.push(Expected {
+                    translation: state.translation,
+                    reverse: state.reverse,
+                    material: state.material,
+                    area_light,
+                });
+            }
+            Item::Block(inner) => {
+                text.push_str("AttributeBegin\n");
+                let mut inner_state = state.clone();
+                model(
+                    inner,
+                    &mut inner_state,
+                    text,
+                    materials,
+                    area_lights,
+                    shapes,
+                );
+                text.push_str("AttributeEnd\n");
+            }
+        }
+    }
+}
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig { cases: 128, ..Default::default() })]
+
+    #[test]
+    fn attribute_blocks_save_and_restore_the_graphics_state(items in items()) {
+        let mut text = String::from("Camera \"perspective\"\nWorldBegin\n");
+        let mut expected = Vec::new();
+        let mut state = State {
+            translation: [0.0; 3],
+            reverse: false,
+            material: 0,
+            area_light: false,
+        };
+        model(&items, &mut state, &mut text, &mut 1, &mut 0, &mut expected);
+        let s = nimbus_parser::load_str(&text, "generated.pbrt");
+        proptest::prop_assert!(s.is_ok(), "{:?}\n{}", s, text);
+        let s = s.unwrap();
+        let got: Vec<Expected> = s
+            .shapes
+            .iter()
+            .map(|sh| {
+                let MaterialRef::Index(material) = sh.material else {
+                    panic!("{:?}", sh.material)
+                };
+                Expected {
+                    translation: sh
+                        .world_from_object
+                        .start
+                        .transform_point3(glam::DVec3::ZERO)
+                        .to_array(),
+                    reverse: sh.reverse_orientation,
+                    material,
+                    area_light: sh.area_light,
+                }
+            })
+            .collect();
+        proptest::prop_assert_eq!(got, expected, "{}", text);
+    }
+}

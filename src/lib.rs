@@ -5,12 +5,14 @@
 //! parameter names and defaults); integrators render from there.
 #![deny(missing_docs)]
 
+pub mod accel;
 pub mod color;
 pub mod geometry;
 pub mod integrators;
 pub mod math;
 pub mod sampling;
 pub mod scene;
+pub mod shapes;
 pub mod spectra;
 
 pub use nimbus_parser as parser;

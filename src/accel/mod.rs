@@ -1,0 +1,409 @@
+//! Ray queries over the scene's surfaces: a compressed wide BVH (obvhs's CWBVH) over
+//! primitives, with object instances as BVHs of their own.
+
+use std::time::Duration;
+
+use glam::{Affine3A, Vec3, Vec3A};
+use obvhs::aabb::Aabb;
+use obvhs::cwbvh::CwBvh;
+use obvhs::cwbvh::builder::build_cwbvh;
+use obvhs::ray::{Ray as BvhRay, RayHit};
+use obvhs::{Boundable, BvhBuildParams};
+
+use crate::geometry::{Bounds3, Ray};
+use crate::shapes::{Cylinder, Disk, Mesh, Sphere, SurfaceHit, transform_normal, triangle_hit};
+
+/// Marks an absent index (no area light, no medium interface, not instanced).
+pub const NONE: u32 = u32::MAX;
+
+/// What a primitive is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Geometry {
+    /// Triangle `tri` of mesh `mesh`.
+    Triangle {
+        /// Mesh index.
+        mesh: u32,
+        /// Triangle index within the mesh.
+        tri: u32,
+    },
+    /// A sphere.
+    Sphere(u32),
+    /// A disk.
+    Disk(u32),
+    /// A cylinder.
+    Cylinder(u32),
+    /// An object instance (only in the top-level BVH).
+    Instance(u32),
+}
+
+/// A piece of geometry with what is attached to it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Primitive {
+    /// The geometry.
+    pub geometry: Geometry,
+    /// Material index.
+    pub material: u32,
+    /// Area light index or [`NONE`].
+    pub area_light: u32,
+    /// Medium interface index or [`NONE`] (not a boundary between media).
+    pub interface: u32,
+}
+
+/// All shapes, referenced by index from primitives.
+#[derive(Default)]
+pub struct ShapeStore {
+    /// Triangle meshes (world space, or instance space for instanced ones).
+    pub meshes: Vec<Mesh>,
+    /// Spheres.
+    pub spheres: Vec<Sphere>,
+    /// Disks.
+    pub disks: Vec<Disk>,
+    /// Cylinders.
+    pub cylinders: Vec<Cylinder>,
+}
+
+impl ShapeStore {
+    /// Bounds of a non-instance geometry.
+    pub fn bounds(&self, g: Geometry) -> Bounds3 {
+        match g {
+            Geometry::Triangle { mesh, tri } => self.meshes[mesh as usize].triangle_bounds(tri),
+            Geometry::Sphere(i) => self.spheres[i as usize].bounds(),
+            Geometry::Disk(i) => self.disks[i as usize].bounds(),
+            Geometry::Cylinder(i) => self.cylinders[i as usize].bounds(),
+            Geometry::Instance(_) => Bounds3::EMPTY,
+        }
+    }
+}
+
+/// Where along a ray a primitive was hit, before computing surface details.
+#[derive(Clone, Copy, Debug)]
+enum Detail {
+    Barycentric(f32, f32),
+    ObjectPoint(Vec3),
+}
+
+#[derive(Clone, Copy, Debug)]
+struct Candidate {
+    t: f32,
+    prim: Primitive,
+    instance: u32,
+    detail: Detail,
+}
+
+/// The BVH library's ray. Negative zeros in the direction become positive: obvhs picks the
+/// traversal octant from the sign bits and its slab test misses with -0.0 components.
+#[inline]
+fn bvh_ray(ray: &Ray, t_max: f32) -> BvhRay {
+    BvhRay::new(
+        Vec3A::from(ray.o),
+        Vec3A::from(ray.d) + Vec3A::ZERO,
+        0.0,
+        t_max,
+    )
+}
+
+struct Bound(Aabb);
+
+impl Boundable for Bound {
+    fn aabb(&self) -> Aabb {
+        self.0
+    }
+}
+
+/// A BVH over primitives (stored in BVH leaf order).
+pub struct Accel {
+    bvh: CwBvh,
+    prims: Vec<Primitive>,
+    bounds: Bounds3,
+}
+
+impl Accel {
+    /// Builds a BVH over `prims` whose bounds are `bounds[i]`. `None` for no primitives.
+    pub fn build(prims: Vec<Primitive>, bounds: &[Bounds3]) -> Option<Accel> {
+        if prims.is_empty() {
+            return None;
+        }
+        let mut total = Bounds3::EMPTY;
+        let aabbs: Vec<Bound> = bounds
+            .iter()
+            .map(|b| {
+                total = total.union(b);
+                Bound(Aabb::new(Vec3A::from(b.min), Vec3A::from(b.max)))
+            })
+            .collect();
+        let bvh = build_cwbvh(
+            &aabbs,
+            BvhBuildParams::medium_build(),
+            &mut Duration::default(),
+        );
+        let prims = bvh
+            .primitive_indices
+            .iter()
+            .map(|&i| prims[i as usize])
+            .collect();
+        Some(Accel {
+            bvh,
+            prims,
+            bounds: total,
+        })
+    }
+
+    /// World bounds of everything in the BVH.
+    pub fn bounds(&self) -> Bounds3 {
+        self.bounds
+    }
+
+    fn closest(
+        &self,
+        scene: &Surfaces,
+        ray: &Ray,
+        t_max: f32,
+        instance: u32,
+        best: &mut Option<Candidate>,
+    ) {
+        let bvh_ray = bvh_ray(ray, t_max);
+        let mut hit = RayHit::none();
+        self.bvh.ray_traverse(bvh_ray, &mut hit, |r, id| {
+            let prim = self.prims[id];
+            let found = match prim.geometry {
+                Geometry::Triangle { mesh, tri } => scene.shapes.meshes[mesh as usize]
+                    .intersect(tri, ray, r.tmax)
+                    .map(|(t, b1, b2)| (t, Detail::Barycentric(b1, b2))),
+                Geometry::Sphere(i) => scene.shapes.spheres[i as usize]
+                    .intersect(ray, r.tmax)
+                    .map(|(t, p)| (t, Detail::ObjectPoint(p))),
+                Geometry::Disk(i) => scene.shapes.disks[i as usize]
+                    .intersect(ray, r.tmax)
+                    .map(|(t, p)| (t, Detail::ObjectPoint(p))),
+                Geometry::Cylinder(i) => scene.shapes.cylinders[i as usize]
+                    .intersect(ray, r.tmax)
+                    .map(|(t, p)| (t, Detail::ObjectPoint(p))),
+                Geometry::Instance(k) => {
+                    let inst = &scene.instances[k as usize];
+                    let local = Ray::new(
+                        inst.instance_from_world.transform_point3(ray.o),
+                        inst.instance_from_world.transform_vector3(ray.d),
+                    );
+                    let before = best.map(|c| c.t);
+                    scene.blas[inst.accel as usize].closest(scene, &local, r.tmax, k, best);
+                    let after = best.map(|c| c.t);
+                    return match after {
+                        Some(t) if after != before => t,
+                        _ => f32::INFINITY,
+                    };
+                }
+            };
+            match found {
+                Some((t, detail)) if t < r.tmax => {
+                    *best = Some(Candidate {
+                        t,
+                        prim,
+                        instance,
+                        detail,
+                    });
+                    t
+                }
+                _ => f32::INFINITY,
+            }
+        });
+    }
+
+    fn any(&self, scene: &Surfaces, ray: &Ray, t_max: f32) -> bool {
+        let bvh_ray = bvh_ray(ray, t_max);
+        !self.bvh.ray_traverse_miss(bvh_ray, |r, id| {
+            let prim = self.prims[id];
+            let hit = match prim.geometry {
+                Geometry::Triangle { mesh, tri } => scene.shapes.meshes[mesh as usize]
+                    .intersect(tri, ray, r.tmax)
+                    .is_some(),
+                Geometry::Sphere(i) => scene.shapes.spheres[i as usize]
+                    .intersect(ray, r.tmax)
+                    .is_some(),
+                Geometry::Disk(i) => scene.shapes.disks[i as usize]
+                    .intersect(ray, r.tmax)
+                    .is_some(),
+                Geometry::Cylinder(i) => scene.shapes.cylinders[i as usize]
+                    .intersect(ray, r.tmax)
+                    .is_some(),
+                Geometry::Instance(k) => {
+                    let inst = &scene.instances[k as usize];
+                    let local = Ray::new(
+                        inst.instance_from_world.transform_point3(ray.o),
+                        inst.instance_from_world.transform_vector3(ray.d),
+                    );
+                    scene.blas[inst.accel as usize].any(scene, &local, r.tmax)
+                }
+            };
+            if hit { 0.0 } else { f32::INFINITY }
+        })
+    }
+}
+
+/// One placement of an object definition.
+pub struct Instance {
+    /// Index of the object's BVH in [`Surfaces::blas`].
+    pub accel: u32,
+    /// World-from-instance.
+    pub world_from_instance: Affine3A,
+    /// Instance-from-world.
+    pub instance_from_world: Affine3A,
+}
+
+/// A surface hit: geometry plus the primitive's attachments.
+#[derive(Clone, Copy, Debug)]
+pub struct Hit {
+    /// World-space geometry.
+    pub surface: SurfaceHit,
+    /// The primitive hit.
+    pub prim: Primitive,
+}
+
+/// Every surface in the scene and the BVHs over them. A scene without surfaces has no BVH.
+#[derive(Default)]
+pub struct Surfaces {
+    /// Shape data.
+    pub shapes: ShapeStore,
+    /// The top-level BVH (primitives and instances), if there are any surfaces.
+    pub top: Option<Accel>,
+    /// One BVH per object definition.
+    pub blas: Vec<Accel>,
+    /// Object placements.
+    pub instances: Vec<Instance>,
+}
+
+impl Surfaces {
+    /// The closest surface the ray hits before `t_max`.
+    pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
+        let top = self.top.as_ref()?;
+        let mut best = None;
+        top.closest(self, ray, t_max, NONE, &mut best);
+        let c = best?;
+        let local = match c.detail {
+            Detail::Barycentric(b1, b2) => {
+                let Geometry::Triangle { mesh, tri } = c.prim.geometry else {
+                    unreachable!("barycentrics come from triangles")
+                };
+                triangle_hit(&self.shapes.meshes[mesh as usize], tri, c.t, b1, b2)
+            }
+            Detail::ObjectPoint(p) => match c.prim.geometry {
+                Geometry::Sphere(i) => self.shapes.spheres[i as usize].hit(c.t, p),
+                Geometry::Disk(i) => self.shapes.disks[i as usize].hit(c.t, p),
+                Geometry::Cylinder(i) => self.shapes.cylinders[i as usize].hit(c.t, p),
+                _ => unreachable!("object points come from quadrics"),
+            },
+        };
+        let surface = if c.instance == NONE {
+            local
+        } else {
+            let inst = &self.instances[c.instance as usize];
+            let w = &inst.world_from_instance;
+            SurfaceHit {
+                t: c.t,
+                p: w.transform_point3(local.p),
+                n: transform_normal(&inst.instance_from_world, local.n),
+                ns: transform_normal(&inst.instance_from_world, local.ns),
+                uv: local.uv,
+                dpdu: w.transform_vector3(local.dpdu),
+            }
+        };
+        Some(Hit {
+            surface,
+            prim: c.prim,
+        })
+    }
+
+    /// True when anything blocks the ray before `t_max`.
+    pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
+        self.top
+            .as_ref()
+            .is_some_and(|top| top.any(self, ray, t_max))
+    }
+
+    /// Bounds of all surfaces (empty without surfaces).
+    pub fn bounds(&self) -> Bounds3 {
+        self.top.as_ref().map_or(Bounds3::EMPTY, |t| t.bounds())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn quad_scene() -> Surfaces {
+        let mut s = Surfaces::default();
+        s.shapes.meshes.push(Mesh::new(
+            &Affine3A::IDENTITY,
+            false,
+            &[
+                [-1.0, -1.0, 0.0],
+                [1.0, -1.0, 0.0],
+                [1.0, 1.0, 0.0],
+                [-1.0, 1.0, 0.0],
+            ],
+            &[],
+            &[],
+            vec![0, 1, 2, 0, 2, 3],
+        ));
+        s.shapes.spheres.push(Sphere::new(
+            Affine3A::from_translation(Vec3::new(0.0, 0.0, 2.0)),
+            false,
+            0.5,
+            -0.5,
+            0.5,
+            360.0,
+        ));
+        let prims = vec![
+            Primitive {
+                geometry: Geometry::Triangle { mesh: 0, tri: 0 },
+                material: 0,
+                area_light: NONE,
+                interface: NONE,
+            },
+            Primitive {
+                geometry: Geometry::Triangle { mesh: 0, tri: 1 },
+                material: 0,
+                area_light: NONE,
+                interface: NONE,
+            },
+            Primitive {
+                geometry: Geometry::Sphere(0),
+                material: 1,
+                area_light: NONE,
+                interface: NONE,
+            },
+        ];
+        let bounds: Vec<Bounds3> = prims.iter().map(|p| s.shapes.bounds(p.geometry)).collect();
+        s.top = Accel::build(prims, &bounds);
+        s
+    }
+
+    #[test]
+    fn closest_hit_and_occlusion() {
+        let s = quad_scene();
+        let down = Ray::new(Vec3::new(0.0, 0.0, 5.0), -Vec3::Z);
+        let h = s.intersect(&down, f32::INFINITY).unwrap();
+        assert_eq!(h.prim.material, 1, "the sphere is in front of the quad");
+        assert!((h.surface.t - 2.5).abs() < 1e-4);
+        let side = Ray::new(Vec3::new(0.9, 0.9, 5.0), -Vec3::Z);
+        let h = s.intersect(&side, f32::INFINITY).unwrap();
+        assert_eq!(h.prim.material, 0);
+        assert!((h.surface.t - 5.0).abs() < 1e-4);
+        assert!(s.occluded(&side, 10.0));
+        assert!(!s.occluded(&side, 4.0));
+        assert!(
+            s.intersect(&Ray::new(Vec3::new(3.0, 0.0, 5.0), -Vec3::Z), f32::INFINITY)
+                .is_none()
+        );
+    }
+
+    #[test]
+    fn no_surfaces_means_no_bvh() {
+        let s = Surfaces::default();
+        assert!(s.top.is_none());
+        assert!(
+            s.intersect(&Ray::new(Vec3::ZERO, Vec3::Z), f32::INFINITY)
+                .is_none()
+        );
+        assert!(!s.occluded(&Ray::new(Vec3::ZERO, Vec3::Z), 1.0));
+    }
+}

@@ -1,0 +1,244 @@
+//! Triangle meshes in world space (pbrt-v4 transforms mesh vertices once at load).
+
+use glam::{Affine3A, Vec2, Vec3};
+
+use super::{ShapeSample, SurfaceHit, swaps_handedness};
+use crate::geometry::{Bounds3, Ray};
+use crate::sampling::warp;
+
+/// Vertex data shared by a mesh's triangles.
+#[derive(Clone, Debug, Default)]
+pub struct Mesh {
+    /// World-space positions.
+    pub positions: Vec<Vec3>,
+    /// World-space unit normals per vertex (empty if none).
+    pub normals: Vec<Vec3>,
+    /// Texture coordinates per vertex (empty if none).
+    pub uvs: Vec<Vec2>,
+    /// Three indices per triangle.
+    pub indices: Vec<u32>,
+    /// ReverseOrientation xor a handedness-swapping transform.
+    pub flip_normals: bool,
+}
+
+impl Mesh {
+    /// A mesh from object-space data and its world-from-object transform.
+    pub fn new(
+        world_from_object: &Affine3A,
+        reverse_orientation: bool,
+        positions: &[[f32; 3]],
+        normals: &[[f32; 3]],
+        uvs: &[[f32; 2]],
+        indices: Vec<u32>,
+    ) -> Mesh {
+        let object_from_world = world_from_object.inverse();
+        let m = object_from_world.matrix3;
+        Mesh {
+            positions: positions
+                .iter()
+                .map(|p| world_from_object.transform_point3(Vec3::from(*p)))
+                .collect(),
+            normals: normals
+                .iter()
+                .map(|n| {
+                    let n = Vec3::from(*n);
+                    let w = Vec3::new(
+                        m.x_axis.dot(n.into()),
+                        m.y_axis.dot(n.into()),
+                        m.z_axis.dot(n.into()),
+                    )
+                    .normalize_or_zero();
+                    // pbrt-v4 flips stored normals too when the mesh is reversed.
+                    if reverse_orientation { -w } else { w }
+                })
+                .collect(),
+            uvs: uvs.iter().map(|t| Vec2::from(*t)).collect(),
+            indices,
+            flip_normals: reverse_orientation ^ swaps_handedness(world_from_object),
+        }
+    }
+
+    /// Number of triangles.
+    pub fn triangle_count(&self) -> usize {
+        self.indices.len() / 3
+    }
+
+    /// The three vertices of triangle `i`.
+    #[inline]
+    pub fn vertices(&self, i: u32) -> [Vec3; 3] {
+        let k = 3 * i as usize;
+        [
+            self.positions[self.indices[k] as usize],
+            self.positions[self.indices[k + 1] as usize],
+            self.positions[self.indices[k + 2] as usize],
+        ]
+    }
+
+    /// Bounds of triangle `i`.
+    pub fn triangle_bounds(&self, i: u32) -> Bounds3 {
+        let [a, b, c] = self.vertices(i);
+        let mut bb = Bounds3::new(a, b);
+        bb.extend(c);
+        bb
+    }
+
+    /// Area of triangle `i`.
+    pub fn triangle_area(&self, i: u32) -> f32 {
+        let [a, b, c] = self.vertices(i);
+        0.5 * (b - a).cross(c - a).length()
+    }
+
+    /// Ray-triangle intersection (Möller-Trumbore): distance and barycentrics (b1, b2) of
+    /// vertices 1 and 2.
+    #[inline]
+    pub fn intersect(&self, i: u32, ray: &Ray, t_max: f32) -> Option<(f32, f32, f32)> {
+        let [p0, p1, p2] = self.vertices(i);
+        let e1 = p1 - p0;
+        let e2 = p2 - p0;
+        let pv = ray.d.cross(e2);
+        let det = e1.dot(pv);
+        if det == 0.0 || !det.is_finite() {
+            return None;
+        }
+        let inv = 1.0 / det;
+        let tv = ray.o - p0;
+        let b1 = tv.dot(pv) * inv;
+        if !(0.0..=1.0).contains(&b1) {
+            return None;
+        }
+        let qv = tv.cross(e1);
+        let b2 = ray.d.dot(qv) * inv;
+        if b2 < 0.0 || b1 + b2 > 1.0 {
+            return None;
+        }
+        let t = e2.dot(qv) * inv;
+        (t > 0.0 && t < t_max).then_some((t, b1, b2))
+    }
+}
+
+/// Surface details of a hit on triangle `i` of `mesh` with barycentrics (b1, b2).
+pub fn triangle_hit(mesh: &Mesh, i: u32, t: f32, b1: f32, b2: f32) -> SurfaceHit {
+    let k = 3 * i as usize;
+    let idx = [
+        mesh.indices[k] as usize,
+        mesh.indices[k + 1] as usize,
+        mesh.indices[k + 2] as usize,
+    ];
+    let [p0, p1, p2] = [
+        mesh.positions[idx[0]],
+        mesh.positions[idx[1]],
+        mesh.positions[idx[2]],
+    ];
+    let b0 = 1.0 - b1 - b2;
+    let p = b0 * p0 + b1 * p1 + b2 * p2;
+    let uv_of = |j: usize| {
+        if mesh.uvs.is_empty() {
+            [Vec2::ZERO, Vec2::X, Vec2::ONE][j]
+        } else {
+            mesh.uvs[idx[j]]
+        }
+    };
+    let (uv0, uv1, uv2) = (uv_of(0), uv_of(1), uv_of(2));
+    let uv = b0 * uv0 + b1 * uv1 + b2 * uv2;
+    // pbrt-v4: n = normalize(cross(p0 - p2, p1 - p2)), flipped for reversed or
+    // handedness-swapping meshes, or turned towards the interpolated shading normal.
+    let mut n = (p0 - p2).cross(p1 - p2).normalize_or_zero();
+    let ns = if mesh.normals.is_empty() {
+        if mesh.flip_normals {
+            n = -n;
+        }
+        n
+    } else {
+        let ns =
+            (b0 * mesh.normals[idx[0]] + b1 * mesh.normals[idx[1]] + b2 * mesh.normals[idx[2]])
+                .normalize_or_zero();
+        if ns == Vec3::ZERO {
+            if mesh.flip_normals {
+                n = -n;
+            }
+            n
+        } else {
+            if n.dot(ns) < 0.0 {
+                n = -n;
+            }
+            ns
+        }
+    };
+    // ∂p/∂u from the uv parameterisation (pbrt-v4), or any tangent when it is degenerate.
+    let duv02 = uv0 - uv2;
+    let duv12 = uv1 - uv2;
+    let dp02 = p0 - p2;
+    let dp12 = p1 - p2;
+    let det = duv02.x * duv12.y - duv02.y * duv12.x;
+    let dpdu = if det.abs() > 1e-9 {
+        (duv12.y * dp02 - duv02.y * dp12) / det
+    } else {
+        Vec3::ZERO
+    };
+    SurfaceHit {
+        t,
+        p,
+        n,
+        ns,
+        uv,
+        dpdu,
+    }
+}
+
+/// Uniform area sample on triangle `i`.
+pub fn triangle_sample(mesh: &Mesh, i: u32, u: Vec2) -> ShapeSample {
+    let (b0, b1) = warp::uniform_triangle(u);
+    let b2 = 1.0 - b0 - b1;
+    let h = triangle_hit(mesh, i, 0.0, b1, b2);
+    ShapeSample {
+        p: h.p,
+        n: h.n,
+        pdf: 1.0 / mesh.triangle_area(i),
+        solid_angle: false,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn triangle_hit_and_orientation() {
+        let mesh = Mesh::new(
+            &Affine3A::IDENTITY,
+            false,
+            &[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+            &[],
+            &[],
+            vec![0, 1, 2],
+        );
+        let ray = Ray::new(Vec3::new(0.2, 0.2, 1.0), -Vec3::Z);
+        let (t, b1, b2) = mesh.intersect(0, &ray, f32::INFINITY).unwrap();
+        assert!((t - 1.0).abs() < 1e-6);
+        let h = triangle_hit(&mesh, 0, t, b1, b2);
+        assert!((h.p - Vec3::new(0.2, 0.2, 0.0)).length() < 1e-6);
+        assert!(
+            (h.n - Vec3::Z).length() < 1e-6,
+            "counter-clockwise triangles face +z: {:?}",
+            h.n
+        );
+        assert!(
+            mesh.intersect(
+                0,
+                &Ray::new(Vec3::new(0.8, 0.8, 1.0), -Vec3::Z),
+                f32::INFINITY
+            )
+            .is_none()
+        );
+        let rev = Mesh::new(
+            &Affine3A::IDENTITY,
+            true,
+            &[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+            &[],
+            &[],
+            vec![0, 1, 2],
+        );
+        assert!((triangle_hit(&rev, 0, t, b1, b2).n + Vec3::Z).length() < 1e-6);
+        assert!((mesh.triangle_area(0) - 0.5).abs() < 1e-6);
+    }
+}

@@ -1,0 +1,76 @@
+//! Shapes with pbrt-v4's geometry and orientation conventions: intersection, surface
+//! details at a hit, and area sampling for shapes that emit.
+
+mod cylinder;
+mod disk;
+mod mesh;
+mod sphere;
+
+pub use cylinder::Cylinder;
+pub use disk::Disk;
+pub use mesh::{Mesh, triangle_hit, triangle_sample};
+pub use sphere::Sphere;
+
+use glam::{Affine3A, Vec2, Vec3};
+
+/// Geometry at a ray hit, in world space.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SurfaceHit {
+    /// Distance along the ray.
+    pub t: f32,
+    /// Hit point.
+    pub p: Vec3,
+    /// Geometric normal, oriented as pbrt-v4 orients it (outward for closed quadrics,
+    /// counter-clockwise for triangles, flipped by ReverseOrientation and by transforms
+    /// that swap handedness; towards the shading normal when a mesh has normals).
+    pub n: Vec3,
+    /// Shading normal (same side as `n`).
+    pub ns: Vec3,
+    /// Surface parameterisation (texture coordinates).
+    pub uv: Vec2,
+    /// ∂p/∂u: the shading frame's first tangent.
+    pub dpdu: Vec3,
+}
+
+/// A point sampled on a shape's surface.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ShapeSample {
+    /// The point.
+    pub p: Vec3,
+    /// Oriented geometric normal there.
+    pub n: Vec3,
+    /// Density of the sample: per unit area, or per solid angle when `solid_angle`.
+    pub pdf: f32,
+    /// True when `pdf` is already per solid angle as seen from the reference point.
+    pub solid_angle: bool,
+}
+
+/// Whether a transform flips handedness (negative determinant): pbrt-v4 then flips normals.
+pub fn swaps_handedness(m: &Affine3A) -> bool {
+    m.matrix3.determinant() < 0.0
+}
+
+/// If `m` scales uniformly (a similarity), its scale factor.
+pub fn uniform_scale(m: &Affine3A) -> Option<f32> {
+    let sx = Vec3::from(m.matrix3.x_axis).length();
+    let sy = Vec3::from(m.matrix3.y_axis).length();
+    let sz = Vec3::from(m.matrix3.z_axis).length();
+    let orthogonal = m.matrix3.x_axis.dot(m.matrix3.y_axis).abs() < 1e-4 * sx * sy
+        && m.matrix3.x_axis.dot(m.matrix3.z_axis).abs() < 1e-4 * sx * sz
+        && m.matrix3.y_axis.dot(m.matrix3.z_axis).abs() < 1e-4 * sy * sz;
+    (orthogonal && (sx - sy).abs() < 1e-4 * sx && (sx - sz).abs() < 1e-4 * sx).then_some(sx)
+}
+
+/// Transforms an object-space normal to world space with the inverse transpose of the
+/// world-from-object transform, given as its inverse.
+#[inline]
+pub fn transform_normal(object_from_world: &Affine3A, n: Vec3) -> Vec3 {
+    // (M^-1)^T n: component i is column i of M^-1 dotted with n.
+    let m = object_from_world.matrix3;
+    Vec3::new(
+        m.x_axis.dot(n.into()),
+        m.y_axis.dot(n.into()),
+        m.z_axis.dot(n.into()),
+    )
+    .normalize_or_zero()
+}

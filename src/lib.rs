@@ -6,6 +6,7 @@
 #![deny(missing_docs)]
 
 pub mod color;
+pub mod film;
 pub mod geometry;
 pub mod integrators;
 pub mod math;

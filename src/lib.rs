@@ -10,6 +10,7 @@ pub mod film;
 pub mod geometry;
 pub mod integrators;
 pub mod math;
+pub mod samplers;
 pub mod sampling;
 pub mod scene;
 pub mod spectra;

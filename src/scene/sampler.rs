@@ -105,6 +105,15 @@ impl SamplerSettings {
                         }
                     };
                 }
+                if kind == SamplerKind::ZSobol && !spp.is_power_of_two() {
+                    let used = 1u32 << spp.ilog2();
+                    warnings.push(Warning::new(
+                        p.loc("pixelsamples").unwrap_or(&e.loc),
+                        format!(
+                            "zsobol takes a power-of-two sample count: {spp} samples per pixel become {used}, as in pbrt-v4"
+                        ),
+                    ));
+                }
                 (kind, spp)
             }
         };
@@ -148,5 +157,18 @@ mod tests {
         // Replaced samplers accept their own randomization values.
         let h = settings("Sampler \"halton\" \"string randomization\" \"permutedigits\"").unwrap();
         assert_eq!(h.kind, SamplerKind::ZSobol);
+    }
+
+    #[test]
+    fn zsobol_warns_that_it_rounds_sample_counts_down() {
+        let scene = nimbus_parser::load_str(
+            "Sampler \"zsobol\" \"integer pixelsamples\" 100\nWorldBegin\n",
+            "t.pbrt",
+        )
+        .unwrap();
+        let mut warnings = Vec::new();
+        SamplerSettings::from_entity(&scene.sampler, None, &mut warnings).unwrap();
+        assert_eq!(warnings.len(), 1);
+        assert!(format!("{:?}", warnings[0]).contains("become 64"));
     }
 }

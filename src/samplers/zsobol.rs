@@ -311,6 +311,72 @@ mod tests {
     }
 
     #[test]
+    fn matches_an_independent_transcription_of_pbrt() {
+        // Scrambled 32-bit values of get_2d, get_1d, get_2d, get_1d from dimension 0, computed
+        // by a separate Python transcription of pbrt-v4's ZSobolSampler that reads dimension
+        // 1's matrix from pbrt's SobolMatrices32 table.
+        let cases: [(u32, UVec2, Randomization, i32, UVec2, u32, [u32; 6]); 3] = [
+            (
+                16,
+                UVec2::new(128, 128),
+                Randomization::FastOwen,
+                0,
+                UVec2::new(5, 9),
+                3,
+                [
+                    0x8072_3c5e,
+                    0x45e2_b0ac,
+                    0x6f0a_5a47,
+                    0x4c96_e31f,
+                    0x1909_d454,
+                    0x0709_e07f,
+                ],
+            ),
+            (
+                32,
+                UVec2::new(100, 37),
+                Randomization::Owen,
+                -3,
+                UVec2::new(77, 20),
+                31,
+                [
+                    0xd789_4c45,
+                    0xf605_8469,
+                    0x7fb8_a190,
+                    0x51c5_b0d8,
+                    0xc5e6_4a06,
+                    0x064b_d0bf,
+                ],
+            ),
+            (
+                8,
+                UVec2::new(640, 480),
+                Randomization::FastOwen,
+                12345,
+                UVec2::new(639, 479),
+                7,
+                [
+                    0x9331_3c63,
+                    0x619e_79b2,
+                    0xc1bd_35ab,
+                    0x5bc4_1bf0,
+                    0x0871_682f,
+                    0x5b54_250b,
+                ],
+            ),
+        ];
+        let to_f32 = |v: u32| (v as f32 * (1.0 / 4_294_967_296.0)).min(ONE_MINUS_EPSILON);
+        for (spp, res, randomization, seed, pixel, index, bits) in cases {
+            let mut s = ZSobolSampler::new(spp, res, randomization, seed);
+            s.start_pixel_sample(pixel, index, 0);
+            let (a, b, c, d) = (s.get_2d(), s.get_1d(), s.get_2d(), s.get_1d());
+            let got = [a.x, a.y, b, c.x, c.y, d];
+            let want = bits.map(to_f32);
+            assert_eq!(got, want, "spp {spp} pixel {pixel}");
+        }
+    }
+
+    #[test]
     fn rounds_sample_counts_down_to_powers_of_two() {
         let s = ZSobolSampler::new(100, UVec2::new(64, 48), Randomization::Owen, 0);
         assert_eq!(s.samples_per_pixel(), 64);

@@ -315,7 +315,9 @@ mod tests {
         // Scrambled 32-bit values of get_2d, get_1d, get_2d, get_1d from dimension 0, computed
         // by a separate Python transcription of pbrt-v4's ZSobolSampler that reads dimension
         // 1's matrix from pbrt's SobolMatrices32 table.
-        let cases: [(u32, UVec2, Randomization, i32, UVec2, u32, [u32; 6]); 3] = [
+        /// Samples per pixel, resolution, randomization, seed, pixel, sample index, values.
+        type Case = (u32, UVec2, Randomization, i32, UVec2, u32, [u32; 6]);
+        let cases: [Case; 3] = [
             (
                 16,
                 UVec2::new(128, 128),

@@ -7,9 +7,11 @@
 
 pub mod accel;
 pub mod color;
+pub mod film;
 pub mod geometry;
 pub mod integrators;
 pub mod math;
+pub mod samplers;
 pub mod sampling;
 pub mod scene;
 pub mod shapes;

@@ -24,6 +24,15 @@ pub enum SamplerKind {
     ZSobol,
 }
 
+/// How the Sobol' samplers randomize their points (pbrt-v4's `randomization` parameter).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Randomization {
+    /// `owen`: exact nested uniform (Owen) scrambling, one hash per bit.
+    Owen,
+    /// `fastowen`: Burley's hash-based approximation of Owen scrambling (pbrt-v4's default).
+    FastOwen,
+}
+
 /// Everything a sampler entity specifies.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SamplerSettings {
@@ -33,6 +42,8 @@ pub struct SamplerSettings {
     pub pixel_samples: u32,
     /// Seed (the scene's `Option "seed"` or the sampler's `seed`).
     pub seed: i32,
+    /// Scrambling of the Sobol' samplers (ignored by the others).
+    pub randomization: Randomization,
 }
 
 impl SamplerSettings {
@@ -46,6 +57,7 @@ impl SamplerSettings {
         let p = &e.params;
         let seed = p.get_one_int("seed", option_seed.unwrap_or(0))?;
         let positive = |v: i32| v > 0;
+        let mut randomization = Randomization::FastOwen;
         let (kind, pixel_samples) = match e.name.as_str() {
             "stratified" => {
                 let x = checked_int(p, "xsamples", 4, positive, "must be positive")? as u32;
@@ -54,7 +66,10 @@ impl SamplerSettings {
                 (SamplerKind::Stratified { x, y, jitter }, x * y)
             }
             name => {
-                let spp = checked_int(p, "pixelsamples", 16, positive, "must be positive")? as u32;
+                // pbrt-v4's independent sampler defaults to 4 samples, all others to 16.
+                let default_spp = if name == "independent" { 4 } else { 16 };
+                let spp = checked_int(p, "pixelsamples", default_spp, positive, "must be positive")?
+                    as u32;
                 let kind = match name {
                     "independent" => SamplerKind::Independent,
                     "sobol" => SamplerKind::Sobol,
@@ -74,16 +89,30 @@ impl SamplerSettings {
                         ));
                     }
                 };
-                if matches!(kind, SamplerKind::Sobol | SamplerKind::ZSobol) {
-                    let r = p.get_one_string("randomization", "owen")?;
-                    if !matches!(r, "owen" | "fastowen") {
-                        return Err(Error::new(
-                            p.loc("randomization").unwrap_or(&e.loc),
-                            format!(
-                                "randomization \"{r}\" is not supported by nimbus (it uses Owen scrambling)"
-                            ),
-                        ));
-                    }
+                // Only sobol and zsobol are checked: the replaced samplers accept other values.
+                if matches!(name, "sobol" | "zsobol") {
+                    let r = p.get_one_string("randomization", "fastowen")?;
+                    randomization = match r {
+                        "owen" => Randomization::Owen,
+                        "fastowen" => Randomization::FastOwen,
+                        _ => {
+                            return Err(Error::new(
+                                p.loc("randomization").unwrap_or(&e.loc),
+                                format!(
+                                    "randomization \"{r}\" is not supported by nimbus (it has owen and fastowen)"
+                                ),
+                            ));
+                        }
+                    };
+                }
+                if kind == SamplerKind::ZSobol && !spp.is_power_of_two() {
+                    let used = 1u32 << spp.ilog2();
+                    warnings.push(Warning::new(
+                        p.loc("pixelsamples").unwrap_or(&e.loc),
+                        format!(
+                            "zsobol takes a power-of-two sample count: {spp} samples per pixel become {used}, as in pbrt-v4"
+                        ),
+                    ));
                 }
                 (kind, spp)
             }
@@ -92,6 +121,54 @@ impl SamplerSettings {
             kind,
             pixel_samples,
             seed,
+            randomization,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn settings(directive: &str) -> Result<SamplerSettings, Error> {
+        let scene = nimbus_parser::load_str(&format!("{directive}\nWorldBegin\n"), "t.pbrt")
+            .expect("scene parses");
+        SamplerSettings::from_entity(&scene.sampler, scene.options.seed, &mut Vec::new())
+    }
+
+    #[test]
+    fn sampler_defaults_follow_pbrt() {
+        let z = settings("").unwrap();
+        assert_eq!(z.kind, SamplerKind::ZSobol);
+        assert_eq!(
+            (z.pixel_samples, z.randomization),
+            (16, Randomization::FastOwen)
+        );
+        assert_eq!(
+            settings("Sampler \"independent\"").unwrap().pixel_samples,
+            4
+        );
+        let s = settings("Sampler \"sobol\" \"string randomization\" \"owen\"").unwrap();
+        assert_eq!(
+            (s.kind, s.randomization),
+            (SamplerKind::Sobol, Randomization::Owen)
+        );
+        assert!(settings("Sampler \"zsobol\" \"string randomization\" \"none\"").is_err());
+        // Replaced samplers accept their own randomization values.
+        let h = settings("Sampler \"halton\" \"string randomization\" \"permutedigits\"").unwrap();
+        assert_eq!(h.kind, SamplerKind::ZSobol);
+    }
+
+    #[test]
+    fn zsobol_warns_that_it_rounds_sample_counts_down() {
+        let scene = nimbus_parser::load_str(
+            "Sampler \"zsobol\" \"integer pixelsamples\" 100\nWorldBegin\n",
+            "t.pbrt",
+        )
+        .unwrap();
+        let mut warnings = Vec::new();
+        SamplerSettings::from_entity(&scene.sampler, None, &mut warnings).unwrap();
+        assert_eq!(warnings.len(), 1);
+        assert!(format!("{:?}", warnings[0]).contains("become 64"));
     }
 }

@@ -1,0 +1,3 @@
+//! The film side of rendering: pixel reconstruction filters.
+
+pub mod filter;

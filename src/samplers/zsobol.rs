@@ -1,0 +1,389 @@
+//! The Z-order Sobol' sampler, pbrt-v4's default (`ZSobolSampler`, after Ahmed and Wonka,
+//! "Screen-Space Blue-Noise Diffusion of Monte Carlo Sampling Error via Hierarchical Ordering
+//! of Pixels", SIGGRAPH Asia 2020).
+
+use glam::{UVec2, Vec2};
+
+use super::hash::{encode_morton2, mix_bits};
+use crate::sampling::warp::ONE_MINUS_EPSILON;
+use crate::scene::sampler::Randomization;
+
+/// Column `j` of the generator matrix of Sobol' dimension 0: the van der Corput sequence
+/// (bit reversal). Index bits from 32 on fall below 32-bit resolution.
+const fn sobol0_column(j: u32) -> u32 {
+    if j < 32 { 1 << (31 - j) } else { 0 }
+}
+
+/// Column `j` of the generator matrix of Sobol' dimension 1: Pascal's triangle mod 2, whose
+/// entry (i, j) is odd exactly when the bits of i are a subset of those of j (Lucas).
+/// Equals pbrt-v4's `SobolMatrices32` for dimension 1 (Joe-Kuo), all 52 columns.
+const fn sobol1_column(j: u32) -> u32 {
+    let mut c = 0u32;
+    let mut i = 0;
+    while i < 32 {
+        if i & !j == 0 {
+            c |= 1 << (31 - i);
+        }
+        i += 1;
+    }
+    c
+}
+
+const fn matrix(dimension: u32) -> [u32; 64] {
+    let mut m = [0u32; 64];
+    let mut j = 0;
+    while j < 64 {
+        m[j as usize] = if dimension == 0 {
+            sobol0_column(j)
+        } else {
+            sobol1_column(j)
+        };
+        j += 1;
+    }
+    m
+}
+
+/// The two generator matrices ZSobol uses: every 2D sample is a (0,2)-sequence.
+static SOBOL_MATRICES: [[u32; 64]; 2] = [matrix(0), matrix(1)];
+
+/// Unscrambled Sobol' sample `a` of `dimension` (0 or 1) as a 32-bit fraction.
+#[inline]
+fn sobol_bits(mut a: u64, dimension: usize) -> u32 {
+    let m = &SOBOL_MATRICES[dimension];
+    let mut v = 0;
+    while a != 0 {
+        v ^= m[a.trailing_zeros() as usize];
+        a &= a - 1;
+    }
+    v
+}
+
+/// pbrt-v4's `OwenScrambler`: each bit is flipped by a hash of the bits above it (nested
+/// uniform scrambling, Owen 1995).
+#[inline]
+fn owen_scramble(mut v: u32, seed: u32) -> u32 {
+    if seed & 1 != 0 {
+        v ^= 1 << 31;
+    }
+    for b in 1..32 {
+        let mask = !0u32 << (32 - b);
+        if (mix_bits(((v & mask) ^ seed) as u64) as u32) & (1 << b) != 0 {
+            v ^= 1 << (31 - b);
+        }
+    }
+    v
+}
+
+/// pbrt-v4's `FastOwenScrambler`: Vegdahl's hash, an approximate Owen scramble in one pass
+/// (Burley, JCGT 2020).
+#[inline]
+fn fast_owen_scramble(v: u32, seed: u32) -> u32 {
+    let mut v = v.reverse_bits();
+    v ^= v.wrapping_mul(0x3d20_adea);
+    v = v.wrapping_add(seed);
+    v = v.wrapping_mul((seed >> 16) | 1);
+    v ^= v.wrapping_mul(0x0552_6c56);
+    v ^= v.wrapping_mul(0x53a2_2864);
+    v.reverse_bits()
+}
+
+/// The 24 permutations of four base-4 digits, in pbrt-v4's order.
+const PERMUTATIONS: [[u8; 4]; 24] = [
+    [0, 1, 2, 3],
+    [0, 1, 3, 2],
+    [0, 2, 1, 3],
+    [0, 2, 3, 1],
+    [0, 3, 2, 1],
+    [0, 3, 1, 2],
+    [1, 0, 2, 3],
+    [1, 0, 3, 2],
+    [1, 2, 0, 3],
+    [1, 2, 3, 0],
+    [1, 3, 2, 0],
+    [1, 3, 0, 2],
+    [2, 1, 0, 3],
+    [2, 1, 3, 0],
+    [2, 0, 1, 3],
+    [2, 0, 3, 1],
+    [2, 3, 0, 1],
+    [2, 3, 1, 0],
+    [3, 1, 2, 0],
+    [3, 1, 0, 2],
+    [3, 2, 1, 0],
+    [3, 2, 0, 1],
+    [3, 0, 2, 1],
+    [3, 0, 1, 2],
+];
+
+/// pbrt-v4's `ZSobolSampler`, bit for bit.
+///
+/// One Sobol' sequence covers the whole image: pixel `p`'s samples are the indices
+/// `(morton(p) << log2(spp)) | i`, each base-4 digit of which is permuted by a hash of the
+/// digits above it and of the dimension. Pixels thus get disjoint, well-stratified blocks of
+/// the sequence whose order is scrambled differently per dimension, which spreads error as
+/// blue noise across the screen. Every 1D and 2D sample uses only Sobol' dimensions 0 and 1
+/// (padding), Owen-scrambled with a hash of the dimension and seed, so each is a (0,2)- or
+/// (0,1)-sequence within the pixel.
+///
+/// As in pbrt, the sample count is a power of two: other counts are rounded down, and
+/// `sample_index` must be below [`Self::samples_per_pixel`]. The generator matrices are
+/// computed, not tabulated (for dimensions 0 and 1 they are the identity reversed and
+/// Pascal's triangle mod 2), and support indices of any width.
+#[derive(Clone, Debug)]
+pub struct ZSobolSampler {
+    randomization: Randomization,
+    seed: i32,
+    log2_samples_per_pixel: u32,
+    base4_digits: u32,
+    morton_index: u64,
+    dimension: u32,
+}
+
+impl ZSobolSampler {
+    /// A sampler for an image of `full_resolution` pixels (the film's full resolution, not
+    /// its crop window: it fixes the number of digits permuted).
+    pub fn new(
+        samples_per_pixel: u32,
+        full_resolution: UVec2,
+        randomization: Randomization,
+        seed: i32,
+    ) -> ZSobolSampler {
+        let log2_spp = samples_per_pixel.max(1).ilog2();
+        let res = full_resolution.max_element().max(1).next_power_of_two();
+        let log4_spp = log2_spp.div_ceil(2);
+        ZSobolSampler {
+            randomization,
+            seed,
+            log2_samples_per_pixel: log2_spp,
+            base4_digits: res.ilog2() + log4_spp,
+            morton_index: 0,
+            dimension: 0,
+        }
+    }
+
+    /// Samples per pixel: the requested count rounded down to a power of two, as in pbrt-v4.
+    pub fn samples_per_pixel(&self) -> u32 {
+        1 << self.log2_samples_per_pixel
+    }
+
+    /// Starts sample `sample_index` of `pixel` at `dimension`.
+    pub fn start_pixel_sample(&mut self, pixel: UVec2, sample_index: u32, dimension: u32) {
+        debug_assert!(sample_index < self.samples_per_pixel());
+        self.dimension = dimension;
+        self.morton_index =
+            (encode_morton2(pixel.x, pixel.y) << self.log2_samples_per_pixel) | sample_index as u64;
+    }
+
+    /// Hash that picks a digit permutation from the digits above it, as pbrt-v4 computes it:
+    /// `0x55555555 * dimension` is a wrapping 32-bit signed product, sign-extended to 64 bits.
+    #[inline]
+    fn digit_hash(&self, higher_digits: u64) -> u64 {
+        let d = 0x5555_5555i32.wrapping_mul(self.dimension as i32) as i64 as u64;
+        mix_bits(higher_digits ^ d)
+    }
+
+    /// Index into the global Sobol' sequence of the current pixel sample and dimension.
+    fn sample_index(&self) -> u64 {
+        let odd_log2 = self.log2_samples_per_pixel & 1 == 1;
+        let last_digit = odd_log2 as u32;
+        let mut index = 0u64;
+        // Permute every full base-4 digit, most significant first, each by the digits above.
+        for i in (last_digit..self.base4_digits).rev() {
+            let shift = 2 * i - odd_log2 as u32;
+            let digit = (self.morton_index >> shift) & 3;
+            let higher = self.morton_index.checked_shr(shift + 2).unwrap_or(0);
+            let p = (self.digit_hash(higher) >> 24) % 24;
+            index |= (PERMUTATIONS[p as usize][digit as usize] as u64) << shift;
+        }
+        // An odd power of two leaves one base-2 digit: flip it or not.
+        if odd_log2 {
+            let digit = self.morton_index & 1;
+            index |= digit ^ (self.digit_hash(self.morton_index >> 1) & 1);
+        }
+        index
+    }
+
+    /// Scrambled Sobol' dimension `dimension` (0 or 1) of sample `a`, in [0, 1).
+    #[inline]
+    fn sobol_sample(&self, a: u64, dimension: usize, seed: u32) -> f32 {
+        let v = sobol_bits(a, dimension);
+        let v = match self.randomization {
+            Randomization::Owen => owen_scramble(v, seed),
+            Randomization::FastOwen => fast_owen_scramble(v, seed),
+        };
+        (v as f32 * (1.0 / 4_294_967_296.0)).min(ONE_MINUS_EPSILON)
+    }
+
+    /// Scramble seed bits for the current dimension (pbrt widens `dimension ^ seed`, a signed
+    /// int, to 64 bits).
+    #[inline]
+    fn scramble_bits(&self) -> u64 {
+        mix_bits(((self.dimension as i32) ^ self.seed) as i64 as u64)
+    }
+
+    /// The next value.
+    pub fn get_1d(&mut self) -> f32 {
+        let a = self.sample_index();
+        // pbrt advances the dimension before hashing it.
+        self.dimension += 1;
+        self.sobol_sample(a, 0, self.scramble_bits() as u32)
+    }
+
+    /// The next two values.
+    pub fn get_2d(&mut self) -> Vec2 {
+        let a = self.sample_index();
+        self.dimension += 2;
+        let bits = self.scramble_bits();
+        Vec2::new(
+            self.sobol_sample(a, 0, bits as u32),
+            self.sobol_sample(a, 1, (bits >> 32) as u32),
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn generator_matrices_match_pbrt_tables() {
+        // From pbrt-v4's SobolMatrices32 (util/sobolmatrices.cpp), dimension 1.
+        let pbrt_dim1 = [
+            0x8000_0000,
+            0xc000_0000,
+            0xa000_0000,
+            0xf000_0000,
+            0x8800_0000,
+            0xcc00_0000,
+            0xaa00_0000,
+            0xff00_0000,
+            0x8080_0000,
+        ];
+        for (j, &c) in pbrt_dim1.iter().enumerate() {
+            assert_eq!(SOBOL_MATRICES[1][j], c, "column {j}");
+        }
+        assert_eq!(SOBOL_MATRICES[1][31], 0xffff_ffff);
+        assert_eq!(SOBOL_MATRICES[1][32], 0x8000_0000);
+        assert_eq!(SOBOL_MATRICES[1][35], 0xf000_0000);
+        assert_eq!(SOBOL_MATRICES[0][0], 0x8000_0000);
+        assert_eq!(SOBOL_MATRICES[0][31], 1);
+        assert_eq!(SOBOL_MATRICES[0][32], 0);
+    }
+
+    #[test]
+    fn scramblers_are_nested_bijections() {
+        // An Owen scramble maps each elementary interval of [0, 1) onto one of the same
+        // size, so the 256 values k << 24 stay 256 distinct top bytes.
+        for seed in [0u32, 1, 0x1234_5678, 0xffff_ffff] {
+            for scramble in [owen_scramble, fast_owen_scramble] {
+                let mut seen = [false; 256];
+                for k in 0u32..256 {
+                    let top = (scramble(k << 24, seed) >> 24) as usize;
+                    assert!(!seen[top]);
+                    seen[top] = true;
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn pixel_gets_an_aligned_block_of_the_sequence() {
+        // 64 spp on a 16×16 image: the permuted indices of one pixel fill one aligned block of
+        // 64 consecutive Sobol' indices, whatever the dimension.
+        let mut s = ZSobolSampler::new(64, UVec2::new(16, 16), Randomization::FastOwen, 3);
+        for dimension in [0, 1, 7] {
+            let mut indices: Vec<u64> = (0..64)
+                .map(|i| {
+                    s.start_pixel_sample(UVec2::new(5, 9), i, dimension);
+                    s.sample_index()
+                })
+                .collect();
+            indices.sort_unstable();
+            let base = indices[0];
+            assert_eq!(base % 64, 0);
+            assert!(
+                indices
+                    .iter()
+                    .enumerate()
+                    .all(|(k, &i)| i == base + k as u64)
+            );
+        }
+    }
+
+    #[test]
+    fn matches_an_independent_transcription_of_pbrt() {
+        // Scrambled 32-bit values of get_2d, get_1d, get_2d, get_1d from dimension 0, computed
+        // by a separate Python transcription of pbrt-v4's ZSobolSampler that reads dimension
+        // 1's matrix from pbrt's SobolMatrices32 table.
+        /// Samples per pixel, resolution, randomization, seed, pixel, sample index, values.
+        type Case = (u32, UVec2, Randomization, i32, UVec2, u32, [u32; 6]);
+        let cases: [Case; 3] = [
+            (
+                16,
+                UVec2::new(128, 128),
+                Randomization::FastOwen,
+                0,
+                UVec2::new(5, 9),
+                3,
+                [
+                    0x8072_3c5e,
+                    0x45e2_b0ac,
+                    0x6f0a_5a47,
+                    0x4c96_e31f,
+                    0x1909_d454,
+                    0x0709_e07f,
+                ],
+            ),
+            (
+                32,
+                UVec2::new(100, 37),
+                Randomization::Owen,
+                -3,
+                UVec2::new(77, 20),
+                31,
+                [
+                    0xd789_4c45,
+                    0xf605_8469,
+                    0x7fb8_a190,
+                    0x51c5_b0d8,
+                    0xc5e6_4a06,
+                    0x064b_d0bf,
+                ],
+            ),
+            (
+                8,
+                UVec2::new(640, 480),
+                Randomization::FastOwen,
+                12345,
+                UVec2::new(639, 479),
+                7,
+                [
+                    0x9331_3c63,
+                    0x619e_79b2,
+                    0xc1bd_35ab,
+                    0x5bc4_1bf0,
+                    0x0871_682f,
+                    0x5b54_250b,
+                ],
+            ),
+        ];
+        let to_f32 = |v: u32| (v as f32 * (1.0 / 4_294_967_296.0)).min(ONE_MINUS_EPSILON);
+        for (spp, res, randomization, seed, pixel, index, bits) in cases {
+            let mut s = ZSobolSampler::new(spp, res, randomization, seed);
+            s.start_pixel_sample(pixel, index, 0);
+            let (a, b, c, d) = (s.get_2d(), s.get_1d(), s.get_2d(), s.get_1d());
+            let got = [a.x, a.y, b, c.x, c.y, d];
+            let want = bits.map(to_f32);
+            assert_eq!(got, want, "spp {spp} pixel {pixel}");
+        }
+    }
+
+    #[test]
+    fn rounds_sample_counts_down_to_powers_of_two() {
+        let s = ZSobolSampler::new(100, UVec2::new(64, 48), Randomization::Owen, 0);
+        assert_eq!(s.samples_per_pixel(), 64);
+        assert_eq!(s.base4_digits, 6 + 3);
+        let s = ZSobolSampler::new(8, UVec2::new(65, 1), Randomization::Owen, 0);
+        assert_eq!((s.samples_per_pixel(), s.base4_digits), (8, 7 + 2));
+    }
+}

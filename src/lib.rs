@@ -6,9 +6,11 @@
 #![deny(missing_docs)]
 
 pub mod accel;
+pub mod camera;
 pub mod color;
 pub mod film;
 pub mod geometry;
+pub mod imageio;
 pub mod integrators;
 pub mod math;
 pub mod samplers;

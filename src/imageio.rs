@@ -1,0 +1,163 @@
+//! Reading and writing images: OpenEXR (float RGB, with metadata) and 8-bit sRGB PNG.
+//! Outputs are written to a temporary file next to the target and renamed into place, so a
+//! reader never sees half an image.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use crate::color::Rgb;
+
+/// A linear RGB image, rows from the top.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Image {
+    /// Width in pixels.
+    pub width: usize,
+    /// Height in pixels.
+    pub height: usize,
+    /// Pixels, row-major.
+    pub pixels: Vec<Rgb>,
+    /// String metadata (`nimbus:spp`, ...), kept in EXR attributes.
+    pub metadata: BTreeMap<String, String>,
+}
+
+impl Image {
+    /// A black image.
+    pub fn new(width: usize, height: usize) -> Image {
+        Image { width, height, pixels: vec![Rgb::ZERO; width * height], metadata: BTreeMap::new() }
+    }
+
+    /// The pixel at (x, y).
+    pub fn get(&self, x: usize, y: usize) -> Rgb {
+        self.pixels[y * self.width + x]
+    }
+
+    /// Mean of every pixel.
+    pub fn mean(&self) -> Rgb {
+        let mut s = [0.0f64; 3];
+        for p in &self.pixels {
+            s[0] += p.x as f64;
+            s[1] += p.y as f64;
+            s[2] += p.z as f64;
+        }
+        let n = self.pixels.len().max(1) as f64;
+        Rgb::new((s[0] / n) as f32, (s[1] / n) as f32, (s[2] / n) as f32)
+    }
+}
+
+fn temp_path(path: &Path) -> PathBuf {
+    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    path.with_file_name(format!(".{name}.{}.tmp", std::process::id()))
+}
+
+fn write_atomically(path: &Path, write: impl FnOnce(&Path) -> Result<(), String>) -> Result<(), String> {
+    let tmp = temp_path(path);
+    if let Err(e) = write(&tmp) {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(e);
+    }
+    std::fs::rename(&tmp, path).map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        format!("{}: {e}", path.display())
+    })
+}
+
+/// Writes `image` as `.exr` (32-bit float RGB) or `.png` (8-bit sRGB), chosen by extension.
+pub fn write_image(path: &Path, image: &Image) -> Result<(), String> {
+    match path.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase()) {
+        Some(e) if e == "exr" => write_atomically(path, |tmp| write_exr(tmp, image)),
+        Some(e) if e == "png" => write_atomically(path, |tmp| write_png(tmp, image)),
+        _ => Err(format!("{}: unsupported output format (use .exr or .png)", path.display())),
+    }
+}
+
+fn write_exr(path: &Path, image: &crate::imageio::Image) -> Result<(), String> {
+    use exr::meta::attribute::{AttributeValue, Text};
+    use exr::prelude::*;
+    let (w, h) = (image.width, image.height);
+    let mut attributes = LayerAttributes::named("");
+    attributes.software_name = Some(Text::from("nimbus"));
+    for (k, v) in &image.metadata {
+        attributes.other.insert(Text::from(k.as_str()), AttributeValue::Text(Text::from(v.as_str())));
+    }
+    let layer = Layer::new(
+        (w, h),
+        attributes,
+        Encoding::FAST_LOSSLESS,
+        SpecificChannels::rgb(|pos: Vec2<usize>| {
+            let p = image.pixels[pos.y() * w + pos.x()];
+            (p.x, p.y, p.z)
+        }),
+    );
+    Image::from_layer(layer).write().to_file(path).map_err(|e| format!("{}: {e}", path.display()))
+}
+
+/// sRGB opto-electronic transfer function.
+fn srgb_encode(v: f32) -> u8 {
+    let v = if v.is_nan() { 0.0 } else { v.clamp(0.0, 1.0) };
+    let s = if v <= 0.003_130_8 { 12.92 * v } else { 1.055 * v.powf(1.0 / 2.4) - 0.055 };
+    (s * 255.0 + 0.5) as u8
+}
+
+fn write_png(path: &Path, image: &Image) -> Result<(), String> {
+    let file = std::fs::File::create(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let mut enc = png::Encoder::new(std::io::BufWriter::new(file), image.width as u32, image.height as u32);
+    enc.set_color(png::ColorType::Rgb);
+    enc.set_depth(png::BitDepth::Eight);
+    enc.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
+    for (k, v) in &image.metadata {
+        let _ = enc.add_text_chunk(k.clone(), v.clone());
+    }
+    let mut writer = enc.write_header().map_err(|e| format!("{}: {e}", path.display()))?;
+    let data: Vec<u8> = image.pixels.iter().flat_map(|p| [srgb_encode(p.x), srgb_encode(p.y), srgb_encode(p.z)]).collect();
+    writer.write_image_data(&data).map_err(|e| format!("{}: {e}", path.display()))?;
+    writer.finish().map_err(|e| format!("{}: {e}", path.display()))
+}
+
+/// Reads the first RGB(A) layer of an OpenEXR file (alpha ignored) and its text attributes.
+pub fn read_exr(path: &Path) -> Result<crate::imageio::Image, String> {
+    use exr::prelude::*;
+    let img = read_first_rgba_layer_from_file(
+        path,
+        |res, _| (res.width(), res.height(), vec![Rgb::ZERO; res.width() * res.height()]),
+        |(w, _h, px): &mut (usize, usize, Vec<Rgb>), pos, (r, g, b, _a): (f32, f32, f32, f32)| {
+            px[pos.y() * *w + pos.x()] = Rgb::new(r, g, b);
+        },
+    )
+    .map_err(|e| format!("{}: {e}", path.display()))?;
+    let (width, height, pixels) = img.layer_data.channel_data.pixels;
+    let mut metadata = BTreeMap::new();
+    for (k, v) in &img.layer_data.attributes.other {
+        if let exr::meta::attribute::AttributeValue::Text(t) = v {
+            metadata.insert(k.to_string(), t.to_string());
+        }
+    }
+    if pixels.iter().any(|p| !p.is_finite()) {
+        return Err(format!("{}: image contains NaN or infinite values", path.display()));
+    }
+    Ok(crate::imageio::Image { width, height, pixels, metadata })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn exr_round_trip_keeps_pixels_and_metadata() {
+        let dir = std::env::temp_dir().join(format!("nimbus-imageio-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("t.exr");
+        let mut img = Image::new(3, 2);
+        img.pixels[4] = Rgb::new(0.25, 1.5, 3.0);
+        img.metadata.insert("nimbus:spp".into(), "16".into());
+        write_image(&path, &img).unwrap();
+        let back = read_exr(&path).unwrap();
+        assert_eq!((back.width, back.height), (3, 2));
+        assert_eq!(back.pixels, img.pixels);
+        assert_eq!(back.metadata.get("nimbus:spp").map(String::as_str), Some("16"));
+        write_image(&dir.join("t.png"), &img).unwrap();
+        assert!(write_image(&dir.join("t.bmp"), &img).is_err());
+        assert_eq!(srgb_encode(1.0), 255);
+        assert_eq!(srgb_encode(0.0), 0);
+        assert_eq!(srgb_encode(0.5), 188);
+    }
+}

@@ -18,7 +18,8 @@ use crate::scene::values::SpectrumSpec;
 /// RGB of a reflectance, albedo or other unbounded quantity (σa, σs, …) for a film in
 /// `film`: the spectrum as seen under `film`'s illuminant, normalised so a constant
 /// spectrum of 1 gives (1, 1, 1). An `rgb` value passes through, adapted from the entity's
-/// space `entity` if that differs (see [`convert_reflectance_rgb`]).
+/// space `entity` if that differs (see [`convert_reflectance_rgb`]); values are not
+/// clamped (pbrt-v4 rejects RGB albedos outside [0, 1], a check left to the caller).
 pub fn reflectance_rgb(
     spec: &SpectrumSpec,
     entity: ColorSpace,

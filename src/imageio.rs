@@ -113,6 +113,46 @@ fn write_png(path: &Path, image: &Image) -> Result<(), String> {
     writer.finish().map_err(|e| format!("{}: {e}", path.display()))
 }
 
+/// Reads an EXR (linear) or PNG (sRGB-encoded 8 or 16 bit) image as linear RGB.
+pub fn read_image(path: &Path) -> Result<crate::imageio::Image, String> {
+    match path.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase()) {
+        Some(e) if e == "exr" => read_exr(path),
+        Some(e) if e == "png" => read_png(path),
+        _ => Err(format!("{}: unsupported image format (nimbus reads .exr and .png)", path.display())),
+    }
+}
+
+fn srgb_decode(v: f32) -> f32 {
+    if v <= 0.04045 { v / 12.92 } else { ((v + 0.055) / 1.055).powf(2.4) }
+}
+
+/// Reads a PNG, decoding sRGB to linear.
+pub fn read_png(path: &Path) -> Result<crate::imageio::Image, String> {
+    let err = |e: &dyn std::fmt::Display| format!("{}: {e}", path.display());
+    let file = std::fs::File::open(path).map_err(|e| err(&e))?;
+    let mut decoder = png::Decoder::new(std::io::BufReader::new(file));
+    decoder.set_transformations(png::Transformations::EXPAND);
+    let mut reader = decoder.read_info().map_err(|e| err(&e))?;
+    let mut buf = vec![0; reader.output_buffer_size().ok_or_else(|| err(&"image too large"))?];
+    let info = reader.next_frame(&mut buf).map_err(|e| err(&e))?;
+    let (w, h) = (info.width as usize, info.height as usize);
+    let channels = info.color_type.samples();
+    let sixteen = info.bit_depth == png::BitDepth::Sixteen;
+    let value = |i: usize| -> f32 {
+        if sixteen { u16::from_be_bytes([buf[2 * i], buf[2 * i + 1]]) as f32 / 65535.0 } else { buf[i] as f32 / 255.0 }
+    };
+    let mut pixels = Vec::with_capacity(w * h);
+    for k in 0..w * h {
+        let base = k * channels;
+        let rgb = match channels {
+            1 | 2 => Rgb::splat(srgb_decode(value(base))),
+            _ => Rgb::new(srgb_decode(value(base)), srgb_decode(value(base + 1)), srgb_decode(value(base + 2))),
+        };
+        pixels.push(rgb);
+    }
+    Ok(crate::imageio::Image { width: w, height: h, pixels, metadata: BTreeMap::new() })
+}
+
 /// Reads the first RGB(A) layer of an OpenEXR file (alpha ignored) and its text attributes.
 pub fn read_exr(path: &Path) -> Result<crate::imageio::Image, String> {
     use exr::prelude::*;

@@ -12,6 +12,7 @@ pub mod film;
 pub mod geometry;
 pub mod imageio;
 pub mod integrators;
+pub mod lights;
 pub mod math;
 pub mod samplers;
 pub mod sampling;

@@ -1,0 +1,174 @@
+//! Image environment maps in pbrt-v4's equal-area octahedral parameterisation (Clarberg
+//! 2008), importance-sampled by a piecewise-constant distribution over the image.
+
+use std::f32::consts::{FRAC_2_PI, FRAC_PI_4, PI};
+use std::path::Path;
+
+use glam::{Affine3A, Vec2, Vec3};
+
+use crate::color::{Rgb, luminance};
+use crate::imageio::Image;
+use crate::sampling::distribution::PiecewiseConstant2D;
+
+/// An environment light's image, orientation and sampling distribution.
+#[derive(Clone, Debug)]
+pub struct EnvironmentMap {
+    size: usize,
+    pixels: Vec<Rgb>,
+    world_from_light: Affine3A,
+    light_from_world: Affine3A,
+    distribution: PiecewiseConstant2D,
+    average: f32,
+}
+
+/// Maps the unit square to the unit sphere, preserving area.
+pub fn equal_area_square_to_sphere(p: Vec2) -> Vec3 {
+    let u = 2.0 * p.x - 1.0;
+    let v = 2.0 * p.y - 1.0;
+    let up = u.abs();
+    let vp = v.abs();
+    let signed_distance = 1.0 - (up + vp);
+    let d = signed_distance.abs();
+    let r = 1.0 - d;
+    let phi = if r == 0.0 { 1.0 } else { (vp - up) / r + 1.0 } * FRAC_PI_4;
+    let z = (1.0 - r * r).copysign(signed_distance);
+    let cos_phi = phi.cos().copysign(u);
+    let sin_phi = phi.sin().copysign(v);
+    let s = r * (2.0 - r * r).max(0.0).sqrt();
+    Vec3::new(cos_phi * s, sin_phi * s, z)
+}
+
+/// Inverse of [`equal_area_square_to_sphere`].
+pub fn equal_area_sphere_to_square(d: Vec3) -> Vec2 {
+    let (x, y, z) = (d.x.abs(), d.y.abs(), d.z.abs());
+    let r = (1.0 - z).max(0.0).sqrt();
+    let a = x.max(y);
+    let b = if a == 0.0 { 0.0 } else { x.min(y) / a };
+    let mut phi = b.atan() * FRAC_2_PI;
+    if x < y {
+        phi = 1.0 - phi;
+    }
+    let mut v = phi * r;
+    let mut u = r - v;
+    if d.z < 0.0 {
+        std::mem::swap(&mut u, &mut v);
+        u = 1.0 - u;
+        v = 1.0 - v;
+    }
+    let u = u.copysign(d.x);
+    let v = v.copysign(d.y);
+    Vec2::new((u + 1.0) * 0.5, (v + 1.0) * 0.5)
+}
+
+impl EnvironmentMap {
+    /// An environment map from a square image, scaled by `scale`.
+    pub fn new(image: &Image, world_from_light: Affine3A, scale: f32) -> Result<EnvironmentMap, String> {
+        if image.width != image.height || image.width == 0 {
+            return Err(format!(
+                "environment image is {}x{}; pbrt-v4 environment maps are square equal-area octahedral images",
+                image.width, image.height
+            ));
+        }
+        let size = image.width;
+        let pixels: Vec<Rgb> = image.pixels.iter().map(|p| p.max(Rgb::ZERO) * scale).collect();
+        let lum: Vec<f32> = pixels.iter().map(|p| luminance(*p).max(0.0)).collect();
+        let average = lum.iter().map(|&l| l as f64).sum::<f64>() as f32 / lum.len() as f32;
+        let distribution = PiecewiseConstant2D::new(&lum, size, size, Vec2::ZERO, Vec2::ONE);
+        Ok(EnvironmentMap { size, pixels, world_from_light, light_from_world: world_from_light.inverse(), distribution, average })
+    }
+
+    /// Reads an environment map image (EXR or PNG).
+    pub fn load(path: &Path, world_from_light: Affine3A, scale: f32) -> Result<EnvironmentMap, String> {
+        let image = crate::imageio::read_image(path)?;
+        EnvironmentMap::new(&image, world_from_light, scale)
+    }
+
+    /// Mean luminance of the image (after scaling).
+    pub fn average_radiance(&self) -> f32 {
+        self.average
+    }
+
+    /// Radiance arriving from world direction `w` (nearest pixel, as pbrt-v4 looks it up).
+    pub fn lookup(&self, w: Vec3) -> Rgb {
+        let wl = self.light_from_world.transform_vector3(w).normalize_or_zero();
+        self.pixel(equal_area_sphere_to_square(wl))
+    }
+
+    fn pixel(&self, uv: Vec2) -> Rgb {
+        let n = self.size as f32;
+        let x = ((uv.x * n) as usize).min(self.size - 1);
+        let y = ((uv.y * n) as usize).min(self.size - 1);
+        self.pixels[y * self.size + x]
+    }
+
+    /// Samples a direction in proportion to luminance: (direction, pdf per solid angle,
+    /// radiance).
+    pub fn sample(&self, u: Vec2) -> Option<(Vec3, f32, Rgb)> {
+        let s = self.distribution.sample(u);
+        if s.pdf <= 0.0 {
+            return None;
+        }
+        let wl = equal_area_square_to_sphere(s.point);
+        let w = self.world_from_light.transform_vector3(wl).normalize();
+        // The mapping is area preserving: the solid-angle density is the square's over 4π.
+        Some((w, s.pdf / (4.0 * PI), self.pixel(s.point)))
+    }
+
+    /// Density of [`EnvironmentMap::sample`] for world direction `w`.
+    pub fn pdf(&self, w: Vec3) -> f32 {
+        let wl = self.light_from_world.transform_vector3(w).normalize_or_zero();
+        self.distribution.pdf(equal_area_sphere_to_square(wl)) / (4.0 * PI)
+    }
+
+    /// Illuminance at a point facing the light space's +z axis, ∫ L cos θ over that
+    /// hemisphere: pbrt-v4's reference for the `illuminance` parameter.
+    pub fn upper_hemisphere_illuminance(&self) -> f32 {
+        let n = self.size;
+        let mut sum = 0.0f64;
+        for y in 0..n {
+            for x in 0..n {
+                let uv = Vec2::new((x as f32 + 0.5) / n as f32, (y as f32 + 0.5) / n as f32);
+                let w = equal_area_square_to_sphere(uv);
+                if w.z > 0.0 {
+                    sum += (luminance(self.pixels[y * n + x]) * w.z) as f64;
+                }
+            }
+        }
+        (sum * 4.0 * PI as f64 / (n * n) as f64) as f32
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn equal_area_mapping_round_trips() {
+        for i in 0..32 {
+            for j in 0..32 {
+                let p = Vec2::new((i as f32 + 0.5) / 32.0, (j as f32 + 0.5) / 32.0);
+                let w = equal_area_square_to_sphere(p);
+                assert!((w.length() - 1.0).abs() < 1e-5);
+                let q = equal_area_sphere_to_square(w);
+                assert!((p - q).length() < 1e-4, "{p:?} -> {w:?} -> {q:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn sampling_pdf_matches_lookup_pdf() {
+        let mut img = Image::new(8, 8);
+        for (k, p) in img.pixels.iter_mut().enumerate() {
+            *p = Rgb::splat(1.0 + (k % 5) as f32);
+        }
+        let map = EnvironmentMap::new(&img, Affine3A::IDENTITY, 1.0).unwrap();
+        for u in [Vec2::new(0.1, 0.2), Vec2::new(0.7, 0.4), Vec2::new(0.95, 0.9)] {
+            let (w, pdf, l) = map.sample(u).unwrap();
+            assert!((map.pdf(w) - pdf).abs() < 1e-3 * pdf, "{} vs {pdf}", map.pdf(w));
+            assert_eq!(map.lookup(w), l);
+        }
+        // A constant map of 1 gives illuminance π.
+        let flat = EnvironmentMap::new(&Image { pixels: vec![Rgb::ONE; 64 * 64], ..Image::new(64, 64) }, Affine3A::IDENTITY, 1.0).unwrap();
+        assert!((flat.upper_hemisphere_illuminance() - PI).abs() < 0.05);
+    }
+}

@@ -1,0 +1,278 @@
+//! Light sources with pbrt-v4's radiometry: point, spot, distant, uniform and image
+//! infinite lights, and diffuse area lights (one per emitting primitive, as in pbrt-v4).
+
+mod envmap;
+mod sampler;
+
+pub use envmap::EnvironmentMap;
+pub use sampler::LightSampler;
+
+use std::f32::consts::PI;
+
+use glam::{Vec2, Vec3};
+
+use crate::accel::{Geometry, ShapeStore};
+use crate::color::{Rgb, average};
+use crate::math::Frame;
+use crate::sampling::warp;
+use crate::shapes::{SurfaceHit, triangle_sample};
+
+/// What a light is.
+#[derive(Clone, Debug)]
+pub enum LightKind {
+    /// Isotropic point source of intensity `i`.
+    Point {
+        /// Position.
+        p: Vec3,
+        /// Radiant intensity.
+        i: Rgb,
+    },
+    /// Point source limited to a cone with a smooth falloff.
+    Spot {
+        /// Position.
+        p: Vec3,
+        /// Frame whose z axis is the spot direction.
+        frame: Frame,
+        /// Radiant intensity on the axis.
+        i: Rgb,
+        /// cos of the angle where the falloff starts.
+        cos_falloff_start: f32,
+        /// cos of the cone angle (falloff end).
+        cos_falloff_end: f32,
+    },
+    /// Parallel light arriving from direction `-w`.
+    Distant {
+        /// Unit direction towards the light.
+        w: Vec3,
+        /// Radiance.
+        l: Rgb,
+    },
+    /// Constant radiance from every direction.
+    UniformInfinite {
+        /// Radiance.
+        l: Rgb,
+    },
+    /// Radiance from an equal-area octahedral image.
+    ImageInfinite(Box<EnvironmentMap>),
+    /// A diffuse emitter on one primitive.
+    Area {
+        /// The emitting geometry (never an instance).
+        geometry: Geometry,
+        /// Emitted radiance.
+        l: Rgb,
+        /// Emits from both sides.
+        two_sided: bool,
+        /// Surface area (world space).
+        area: f32,
+    },
+}
+
+/// A light and the medium it sits in.
+#[derive(Clone, Debug)]
+pub struct Light {
+    /// The light.
+    pub kind: LightKind,
+    /// Index of the medium around it, or [`crate::accel::NONE`].
+    pub medium: u32,
+}
+
+/// Where lighting is sampled from.
+#[derive(Clone, Copy, Debug)]
+pub struct LightContext {
+    /// Reference point.
+    pub p: Vec3,
+}
+
+/// Incident light sampled from a light.
+#[derive(Clone, Copy, Debug)]
+pub struct LightSample {
+    /// Radiance arriving (for delta lights, the incident radiance-like quantity I/r²).
+    pub l: Rgb,
+    /// Unit direction from the reference point towards the light.
+    pub wi: Vec3,
+    /// Density per solid angle (1 for delta lights).
+    pub pdf: f32,
+    /// Point on the light (far away for infinite and distant lights).
+    pub p: Vec3,
+    /// Normal at `p` for area lights (zero otherwise).
+    pub n: Vec3,
+    /// True for lights that cannot be hit by rays (point, spot, distant).
+    pub delta: bool,
+    /// True when `p` is at infinity (the shadow ray is unbounded).
+    pub infinite: bool,
+}
+
+/// Scene extent, for distant and infinite lights.
+#[derive(Clone, Copy, Debug)]
+pub struct SceneSphere {
+    /// Centre of a sphere bounding the scene.
+    pub center: Vec3,
+    /// Its radius.
+    pub radius: f32,
+}
+
+impl Light {
+    /// True for lights with a delta distribution (never hit by rays).
+    pub fn is_delta(&self) -> bool {
+        matches!(self.kind, LightKind::Point { .. } | LightKind::Spot { .. } | LightKind::Distant { .. })
+    }
+
+    /// True for lights at infinity that escaped rays see.
+    pub fn is_infinite(&self) -> bool {
+        matches!(self.kind, LightKind::UniformInfinite { .. } | LightKind::ImageInfinite(_))
+    }
+
+    /// Whether next-event estimation samples this light. A uniform environment is left to
+    /// BSDF and phase sampling, as pbrt-v4 does (its sampled pdf would only add variance).
+    pub fn samples_directly(&self) -> bool {
+        !matches!(self.kind, LightKind::UniformInfinite { .. })
+    }
+
+    /// Total emitted power (channel average), for choosing lights in proportion to it.
+    pub fn power(&self, scene: &SceneSphere) -> f32 {
+        let p = match &self.kind {
+            LightKind::Point { i, .. } => 4.0 * PI * average(*i),
+            LightKind::Spot { i, cos_falloff_start, cos_falloff_end, .. } => {
+                2.0 * PI * average(*i) * ((1.0 - cos_falloff_start) + (cos_falloff_start - cos_falloff_end) / 2.0)
+            }
+            LightKind::Distant { l, .. } => PI * scene.radius * scene.radius * average(*l),
+            LightKind::UniformInfinite { l } => 4.0 * PI * PI * scene.radius * scene.radius * average(*l),
+            LightKind::ImageInfinite(map) => 4.0 * PI * PI * scene.radius * scene.radius * map.average_radiance(),
+            LightKind::Area { l, two_sided, area, .. } => PI * if *two_sided { 2.0 } else { 1.0 } * area * average(*l),
+        };
+        if p.is_finite() { p.max(0.0) } else { 0.0 }
+    }
+
+    /// Samples incident light at `ctx`.
+    pub fn sample_li(&self, ctx: &LightContext, u: Vec2, shapes: &ShapeStore, scene: &SceneSphere) -> Option<LightSample> {
+        match &self.kind {
+            LightKind::Point { p, i } => {
+                let d2 = p.distance_squared(ctx.p);
+                if d2 == 0.0 {
+                    return None;
+                }
+                let wi = (*p - ctx.p) / d2.sqrt();
+                Some(LightSample { l: *i / d2, wi, pdf: 1.0, p: *p, n: Vec3::ZERO, delta: true, infinite: false })
+            }
+            LightKind::Spot { p, frame, i, cos_falloff_start, cos_falloff_end } => {
+                let d2 = p.distance_squared(ctx.p);
+                if d2 == 0.0 {
+                    return None;
+                }
+                let wi = (*p - ctx.p) / d2.sqrt();
+                let cos = frame.z.dot(-wi);
+                let falloff = smoothstep(*cos_falloff_end, *cos_falloff_start, cos);
+                if falloff == 0.0 {
+                    return None;
+                }
+                Some(LightSample { l: *i * (falloff / d2), wi, pdf: 1.0, p: *p, n: Vec3::ZERO, delta: true, infinite: false })
+            }
+            LightKind::Distant { w, l } => Some(LightSample {
+                l: *l,
+                wi: *w,
+                pdf: 1.0,
+                p: ctx.p + *w * (2.0 * scene.radius),
+                n: Vec3::ZERO,
+                delta: true,
+                infinite: true,
+            }),
+            LightKind::UniformInfinite { l } => {
+                let wi = warp::uniform_sphere(u);
+                Some(LightSample {
+                    l: *l,
+                    wi,
+                    pdf: warp::UNIFORM_SPHERE_PDF,
+                    p: ctx.p + wi * (2.0 * scene.radius),
+                    n: Vec3::ZERO,
+                    delta: false,
+                    infinite: true,
+                })
+            }
+            LightKind::ImageInfinite(map) => {
+                let (wi, pdf, l) = map.sample(u)?;
+                Some(LightSample { l, wi, pdf, p: ctx.p + wi * (2.0 * scene.radius), n: Vec3::ZERO, delta: false, infinite: true })
+            }
+            LightKind::Area { geometry, l, two_sided, .. } => {
+                let s = match *geometry {
+                    Geometry::Triangle { mesh, tri } => triangle_sample(&shapes.meshes[mesh as usize], tri, u),
+                    Geometry::Sphere(i) => shapes.spheres[i as usize].sample(ctx.p, u)?,
+                    Geometry::Disk(i) => shapes.disks[i as usize].sample_area(u)?,
+                    Geometry::Cylinder(i) => shapes.cylinders[i as usize].sample_area(u)?,
+                    Geometry::Instance(_) => return None,
+                };
+                let to = s.p - ctx.p;
+                let d2 = to.length_squared();
+                if d2 == 0.0 {
+                    return None;
+                }
+                let wi = to / d2.sqrt();
+                let cos_light = s.n.dot(-wi);
+                let pdf = if s.solid_angle {
+                    s.pdf
+                } else {
+                    if cos_light.abs() == 0.0 {
+                        return None;
+                    }
+                    s.pdf * d2 / cos_light.abs()
+                };
+                if !pdf.is_finite() || pdf <= 0.0 {
+                    return None;
+                }
+                let le = if *two_sided || cos_light > 0.0 { *l } else { Rgb::ZERO };
+                if le == Rgb::ZERO {
+                    return None;
+                }
+                Some(LightSample { l: le, wi, pdf, p: s.p, n: s.n, delta: false, infinite: false })
+            }
+        }
+    }
+
+    /// Density (per solid angle) with which [`Light::sample_li`] would pick direction `wi`
+    /// from `ctx`; for area lights `hit` is where that direction meets the light.
+    pub fn pdf_li(&self, ctx: &LightContext, wi: Vec3, hit: Option<&SurfaceHit>, shapes: &ShapeStore) -> f32 {
+        match &self.kind {
+            LightKind::Point { .. } | LightKind::Spot { .. } | LightKind::Distant { .. } => 0.0,
+            LightKind::UniformInfinite { .. } => warp::UNIFORM_SPHERE_PDF,
+            LightKind::ImageInfinite(map) => map.pdf(wi),
+            LightKind::Area { geometry, area, .. } => {
+                let Some(hit) = hit else { return 0.0 };
+                match *geometry {
+                    Geometry::Sphere(i) => shapes.spheres[i as usize].pdf(ctx.p, wi, hit),
+                    _ => {
+                        let cos = hit.n.dot(wi).abs();
+                        if cos == 0.0 { 0.0 } else { ctx.p.distance_squared(hit.p) / (cos * area) }
+                    }
+                }
+            }
+        }
+    }
+
+    /// Radiance an area light emits from `hit` in direction `w` (pointing away from it).
+    #[inline]
+    pub fn emitted(&self, hit: &SurfaceHit, w: Vec3) -> Rgb {
+        match &self.kind {
+            LightKind::Area { l, two_sided, .. } if *two_sided || hit.n.dot(w) > 0.0 => *l,
+            _ => Rgb::ZERO,
+        }
+    }
+
+    /// Radiance an infinite light sends along a ray leaving the scene in direction `d`.
+    #[inline]
+    pub fn le(&self, d: Vec3) -> Rgb {
+        match &self.kind {
+            LightKind::UniformInfinite { l } => *l,
+            LightKind::ImageInfinite(map) => map.lookup(d),
+            _ => Rgb::ZERO,
+        }
+    }
+}
+
+/// pbrt-v4's SmoothStep: 0 below `a`, 1 above `b`, cubic between.
+#[inline]
+pub fn smoothstep(a: f32, b: f32, x: f32) -> f32 {
+    if a == b {
+        return if x < a { 0.0 } else { 1.0 };
+    }
+    let t = ((x - a) / (b - a)).clamp(0.0, 1.0);
+    t * t * (3.0 - 2.0 * t)
+}

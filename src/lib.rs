@@ -19,5 +19,6 @@ pub mod sampling;
 pub mod scene;
 pub mod shapes;
 pub mod spectra;
+pub mod textures;
 
 pub use nimbus_parser as parser;

@@ -1,0 +1,256 @@
+//! Textures as pbrt-v4 evaluates them (without ray-differential filtering): constants,
+//! scale, mix, 2D checkerboards and image maps, over uv, spherical, cylindrical or planar
+//! mappings. Float textures evaluate to gray RGB and are read from the first channel.
+
+use std::f32::consts::PI;
+use std::sync::Arc;
+
+use glam::{Affine3A, Vec2, Vec3};
+
+use crate::color::Rgb;
+use crate::imageio::Image;
+
+/// A texture input: a constant (the common case, no indirection) or a texture node.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Tex {
+    /// A constant value.
+    Const(Rgb),
+    /// Index of a node in [`Textures`].
+    Node(u32),
+}
+
+/// Where a texture is evaluated.
+#[derive(Clone, Copy, Debug)]
+pub struct TexContext {
+    /// World-space point.
+    pub p: Vec3,
+    /// Surface (u, v).
+    pub uv: Vec2,
+}
+
+/// How points map to (s, t).
+#[derive(Clone, Debug)]
+pub enum TexMapping {
+    /// (su·u + du, sv·v + dv)
+    Uv {
+        /// Scale.
+        s: Vec2,
+        /// Offset.
+        d: Vec2,
+    },
+    /// Spherical angles about texture-space origin.
+    Spherical {
+        /// Texture-from-world.
+        texture_from_world: Affine3A,
+    },
+    /// Cylindrical about texture-space z.
+    Cylindrical {
+        /// Texture-from-world.
+        texture_from_world: Affine3A,
+    },
+    /// Projection onto two texture-space vectors.
+    Planar {
+        /// Texture-from-world.
+        texture_from_world: Affine3A,
+        /// s axis.
+        vs: Vec3,
+        /// t axis.
+        vt: Vec3,
+        /// Offset.
+        d: Vec2,
+    },
+}
+
+impl TexMapping {
+    /// (s, t) at `ctx`.
+    pub fn map(&self, ctx: &TexContext) -> Vec2 {
+        match self {
+            TexMapping::Uv { s, d } => *s * ctx.uv + *d,
+            TexMapping::Spherical { texture_from_world } => {
+                let v = texture_from_world.transform_point3(ctx.p).normalize_or_zero();
+                let theta = v.z.clamp(-1.0, 1.0).acos();
+                let mut phi = v.y.atan2(v.x);
+                if phi < 0.0 {
+                    phi += 2.0 * PI;
+                }
+                Vec2::new(theta / PI, phi / (2.0 * PI))
+            }
+            TexMapping::Cylindrical { texture_from_world } => {
+                let p = texture_from_world.transform_point3(ctx.p);
+                Vec2::new((PI + p.y.atan2(p.x)) / (2.0 * PI), p.z)
+            }
+            TexMapping::Planar { texture_from_world, vs, vt, d } => {
+                let v = texture_from_world.transform_point3(ctx.p);
+                Vec2::new(d.x + v.dot(*vs), d.y + v.dot(*vt))
+            }
+        }
+    }
+}
+
+/// How image lookups outside [0, 1] behave.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Wrap {
+    /// Tile.
+    Repeat,
+    /// Black outside.
+    Black,
+    /// Clamp to the edge.
+    Clamp,
+}
+
+/// One texture.
+#[derive(Clone, Debug)]
+pub enum TexNode {
+    /// `tex` × `scale`.
+    Scale {
+        /// Value.
+        tex: Tex,
+        /// Factor (float).
+        scale: Tex,
+    },
+    /// lerp(amount, a, b).
+    Mix {
+        /// At amount 0.
+        a: Tex,
+        /// At amount 1.
+        b: Tex,
+        /// Blend (float).
+        amount: Tex,
+    },
+    /// Alternating squares of `a` (even) and `b` (odd).
+    Checkerboard {
+        /// Even squares.
+        a: Tex,
+        /// Odd squares.
+        b: Tex,
+        /// Mapping.
+        mapping: TexMapping,
+    },
+    /// A bilinearly filtered image.
+    Image {
+        /// Pixels (linear).
+        image: Arc<Image>,
+        /// Mapping.
+        mapping: TexMapping,
+        /// Multiplier.
+        scale: f32,
+        /// 1 - value.
+        invert: bool,
+        /// Out-of-range behaviour.
+        wrap: Wrap,
+    },
+}
+
+/// All texture nodes of a scene.
+#[derive(Clone, Debug, Default)]
+pub struct Textures {
+    /// Nodes; [`Tex::Node`] indexes this.
+    pub nodes: Vec<TexNode>,
+}
+
+impl Textures {
+    /// Evaluates a texture input.
+    #[inline]
+    pub fn eval(&self, t: Tex, ctx: &TexContext) -> Rgb {
+        match t {
+            Tex::Const(c) => c,
+            Tex::Node(i) => self.eval_node(&self.nodes[i as usize], ctx),
+        }
+    }
+
+    /// Evaluates a float texture input (first channel).
+    #[inline]
+    pub fn eval_float(&self, t: Tex, ctx: &TexContext) -> f32 {
+        self.eval(t, ctx).x
+    }
+
+    fn eval_node(&self, node: &TexNode, ctx: &TexContext) -> Rgb {
+        match node {
+            TexNode::Scale { tex, scale } => {
+                let s = self.eval_float(*scale, ctx);
+                if s == 0.0 { Rgb::ZERO } else { self.eval(*tex, ctx) * s }
+            }
+            TexNode::Mix { a, b, amount } => {
+                let t = self.eval_float(*amount, ctx);
+                let va = if t != 1.0 { self.eval(*a, ctx) } else { Rgb::ZERO };
+                let vb = if t != 0.0 { self.eval(*b, ctx) } else { Rgb::ZERO };
+                (1.0 - t) * va + t * vb
+            }
+            TexNode::Checkerboard { a, b, mapping } => {
+                let st = mapping.map(ctx);
+                if (st.x.floor() as i64 + st.y.floor() as i64) % 2 == 0 { self.eval(*a, ctx) } else { self.eval(*b, ctx) }
+            }
+            TexNode::Image { image, mapping, scale, invert, wrap } => {
+                let mut st = mapping.map(ctx);
+                // pbrt-v4 flips t so that images are not upside down.
+                st.y = 1.0 - st.y;
+                let v = bilerp(image, st, *wrap) * *scale;
+                if *invert { (Rgb::ONE - v).max(Rgb::ZERO) } else { v }
+            }
+        }
+    }
+}
+
+fn texel(image: &Image, x: i64, y: i64, wrap: Wrap) -> Rgb {
+    let (w, h) = (image.width as i64, image.height as i64);
+    let (x, y) = match wrap {
+        Wrap::Repeat => (x.rem_euclid(w), y.rem_euclid(h)),
+        Wrap::Clamp => (x.clamp(0, w - 1), y.clamp(0, h - 1)),
+        Wrap::Black => {
+            if x < 0 || y < 0 || x >= w || y >= h {
+                return Rgb::ZERO;
+            }
+            (x, y)
+        }
+    };
+    image.pixels[(y * w + x) as usize]
+}
+
+/// Bilinear lookup with pixel centres at half-integers (pbrt-v4's Image::Bilerp).
+fn bilerp(image: &Image, st: Vec2, wrap: Wrap) -> Rgb {
+    let x = st.x * image.width as f32 - 0.5;
+    let y = st.y * image.height as f32 - 0.5;
+    let (xi, yi) = (x.floor(), y.floor());
+    let (dx, dy) = (x - xi, y - yi);
+    let (xi, yi) = (xi as i64, yi as i64);
+    (1.0 - dx) * (1.0 - dy) * texel(image, xi, yi, wrap)
+        + dx * (1.0 - dy) * texel(image, xi + 1, yi, wrap)
+        + (1.0 - dx) * dy * texel(image, xi, yi + 1, wrap)
+        + dx * dy * texel(image, xi + 1, yi + 1, wrap)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn checkerboard_and_mix() {
+        let mut t = Textures::default();
+        t.nodes.push(TexNode::Checkerboard {
+            a: Tex::Const(Rgb::ONE),
+            b: Tex::Const(Rgb::ZERO),
+            mapping: TexMapping::Uv { s: Vec2::splat(2.0), d: Vec2::ZERO },
+        });
+        t.nodes.push(TexNode::Mix { a: Tex::Node(0), b: Tex::Const(Rgb::splat(0.5)), amount: Tex::Const(Rgb::splat(0.5)) });
+        let at = |u: f32, v: f32| TexContext { p: Vec3::ZERO, uv: Vec2::new(u, v) };
+        assert_eq!(t.eval(Tex::Node(0), &at(0.25, 0.25)), Rgb::ONE);
+        assert_eq!(t.eval(Tex::Node(0), &at(0.75, 0.25)), Rgb::ZERO);
+        assert_eq!(t.eval(Tex::Node(1), &at(0.25, 0.25)), Rgb::splat(0.75));
+    }
+
+    #[test]
+    fn image_lookup_is_bilinear_and_flipped() {
+        let mut img = Image::new(2, 1);
+        img.pixels = vec![Rgb::ZERO, Rgb::ONE];
+        let mut t = Textures::default();
+        t.nodes.push(TexNode::Image {
+            image: Arc::new(img),
+            mapping: TexMapping::Uv { s: Vec2::ONE, d: Vec2::ZERO },
+            scale: 1.0,
+            invert: false,
+            wrap: Wrap::Clamp,
+        });
+        let v = t.eval(Tex::Node(0), &TexContext { p: Vec3::ZERO, uv: Vec2::new(0.5, 0.5) });
+        assert!((v.x - 0.5).abs() < 1e-6);
+    }
+}

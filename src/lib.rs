@@ -8,6 +8,7 @@
 pub mod color;
 pub mod geometry;
 pub mod integrators;
+pub mod materials;
 pub mod math;
 pub mod sampling;
 pub mod scene;

@@ -13,6 +13,7 @@ pub mod geometry;
 pub mod imageio;
 pub mod integrators;
 pub mod lights;
+pub mod materials;
 pub mod math;
 pub mod samplers;
 pub mod sampling;

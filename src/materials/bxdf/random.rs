@@ -1,4 +1,8 @@
-//! pbrt-v4's PCG32 generator (`util/rng.h`, O'Neill 2014), used by the BxDF tests.
+//! The deterministic random numbers of pbrt-v4's stochastic BxDFs: its PCG32 generator
+//! (`util/rng.h`, O'Neill 2014) seeded by MurmurHash64A of the directions involved
+//! (`util/hash.h`), so that evaluating the same (ωo, ωi) twice gives the same estimate.
+
+use glam::{Vec2, Vec3};
 
 use crate::sampling::warp::ONE_MINUS_EPSILON;
 
@@ -52,6 +56,57 @@ impl Pcg32 {
     }
 }
 
+/// MurmurHash64A (Appleby) of `key`, as pbrt-v4 uses it for `Hash(...)`.
+pub(crate) fn murmur_hash64a(key: &[u8], seed: u64) -> u64 {
+    const M: u64 = 0xc6a4_a793_5bd1_e995;
+    const R: u32 = 47;
+    let mut h = seed ^ (key.len() as u64).wrapping_mul(M);
+    let mut chunks = key.chunks_exact(8);
+    for chunk in &mut chunks {
+        let mut k = u64::from_le_bytes(chunk.try_into().expect("8-byte chunk"));
+        k = k.wrapping_mul(M);
+        k ^= k >> R;
+        k = k.wrapping_mul(M);
+        h ^= k;
+        h = h.wrapping_mul(M);
+    }
+    let tail = chunks.remainder();
+    if !tail.is_empty() {
+        for (i, &b) in tail.iter().enumerate() {
+            h ^= (b as u64) << (8 * i);
+        }
+        h = h.wrapping_mul(M);
+    }
+    h ^= h >> R;
+    h = h.wrapping_mul(M);
+    h ^= h >> R;
+    h
+}
+
+/// pbrt-v4's `Hash(a, b, c, ...)` for up to four f32 values (their bytes, packed).
+fn hash_f32s<const N: usize>(values: [f32; N]) -> u64 {
+    let mut buf = [0u8; 16];
+    for (i, v) in values.iter().enumerate() {
+        buf[4 * i..4 * i + 4].copy_from_slice(&v.to_le_bytes());
+    }
+    murmur_hash64a(&buf[..4 * N], 0)
+}
+
+/// pbrt-v4's `Hash(seed, w)` for an `int` seed and a `Vector3f`.
+pub(crate) fn hash_seed_vec3(seed: i32, w: Vec3) -> u64 {
+    hash_f32s([f32::from_bits(seed as u32), w.x, w.y, w.z])
+}
+
+/// pbrt-v4's `Hash(w)` for a `Vector3f`.
+pub(crate) fn hash_vec3(w: Vec3) -> u64 {
+    hash_f32s([w.x, w.y, w.z])
+}
+
+/// pbrt-v4's `Hash(uc, u)` for a `Float` and a `Point2f`.
+pub(crate) fn hash_sample(uc: f32, u: Vec2) -> u64 {
+    hash_f32s([uc, u.x, u.y])
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -76,5 +131,24 @@ mod tests {
             let u = d.uniform();
             assert!((0.0..1.0).contains(&u));
         }
+    }
+
+    #[test]
+    fn murmur_hash_is_stable_and_reads_tails() {
+        // Reference values of MurmurHash64A with seed 0.
+        assert_eq!(murmur_hash64a(b"", 0), 0);
+        let a = murmur_hash64a(&[1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12], 0);
+        let b = murmur_hash64a(&[1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 13], 0);
+        assert_ne!(a, b, "the tail bytes must matter");
+        assert_eq!(
+            hash_vec3(Vec3::new(0.1, 0.2, 0.3)),
+            hash_vec3(Vec3::new(0.1, 0.2, 0.3))
+        );
+        // Hash(uc, u) packs the same 12 bytes as Hash(Vector3f(uc, u.x, u.y)).
+        assert_eq!(
+            hash_vec3(Vec3::new(0.1, 0.2, 0.3)),
+            hash_sample(0.1, Vec2::new(0.2, 0.3))
+        );
+        assert_ne!(hash_seed_vec3(0, Vec3::X), hash_seed_vec3(1, Vec3::X));
     }
 }

@@ -15,6 +15,8 @@ pub mod integrators;
 pub mod lights;
 pub mod materials;
 pub mod math;
+pub mod metrics;
+pub mod render;
 pub mod samplers;
 pub mod sampling;
 pub mod scene;

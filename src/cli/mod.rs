@@ -1,6 +1,9 @@
 //! Subcommands of the `nimbus` binary.
 
 mod check;
+mod diff;
+mod parity;
+mod render;
 
 use std::process::ExitCode;
 
@@ -18,6 +21,13 @@ struct Cli {
 enum Command {
     /// Read a scene and report what it contains, or what is wrong with it and where.
     Check(check::CheckArgs),
+    /// Render a scene to an image.
+    Render(render::RenderArgs),
+    /// Compare an image with a reference: MSE, relMSE, MAE, MPE/MNE, means, error image.
+    Diff(diff::DiffArgs),
+    /// Judge two renders (different seeds) against a reference as the pbrt-v4 parity suite
+    /// does: relative mean difference and block-noise excess.
+    Parity(parity::ParityArgs),
 }
 
 /// Parses the command line and runs the subcommand; errors print to stderr and give exit
@@ -26,6 +36,9 @@ pub fn run() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Check(args) => check::run(&args),
+        Command::Render(args) => render::run(&args),
+        Command::Parity(args) => parity::run(&args),
+        Command::Diff(args) => diff::run(&args),
     };
     match result {
         Ok(code) => code,

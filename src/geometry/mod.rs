@@ -1,8 +1,57 @@
 //! Geometry shared by shapes and integrators: rays, bounds and mesh file formats.
 
 mod bounds;
+pub mod gltf;
+pub mod obj;
 pub mod ply;
 mod ray;
 
 pub use bounds::Bounds3;
 pub use ray::{Ray, offset_origin, position_error, spawn_ray, spawn_ray_to};
+
+/// Triangle mesh data as read from a file, in the file's (object) space.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct MeshData {
+    /// Vertex positions.
+    pub positions: Vec<[f32; 3]>,
+    /// Per-vertex normals (empty if the file has none).
+    pub normals: Vec<[f32; 3]>,
+    /// Per-vertex texture coordinates (empty if none).
+    pub uvs: Vec<[f32; 2]>,
+    /// Triangle vertex indices.
+    pub indices: Vec<u32>,
+}
+
+impl MeshData {
+    /// Checks indices, array lengths and finiteness; `what` prefixes messages.
+    pub fn validate(&self, what: &str) -> Result<(), String> {
+        let n = self.positions.len();
+        if let Some(&bad) = self.indices.iter().find(|&&i| i as usize >= n) {
+            return Err(format!(
+                "{what}: vertex index {bad} out of range ({n} vertices)"
+            ));
+        }
+        if !self.indices.len().is_multiple_of(3) {
+            return Err(format!(
+                "{what}: {} indices is not a multiple of 3",
+                self.indices.len()
+            ));
+        }
+        if self.positions.iter().flatten().any(|c| !c.is_finite()) {
+            return Err(format!("{what}: non-finite vertex position"));
+        }
+        if !self.normals.is_empty() && self.normals.len() != n {
+            return Err(format!(
+                "{what}: {} normals for {n} vertices",
+                self.normals.len()
+            ));
+        }
+        if !self.uvs.is_empty() && self.uvs.len() != n {
+            return Err(format!(
+                "{what}: {} texture coordinates for {n} vertices",
+                self.uvs.len()
+            ));
+        }
+        Ok(())
+    }
+}

@@ -5,18 +5,7 @@
 use std::io::Read;
 use std::path::Path;
 
-/// A triangle mesh read from a PLY file.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct PlyMesh {
-    /// Vertex positions.
-    pub positions: Vec<[f32; 3]>,
-    /// Per-vertex normals (empty if the file has none).
-    pub normals: Vec<[f32; 3]>,
-    /// Per-vertex texture coordinates (empty if none).
-    pub uvs: Vec<[f32; 2]>,
-    /// Triangle vertex indices.
-    pub indices: Vec<u32>,
-}
+use super::MeshData;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 enum Scalar {
@@ -133,7 +122,7 @@ impl Body<'_> {
 
 /// Reads a PLY file (`.ply` or `.ply.gz`). Errors are plain messages; callers add the scene
 /// location.
-pub fn read_ply(path: &Path) -> Result<PlyMesh, String> {
+pub fn read_ply(path: &Path) -> Result<MeshData, String> {
     let mut data = Vec::new();
     let file = std::fs::File::open(path).map_err(|e| format!("{}: {e}", path.display()))?;
     if path.extension().is_some_and(|x| x == "gz") {
@@ -146,7 +135,7 @@ pub fn read_ply(path: &Path) -> Result<PlyMesh, String> {
 }
 
 /// Parses PLY bytes.
-pub fn parse_ply(data: &[u8]) -> Result<PlyMesh, String> {
+pub fn parse_ply(data: &[u8]) -> Result<MeshData, String> {
     let header_end = find_header_end(data).ok_or("not a PLY file (no end_header)")?;
     let header =
         std::str::from_utf8(&data[..header_end.0]).map_err(|_| "PLY header is not text")?;
@@ -196,7 +185,7 @@ pub fn parse_ply(data: &[u8]) -> Result<PlyMesh, String> {
         pos: header_end.1,
         format,
     };
-    let mut mesh = PlyMesh::default();
+    let mut mesh = MeshData::default();
     for el in &elements {
         match el.name.as_str() {
             "vertex" => read_vertices(&mut body, el, &mut mesh)?,
@@ -225,7 +214,7 @@ fn find_header_end(data: &[u8]) -> Option<(usize, usize)> {
     Some((at + key.len(), body))
 }
 
-fn read_vertices(body: &mut Body<'_>, el: &Element, mesh: &mut PlyMesh) -> Result<(), String> {
+fn read_vertices(body: &mut Body<'_>, el: &Element, mesh: &mut MeshData) -> Result<(), String> {
     let index = |names: &[&str]| {
         el.properties
             .iter()
@@ -278,7 +267,7 @@ fn read_vertices(body: &mut Body<'_>, el: &Element, mesh: &mut PlyMesh) -> Resul
     Ok(())
 }
 
-fn read_faces(body: &mut Body<'_>, el: &Element, mesh: &mut PlyMesh) -> Result<(), String> {
+fn read_faces(body: &mut Body<'_>, el: &Element, mesh: &mut MeshData) -> Result<(), String> {
     mesh.indices.reserve(el.count * 3);
     let mut face = Vec::with_capacity(4);
     for f in 0..el.count {

@@ -1,9 +1,16 @@
 //! Integrators: one folder per method, each with its settings. The registry maps the names
-//! scenes and `--integrator` use to settings readers.
+//! scenes and `--integrator` use to settings readers and implementations.
 
+pub mod common;
 pub mod volpath;
 
 use nimbus_parser::{Entity, Error};
+
+use crate::color::Rgb;
+use crate::geometry::Ray;
+use crate::samplers::Sampler;
+use crate::scene::Scene;
+use common::RayStats;
 
 /// Settings of the integrator a scene asks for.
 #[derive(Clone, Debug, PartialEq)]
@@ -17,7 +24,7 @@ pub const INTEGRATOR_NAMES: &[&str] = &["volpath"];
 
 impl IntegratorSettings {
     /// Reads the integrator entity; `name_override` replaces the scene's choice (the
-    /// parameters that method shares with the scene's are kept).
+    /// parameters that method shares with the scene's, such as `maxdepth`, are kept).
     pub fn from_entity(
         e: &Entity,
         name_override: Option<&str>,
@@ -42,4 +49,20 @@ impl IntegratorSettings {
             IntegratorSettings::VolPath(_) => "volpath",
         }
     }
+
+    /// Creates the integrator.
+    pub fn create(&self) -> Box<dyn Integrator> {
+        match self {
+            IntegratorSettings::VolPath(s) => Box::new(volpath::VolPath::new(s)),
+        }
+    }
+}
+
+/// A light transport method: radiance along camera rays.
+pub trait Integrator: Sync {
+    /// The method's name (as in scene files).
+    fn name(&self) -> &'static str;
+
+    /// Radiance arriving at the camera along `ray`, one sample.
+    fn li(&self, scene: &Scene, ray: Ray, sampler: &mut Sampler, stats: &mut RayStats) -> Rgb;
 }

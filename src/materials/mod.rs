@@ -1,4 +1,7 @@
-//! Materials: the scattering functions (BxDFs) of pbrt-v4's materials, evaluated in the local
-//! shading frame.
+//! Materials: pbrt-v4's BxDF models (evaluated in the local shading frame) and the
+//! materials that create them at surface hits.
 
 pub mod bxdf;
+mod material;
+
+pub use material::{ConductorInput, Material, RoughnessTex};

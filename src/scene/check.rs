@@ -84,6 +84,44 @@ fn shape_triangles(shape: &ShapeEntity, settings: &ShapeSettings<'_>) -> Result<
     })
 }
 
+/// Warnings for every parameter that no reader used, across all entities of `scene`. Call
+/// after the entities were read (by [`check_scene`] or by building the scene).
+pub fn unused_parameters(scene: &SceneDescription) -> Vec<Warning> {
+    let mut w = Vec::new();
+    let mut dicts: Vec<&ParameterDictionary> = vec![
+        &scene.camera.entity.params,
+        &scene.film.params,
+        &scene.filter.params,
+        &scene.sampler.params,
+        &scene.integrator.params,
+    ];
+    dicts.extend(scene.shapes.iter().map(|s| &s.entity.params));
+    dicts.extend(
+        scene
+            .instance_definitions
+            .iter()
+            .flat_map(|d| d.shapes.iter().map(|s| &s.entity.params)),
+    );
+    dicts.extend(scene.lights.iter().map(|l| &l.entity.params));
+    dicts.extend(scene.area_lights.iter().map(|a| &a.params));
+    dicts.extend(scene.media.iter().map(|m| &m.entity.params));
+    for d in dicts {
+        w.extend(d.report_unused());
+    }
+    // Materials and textures of types nimbus lacks were already reported as unsupported.
+    for e in scene
+        .materials
+        .iter()
+        .chain(scene.named_materials.iter().map(|m| &m.entity))
+        .chain(scene.textures.iter().map(|t| &t.entity))
+    {
+        if e.params.iter().any(|p| p.is_used()) || e.params.is_empty() {
+            w.extend(e.params.report_unused());
+        }
+    }
+    w
+}
+
 /// Reads every entity of `scene` through its settings reader. Errors stop at the first; the
 /// result lists warnings, including every parameter no reader used.
 pub fn check_scene(scene: &SceneDescription) -> Result<SceneCheck, Error> {

@@ -13,6 +13,8 @@ pub mod shapes;
 pub mod textures;
 pub mod values;
 
+mod build;
 mod check;
 
-pub use check::{SceneCheck, check_scene};
+pub use build::{BuildOptions, BuildStats, Scene, build_scene};
+pub use check::{SceneCheck, check_scene, unused_parameters};

@@ -1,6 +1,40 @@
 //! `volpath`: pbrt-v4's volumetric path tracer, the reference every other method is checked
-//! against.
+//! against. The loop itself lives in [`crate::integrators::common::path`].
 
 mod settings;
 
 pub use settings::{LightSamplerKind, VolPathSettings};
+
+use super::Integrator;
+use super::common::{NoObserver, PathConfig, RayStats, trace_path};
+use crate::color::Rgb;
+use crate::geometry::Ray;
+use crate::samplers::Sampler;
+use crate::scene::Scene;
+
+/// The volumetric path tracer.
+pub struct VolPath {
+    config: PathConfig,
+}
+
+impl VolPath {
+    /// A tracer with the given settings.
+    pub fn new(s: &VolPathSettings) -> VolPath {
+        VolPath {
+            config: PathConfig {
+                max_depth: s.max_depth,
+                regularize: s.regularize,
+            },
+        }
+    }
+}
+
+impl Integrator for VolPath {
+    fn name(&self) -> &'static str {
+        "volpath"
+    }
+
+    fn li(&self, scene: &Scene, ray: Ray, sampler: &mut Sampler, stats: &mut RayStats) -> Rgb {
+        trace_path(scene, ray, sampler, &self.config, &mut NoObserver, stats)
+    }
+}

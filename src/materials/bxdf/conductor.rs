@@ -15,12 +15,27 @@ pub struct ConductorBxdf {
     distrib: TrowbridgeReitz,
     eta: Rgb,
     k: Rgb,
+    /// Per-channel factor on the Fresnel term: 1 except where an RGB fit of spectral optical
+    /// constants needs it (a projected reflectance above 1, e.g. gold's red channel in sRGB).
+    fresnel_scale: Rgb,
 }
 
 impl ConductorBxdf {
     /// A conductor with the given microfacet distribution and optical constants.
     pub fn new(distrib: TrowbridgeReitz, eta: Rgb, k: Rgb) -> ConductorBxdf {
-        ConductorBxdf { distrib, eta, k }
+        ConductorBxdf {
+            distrib,
+            eta,
+            k,
+            fresnel_scale: Rgb::ONE,
+        }
+    }
+
+    /// The same conductor with its Fresnel reflectance multiplied by `scale` per channel
+    /// (see [`crate::spectra::ConductorFit`]).
+    pub fn with_fresnel_scale(mut self, scale: Rgb) -> ConductorBxdf {
+        self.fresnel_scale = scale;
+        self
     }
 
     /// A conductor specified by its normal-incidence reflectance `r`, as pbrt-v4's
@@ -52,7 +67,7 @@ impl ConductorBxdf {
             return Rgb::ZERO;
         }
         let wm = wm.normalize();
-        let fresnel = fr_complex_rgb(wo.dot(wm).abs(), self.eta, self.k);
+        let fresnel = fr_complex_rgb(wo.dot(wm).abs(), self.eta, self.k) * self.fresnel_scale;
         self.distrib.d(wm) * fresnel * self.distrib.g(wo, wi) / (4.0 * cos_i * cos_o)
     }
 
@@ -72,7 +87,7 @@ impl ConductorBxdf {
         if self.distrib.effectively_smooth() {
             let wi = Vec3::new(-wo.x, -wo.y, wo.z);
             let cos_i = abs_cos_theta(wi);
-            let f = fr_complex_rgb(cos_i, self.eta, self.k) / cos_i;
+            let f = fr_complex_rgb(cos_i, self.eta, self.k) * self.fresnel_scale / cos_i;
             return Some(BsdfSample::new(f, wi, 1.0, BxdfFlags::SPECULAR_REFLECTION));
         }
         if wo.z == 0.0 {
@@ -90,7 +105,7 @@ impl ConductorBxdf {
         if cos_i == 0.0 || cos_o == 0.0 {
             return None;
         }
-        let fresnel = fr_complex_rgb(wo.dot(wm).abs(), self.eta, self.k);
+        let fresnel = fr_complex_rgb(wo.dot(wm).abs(), self.eta, self.k) * self.fresnel_scale;
         let f = self.distrib.d(wm) * fresnel * self.distrib.g(wo, wi) / (4.0 * cos_i * cos_o);
         Some(BsdfSample::new(f, wi, pdf, BxdfFlags::GLOSSY_REFLECTION))
     }

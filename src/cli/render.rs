@@ -1,0 +1,195 @@
+//! `nimbus render scene.pbrt`: pbrt-v4's command line (`--spp`, `--outfile`, `--nthreads`,
+//! `--seed`, `--cropwindow`, `--pixelbounds`, `--quick`, `--stats`) plus `--integrator` and
+//! `--time`.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::time::Instant;
+
+use anyhow::{Context, Result};
+use nimbus::scene::{BuildOptions, build_scene, unused_parameters};
+
+/// Arguments of `nimbus render`.
+#[derive(clap::Args)]
+pub struct RenderArgs {
+    /// Scene file (`.pbrt`, `.pbrt.gz`, or `-` for standard input).
+    scene: PathBuf,
+    /// Samples per pixel (overrides the scene's sampler).
+    #[arg(long)]
+    spp: Option<u32>,
+    /// Output image (.exr float RGB with metadata, or .png 8-bit sRGB); default: the film's
+    /// filename.
+    #[arg(long)]
+    outfile: Option<PathBuf>,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    nthreads: Option<usize>,
+    /// Sampler seed.
+    #[arg(long)]
+    seed: Option<i32>,
+    /// Render only this part of the image, in NDC: x0 x1 y0 y1.
+    #[arg(long, num_args = 4, value_names = ["X0", "X1", "Y0", "Y1"], allow_negative_numbers = true)]
+    cropwindow: Option<Vec<f32>>,
+    /// Render only these pixels: x0 x1 y0 y1.
+    #[arg(long, num_args = 4, value_names = ["X0", "X1", "Y0", "Y1"], allow_negative_numbers = true)]
+    pixelbounds: Option<Vec<i32>>,
+    /// Quarter resolution and samples.
+    #[arg(long)]
+    quick: bool,
+    /// Print rays/s, paths/s, memory and time per phase.
+    #[arg(long)]
+    stats: bool,
+    /// Render with this integrator instead of the scene's (drop-in comparison).
+    #[arg(long)]
+    integrator: Option<String>,
+    /// Render progressively for this many seconds instead of to the scene's spp.
+    #[arg(long)]
+    time: Option<f64>,
+    /// No progress bar or summary.
+    #[arg(long)]
+    quiet: bool,
+    /// Fail on warnings (unused parameters, unsupported features with stand-ins).
+    #[arg(long)]
+    strict: bool,
+}
+
+fn scene_error(e: &nimbus::parser::Error) {
+    match &e.loc {
+        Some(loc) => eprintln!("{loc}: error: {}", e.message),
+        None => eprintln!("error: {}", e.message),
+    }
+}
+
+/// Runs the render.
+pub fn run(args: &RenderArgs) -> Result<ExitCode> {
+    let t_start = Instant::now();
+    if let Some(n) = args.nthreads {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(n.max(1))
+            .build_global()
+            .context("setting the thread count")?;
+    }
+    if let Some(t) = args.time
+        && (!t.is_finite() || t <= 0.0)
+    {
+        anyhow::bail!("--time must be a positive number of seconds");
+    }
+    let desc = match nimbus::parser::load_file(&args.scene) {
+        Ok(d) => d,
+        Err(e) => {
+            scene_error(&e);
+            return Ok(ExitCode::FAILURE);
+        }
+    };
+    let t_parsed = Instant::now();
+    let opts = BuildOptions {
+        integrator: args.integrator.clone(),
+        spp: args.spp,
+        seed: args.seed,
+        quick: args.quick,
+        crop_window: args.cropwindow.as_ref().map(|v| [v[0], v[1], v[2], v[3]]),
+        pixel_bounds: args.pixelbounds.as_ref().map(|v| [v[0], v[1], v[2], v[3]]),
+    };
+    let scene = match build_scene(&desc, &opts) {
+        Ok(s) => s,
+        Err(e) => {
+            scene_error(&e);
+            return Ok(ExitCode::FAILURE);
+        }
+    };
+    let mut warnings = scene.warnings.clone();
+    warnings.extend(unused_parameters(&desc));
+    for w in &warnings {
+        match &w.loc {
+            Some(loc) => eprintln!("{loc}: warning: {}", w.message),
+            None => eprintln!("warning: {}", w.message),
+        }
+    }
+    if args.strict && !warnings.is_empty() {
+        eprintln!(
+            "error: {} warning(s) and --strict was given",
+            warnings.len()
+        );
+        return Ok(ExitCode::FAILURE);
+    }
+    let t_built = Instant::now();
+    let integrator = scene.integrator.create();
+    let result = nimbus::render::render(
+        &scene,
+        integrator.as_ref(),
+        &nimbus::render::RenderOptions {
+            time_budget: args.time,
+            quiet: args.quiet,
+        },
+    );
+    let t_rendered = Instant::now();
+    let mut image = result.image;
+    image
+        .metadata
+        .insert("nimbus:spp".into(), result.spp.to_string());
+    image
+        .metadata
+        .insert("nimbus:time".into(), format!("{:.3}", result.seconds));
+    image
+        .metadata
+        .insert("nimbus:integrator".into(), integrator.name().to_string());
+    image
+        .metadata
+        .insert("nimbus:seed".into(), scene.sampler.seed.to_string());
+    image
+        .metadata
+        .insert("nimbus:scene".into(), args.scene.display().to_string());
+    let out = args
+        .outfile
+        .clone()
+        .unwrap_or_else(|| PathBuf::from(&scene.film.filename));
+    nimbus::imageio::write_image(&out, &image).map_err(anyhow::Error::msg)?;
+    let t_written = Instant::now();
+    if !args.quiet {
+        eprintln!(
+            "{}: {}x{}, {} spp, {} in {:.2} s",
+            out.display(),
+            image.width,
+            image.height,
+            result.spp,
+            integrator.name(),
+            result.seconds
+        );
+    }
+    if args.stats {
+        let secs = result.seconds.max(1e-9);
+        println!(
+            "phase       parse {:.3} s, build {:.3} s (geometry {:.3} s), render {:.3} s, write {:.3} s",
+            (t_parsed - t_start).as_secs_f64(),
+            (t_built - t_parsed).as_secs_f64(),
+            scene.stats.geometry_seconds,
+            (t_rendered - t_built).as_secs_f64(),
+            (t_written - t_rendered).as_secs_f64()
+        );
+        println!(
+            "rays        {} total ({} camera, {} bounce, {} shadow), {:.3} M rays/s",
+            result.rays.total(),
+            result.rays.camera,
+            result.rays.bounce,
+            result.rays.shadow,
+            result.rays.total() as f64 / secs / 1e6
+        );
+        println!(
+            "paths       {:.3} M paths/s",
+            result.rays.camera as f64 / secs / 1e6
+        );
+        println!(
+            "geometry    {} primitives, {} triangles, {:.1} MiB of mesh data, {}",
+            scene.stats.primitives,
+            scene.stats.triangles,
+            scene.stats.mesh_bytes as f64 / (1 << 20) as f64,
+            if scene.surfaces.top.is_some() {
+                "BVH built"
+            } else {
+                "no surfaces, no BVH"
+            }
+        );
+        println!("lights      {}", scene.lights.len());
+    }
+    Ok(ExitCode::SUCCESS)
+}

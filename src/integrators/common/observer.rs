@@ -1,0 +1,79 @@
+//! Observing the path loop: research integrators (path graphs, guiding, radiance graphs)
+//! record vertices, next-event samples and emission without copying the loop. Every method
+//! has an empty default and the loop is generic over the observer, so `volpath` pays
+//! nothing for the hooks.
+
+use glam::Vec3;
+
+use crate::color::Rgb;
+
+/// A scattering vertex: where the path scattered and how it continued.
+#[derive(Clone, Copy, Debug)]
+pub struct VertexEvent {
+    /// Number of scattering events before this one (0 for the first vertex).
+    pub depth: u32,
+    /// Position.
+    pub p: Vec3,
+    /// Shading normal (zero inside media).
+    pub n: Vec3,
+    /// Direction back along the incoming ray (towards the previous vertex).
+    pub wo: Vec3,
+    /// Sampled continuation direction.
+    pub wi: Vec3,
+    /// Density of `wi` under the sampling technique used.
+    pub pdf: f32,
+    /// BSDF or phase value × |cos| for `wi` (value only for phase functions).
+    pub f: Rgb,
+    /// Throughput arriving at the vertex (before this scattering).
+    pub beta: Rgb,
+    /// True when the continuation was a specular (delta) sample.
+    pub specular: bool,
+    /// True for a vertex inside a medium.
+    pub in_medium: bool,
+}
+
+/// A next-event estimate at a vertex.
+#[derive(Clone, Copy, Debug)]
+pub struct NeeEvent {
+    /// Scattering events before the vertex.
+    pub depth: u32,
+    /// The vertex position.
+    pub p: Vec3,
+    /// Direction to the light sample.
+    pub wi: Vec3,
+    /// Light sample density (light choice × direction, solid angle).
+    pub pdf_light: f32,
+    /// BSDF/phase density of `wi` (MIS partner).
+    pub pdf_scatter: f32,
+    /// Contribution added to the pixel (already MIS-weighted, transmittance included).
+    pub contribution: Rgb,
+}
+
+/// Emission found by the path (hit area light, escaped to the environment, medium
+/// emission).
+#[derive(Clone, Copy, Debug)]
+pub struct EmissionEvent {
+    /// Scattering events before it.
+    pub depth: u32,
+    /// Contribution added to the pixel (MIS-weighted).
+    pub contribution: Rgb,
+}
+
+/// Receives the path loop's events.
+pub trait PathObserver {
+    /// A scattering vertex was sampled.
+    #[inline]
+    fn on_vertex(&mut self, _v: &VertexEvent) {}
+    /// A next-event estimate was made.
+    #[inline]
+    fn on_nee(&mut self, _e: &NeeEvent) {}
+    /// Emission was added.
+    #[inline]
+    fn on_emission(&mut self, _e: &EmissionEvent) {}
+}
+
+/// The observer that records nothing.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct NoObserver;
+
+impl PathObserver for NoObserver {}

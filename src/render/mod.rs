@@ -1,0 +1,238 @@
+//! Rendering a scene into an image: tiles in parallel with rayon, each pixel's samples in a
+//! fixed order so the image is the same at any thread count, progressive passes for a time
+//! budget.
+
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::Instant;
+
+use glam::UVec2;
+use rayon::prelude::*;
+
+use crate::color::Rgb;
+use crate::imageio::Image;
+use crate::integrators::Integrator;
+use crate::integrators::common::RayStats;
+use crate::samplers::{Sampler, get_camera_sample};
+use crate::scene::Scene;
+
+/// Side of a square tile in pixels.
+const TILE: u32 = 16;
+
+/// How to run a render.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct RenderOptions {
+    /// Stop after this many seconds (progressive), instead of at the scene's spp.
+    pub time_budget: Option<f64>,
+    /// Print nothing while rendering.
+    pub quiet: bool,
+}
+
+/// A finished render.
+pub struct RenderResult {
+    /// The image (the film's pixel bounds).
+    pub image: Image,
+    /// Samples per pixel reached.
+    pub spp: u32,
+    /// Seconds spent rendering (excluding scene building).
+    pub seconds: f64,
+    /// Rays traced.
+    pub rays: RayStats,
+}
+
+/// Per-pixel accumulation: Σ w·L and Σ w (pbrt-v4's RGBFilm).
+#[derive(Clone, Copy, Debug, Default)]
+struct PixelSum {
+    rgb: [f64; 3],
+    weight: f64,
+}
+
+/// The film being accumulated.
+pub struct Accumulator {
+    width: u32,
+    height: u32,
+    origin: UVec2,
+    pixels: Vec<PixelSum>,
+}
+
+impl Accumulator {
+    fn new(bounds: [u32; 4]) -> Accumulator {
+        let (w, h) = (bounds[2] - bounds[0], bounds[3] - bounds[1]);
+        Accumulator {
+            width: w,
+            height: h,
+            origin: UVec2::new(bounds[0], bounds[1]),
+            pixels: vec![PixelSum::default(); (w * h) as usize],
+        }
+    }
+
+    fn image(&self, imaging_ratio: f32) -> Image {
+        let mut img = Image::new(self.width as usize, self.height as usize);
+        for (o, p) in img.pixels.iter_mut().zip(&self.pixels) {
+            if p.weight != 0.0 {
+                let s = imaging_ratio as f64 / p.weight;
+                *o = Rgb::new(
+                    (p.rgb[0] * s) as f32,
+                    (p.rgb[1] * s) as f32,
+                    (p.rgb[2] * s) as f32,
+                );
+            }
+        }
+        img
+    }
+}
+
+/// Renders samples `[first, first + count)` of every pixel in one tile.
+#[allow(clippy::too_many_arguments)]
+fn render_tile(
+    scene: &Scene,
+    integrator: &dyn Integrator,
+    sampler: &mut Sampler,
+    acc_origin: UVec2,
+    acc_width: u32,
+    tile: [u32; 4],
+    first: u32,
+    count: u32,
+    out: &mut Vec<(u32, PixelSum)>,
+    stats: &mut RayStats,
+) {
+    let max = scene.film.max_component_value;
+    for y in tile[1]..tile[3] {
+        for x in tile[0]..tile[2] {
+            let pixel = UVec2::new(x, y);
+            let mut sum = PixelSum::default();
+            for s in first..first + count {
+                sampler.start_pixel_sample(pixel, s, 0);
+                let cs = get_camera_sample(sampler, pixel, &scene.filter);
+                let ray = scene.camera.generate_ray(cs.p_film, cs.p_lens);
+                stats.camera += 1;
+                let mut l = integrator.li(scene, ray, sampler, stats);
+                if !l.is_finite() {
+                    // A NaN or infinite sample would poison the pixel; pbrt-v4 logs and zeroes it.
+                    l = Rgb::ZERO;
+                }
+                let m = l.max_element();
+                if m > max {
+                    l *= max / m;
+                }
+                let w = cs.filter_weight as f64;
+                sum.rgb[0] += w * l.x as f64;
+                sum.rgb[1] += w * l.y as f64;
+                sum.rgb[2] += w * l.z as f64;
+                sum.weight += w;
+            }
+            let index = (y - acc_origin.y) * acc_width + (x - acc_origin.x);
+            out.push((index, sum));
+        }
+    }
+}
+
+fn tiles(bounds: [u32; 4]) -> Vec<[u32; 4]> {
+    let mut v = Vec::new();
+    let mut y = bounds[1];
+    while y < bounds[3] {
+        let mut x = bounds[0];
+        while x < bounds[2] {
+            v.push([x, y, (x + TILE).min(bounds[2]), (y + TILE).min(bounds[3])]);
+            x += TILE;
+        }
+        y += TILE;
+    }
+    v
+}
+
+/// Renders `scene` with `integrator`: to the scene's spp, or progressively for the time
+/// budget (passes of 1, 1, 2, 4, ... samples until the budget is spent).
+pub fn render(scene: &Scene, integrator: &dyn Integrator, options: &RenderOptions) -> RenderResult {
+    let start = Instant::now();
+    let bounds = scene.pixel_bounds;
+    let mut acc = Accumulator::new(bounds);
+    let tiles = tiles(bounds);
+    let full = UVec2::new(scene.film.resolution[0], scene.film.resolution[1]);
+    let base_sampler = Sampler::new(&scene.sampler, full);
+    let target_spp = base_sampler.samples_per_pixel();
+    let rays = AtomicU64::new(0);
+    let mut total_stats = RayStats::default();
+    let progress = (!options.quiet).then(|| {
+        let pb = indicatif::ProgressBar::new(if options.time_budget.is_some() {
+            0
+        } else {
+            target_spp as u64 * tiles.len() as u64
+        });
+        pb.set_style(
+            indicatif::ProgressStyle::with_template(
+                "{spinner} [{elapsed_precise}] {bar:40} {pos}/{len} tile-passes, ETA {eta}",
+            )
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+        );
+        pb
+    });
+    let mut spp_done = 0u32;
+    let mut pass = 0u32;
+    loop {
+        let count = match options.time_budget {
+            Some(_) => {
+                if pass == 0 {
+                    1
+                } else {
+                    spp_done.clamp(1, 64)
+                }
+            }
+            None => target_spp - spp_done,
+        };
+        if count == 0 {
+            break;
+        }
+        let results: Vec<(Vec<(u32, PixelSum)>, RayStats)> = tiles
+            .par_iter()
+            .map(|tile| {
+                let mut sampler = base_sampler.clone();
+                let mut out =
+                    Vec::with_capacity(((tile[2] - tile[0]) * (tile[3] - tile[1])) as usize);
+                let mut stats = RayStats::default();
+                render_tile(
+                    scene,
+                    integrator,
+                    &mut sampler,
+                    acc.origin,
+                    acc.width,
+                    *tile,
+                    spp_done,
+                    count,
+                    &mut out,
+                    &mut stats,
+                );
+                if let Some(pb) = &progress {
+                    pb.inc(count as u64);
+                }
+                rays.fetch_add(stats.total(), Ordering::Relaxed);
+                (out, stats)
+            })
+            .collect();
+        for (out, stats) in &results {
+            total_stats.add(stats);
+            for (i, s) in out {
+                let p = &mut acc.pixels[*i as usize];
+                p.rgb[0] += s.rgb[0];
+                p.rgb[1] += s.rgb[1];
+                p.rgb[2] += s.rgb[2];
+                p.weight += s.weight;
+            }
+        }
+        spp_done += count;
+        pass += 1;
+        match options.time_budget {
+            Some(t) if start.elapsed().as_secs_f64() >= t => break,
+            Some(_) => {}
+            None => break,
+        }
+    }
+    if let Some(pb) = progress {
+        pb.finish_and_clear();
+    }
+    RenderResult {
+        image: acc.image(scene.imaging_ratio),
+        spp: spp_done,
+        seconds: start.elapsed().as_secs_f64(),
+        rays: total_stats,
+    }
+}

@@ -1,0 +1,979 @@
+//! Builds the render-time [`Scene`] from a description: reads every entity's settings,
+//! converts spectra to the film's RGB, creates shapes, BVHs, materials, textures and lights.
+//! Only what the scene uses is built: no BVH without surfaces, no grid for homogeneous media.
+
+use std::collections::HashMap;
+use std::path::Path;
+use std::sync::Arc;
+use std::time::Instant;
+
+use glam::{Affine3A, DMat4, UVec2, Vec2, Vec3};
+use nimbus_parser::{
+    AnimatedTransform, ColorSpace, Error, FileLoc, MaterialRef, SceneDescription, ShapeEntity,
+    TextureValue, Warning,
+};
+
+use super::camera::CameraSettings;
+use super::film::FilmSettings;
+use super::filter::FilterSettings;
+use super::lights::{AreaLightSettings, LightKind as LightSpec, LightSettings};
+use super::materials::{ConductorSpec, Eta, MaterialKind, MaterialSettings, Roughness};
+use super::sampler::SamplerSettings;
+use super::shapes::{ShapeKind, ShapeSettings};
+use super::textures::{Mapping, TexInput, TextureKind, TextureSettings};
+use super::values::{FloatInput, SpectrumInput, SpectrumSpec};
+use crate::accel::{Accel, Geometry, Instance, NONE, Primitive, ShapeStore, Surfaces};
+use crate::camera::Camera;
+use crate::color::Rgb;
+use crate::film::filter::Filter;
+use crate::geometry::Bounds3;
+use crate::geometry::ply::read_ply;
+use crate::integrators::IntegratorSettings;
+use crate::lights::{EnvironmentMap, Light, LightKind, LightSampler, SceneSphere};
+use crate::materials::{ConductorInput, Material, RoughnessTex};
+use crate::math::Frame;
+use crate::shapes::{Cylinder, Disk, Mesh, Sphere, uniform_scale};
+use crate::spectra::{conductor_rgb, dielectric_eta, illuminant_rgb, reflectance_rgb};
+use crate::textures::{Tex, TexMapping, TexNode, Textures, Wrap};
+
+/// Command-line choices that override the scene file (pbrt-v4's flags).
+#[derive(Clone, Debug, Default)]
+pub struct BuildOptions {
+    /// `--integrator`: render with this method instead of the scene's.
+    pub integrator: Option<String>,
+    /// `--spp`
+    pub spp: Option<u32>,
+    /// `--seed`
+    pub seed: Option<i32>,
+    /// `--quick`: a quarter of the resolution in each axis and a quarter of the samples.
+    pub quick: bool,
+    /// `--cropwindow x0 x1 y0 y1`
+    pub crop_window: Option<[f32; 4]>,
+    /// `--pixelbounds x0 x1 y0 y1`
+    pub pixel_bounds: Option<[i32; 4]>,
+}
+
+/// Time and memory spent building, for `--stats`.
+#[derive(Clone, Debug, Default)]
+pub struct BuildStats {
+    /// Seconds to build shapes and the BVH.
+    pub geometry_seconds: f64,
+    /// Seconds for everything else.
+    pub other_seconds: f64,
+    /// Triangles.
+    pub triangles: usize,
+    /// Primitives in BVHs.
+    pub primitives: usize,
+    /// Bytes of mesh data.
+    pub mesh_bytes: usize,
+}
+
+/// Everything needed to render.
+pub struct Scene {
+    /// The camera.
+    pub camera: Camera,
+    /// Film settings (output name, resolution, clamp, color space).
+    pub film: FilmSettings,
+    /// Pixels to render: [x0, y0, x1, y1), within the full resolution.
+    pub pixel_bounds: [u32; 4],
+    /// Sampler settings (spp, seed, kind).
+    pub sampler: SamplerSettings,
+    /// The reconstruction filter.
+    pub filter: Filter,
+    /// The integrator to use and its parameters.
+    pub integrator: IntegratorSettings,
+    /// Surfaces and BVHs.
+    pub surfaces: Surfaces,
+    /// Materials, indexed by primitives.
+    pub materials: Vec<Material>,
+    /// Texture nodes.
+    pub textures: Textures,
+    /// Lights (area lights first, one per emitting primitive).
+    pub lights: Vec<Light>,
+    /// Next-event light selection.
+    pub light_sampler: LightSampler,
+    /// Indices of lights at infinity.
+    pub infinite_lights: Vec<u32>,
+    /// Bounding sphere of the scene.
+    pub sphere: SceneSphere,
+    /// Whether any surface is an `interface` (shadow rays must pass through them).
+    pub has_interfaces: bool,
+    /// Imaging ratio: exposure time × ISO / 100 (pbrt-v4's cie1931 sensor).
+    pub imaging_ratio: f32,
+    /// Build statistics.
+    pub stats: BuildStats,
+    /// Warnings found while building.
+    pub warnings: Vec<Warning>,
+}
+
+fn err(loc: &FileLoc, message: impl Into<String>) -> Error {
+    Error::new(loc, message)
+}
+
+fn fixed_transform(t: &AnimatedTransform, loc: &FileLoc, what: &str) -> Result<Affine3A, Error> {
+    if t.is_animated() {
+        return Err(err(
+            loc,
+            format!(
+                "animated transforms ({what} with ActiveTransform/TransformTimes motion) are not supported by nimbus"
+            ),
+        ));
+    }
+    affine(&t.start, loc)
+}
+
+fn affine(m: &DMat4, loc: &FileLoc) -> Result<Affine3A, Error> {
+    let row3 = m.row(3);
+    if (row3.x, row3.y, row3.z, row3.w) != (0.0, 0.0, 0.0, 1.0) {
+        return Err(err(
+            loc,
+            "projective transforms are not supported (the last row must be 0 0 0 1)",
+        ));
+    }
+    let a = Affine3A::from_mat4(m.as_mat4());
+    if !a.is_finite() || a.matrix3.determinant() == 0.0 {
+        return Err(err(loc, "the transform is singular or not finite"));
+    }
+    Ok(a)
+}
+
+/// Builds textures and remembers which name maps to which node.
+struct TextureBuilder {
+    textures: Textures,
+    float_names: HashMap<String, u32>,
+    spectrum_names: HashMap<String, u32>,
+    film_cs: ColorSpace,
+}
+
+impl TextureBuilder {
+    fn float(&self, input: &FloatInput, loc: &FileLoc) -> Result<Tex, Error> {
+        Ok(match input {
+            FloatInput::Value(v) => Tex::Const(Rgb::splat(*v)),
+            FloatInput::Texture(name) => Tex::Node(
+                *self
+                    .float_names
+                    .get(name)
+                    .ok_or_else(|| err(loc, format!("float texture \"{name}\" is not defined")))?,
+            ),
+        })
+    }
+
+    fn spectrum(&self, input: &SpectrumInput, cs: ColorSpace, loc: &FileLoc) -> Result<Tex, Error> {
+        Ok(match input {
+            SpectrumInput::Value(spec) => Tex::Const(
+                reflectance_rgb(spec, cs, self.film_cs).map_err(|e| err(loc, e.to_string()))?,
+            ),
+            SpectrumInput::Texture(name) => {
+                Tex::Node(*self.spectrum_names.get(name).ok_or_else(|| {
+                    err(loc, format!("spectrum texture \"{name}\" is not defined"))
+                })?)
+            }
+        })
+    }
+
+    fn input(&self, input: &TexInput, cs: ColorSpace, loc: &FileLoc) -> Result<Tex, Error> {
+        match input {
+            TexInput::Float(f) => self.float(f, loc),
+            TexInput::Spectrum(s) => self.spectrum(s, cs, loc),
+        }
+    }
+
+    fn add(
+        &mut self,
+        t: &nimbus_parser::TextureEntity,
+        warnings: &mut Vec<Warning>,
+    ) -> Result<(), Error> {
+        let e = &t.entity;
+        let settings = TextureSettings::from_entity(t, warnings)?;
+        let texture_from_world =
+            fixed_transform(&t.world_from_texture, &e.loc, "texture")?.inverse();
+        let mapping = |m: &Mapping| match m {
+            Mapping::Uv { su, sv, du, dv } => TexMapping::Uv {
+                s: Vec2::new(*su, *sv),
+                d: Vec2::new(*du, *dv),
+            },
+            Mapping::Spherical => TexMapping::Spherical { texture_from_world },
+            Mapping::Cylindrical => TexMapping::Cylindrical { texture_from_world },
+            Mapping::Planar { v1, v2, du, dv } => TexMapping::Planar {
+                texture_from_world,
+                vs: Vec3::from(*v1),
+                vt: Vec3::from(*v2),
+                d: Vec2::new(*du, *dv),
+            },
+        };
+        let cs = e.color_space;
+        let node = match &settings.kind {
+            TextureKind::Constant(v) => TexNode::Scale {
+                tex: self.input(v, cs, &e.loc)?,
+                scale: Tex::Const(Rgb::ONE),
+            },
+            TextureKind::Scale { tex, scale } => TexNode::Scale {
+                tex: self.input(tex, cs, &e.loc)?,
+                scale: self.float(scale, &e.loc)?,
+            },
+            TextureKind::Mix { tex1, tex2, amount } => TexNode::Mix {
+                a: self.input(tex1, cs, &e.loc)?,
+                b: self.input(tex2, cs, &e.loc)?,
+                amount: self.float(amount, &e.loc)?,
+            },
+            TextureKind::Checkerboard {
+                tex1,
+                tex2,
+                mapping: m,
+            } => TexNode::Checkerboard {
+                a: self.input(tex1, cs, &e.loc)?,
+                b: self.input(tex2, cs, &e.loc)?,
+                mapping: mapping(m),
+            },
+            TextureKind::ImageMap {
+                filename,
+                scale,
+                invert,
+                wrap,
+                encoding,
+                mapping: m,
+            } => {
+                let image = load_texture_image(filename, encoding).map_err(|m| err(&e.loc, m))?;
+                let wrap = match wrap.as_str() {
+                    "repeat" => Wrap::Repeat,
+                    "black" => Wrap::Black,
+                    "clamp" => Wrap::Clamp,
+                    other => {
+                        return Err(err(
+                            &e.loc,
+                            format!(
+                                "imagemap: unknown wrap mode \"{other}\" (repeat, black or clamp)"
+                            ),
+                        ));
+                    }
+                };
+                TexNode::Image {
+                    image: Arc::new(image),
+                    mapping: mapping(m),
+                    scale: *scale,
+                    invert: *invert,
+                    wrap,
+                }
+            }
+            TextureKind::Unsupported(_) => TexNode::Scale {
+                tex: Tex::Const(Rgb::splat(0.5)),
+                scale: Tex::Const(Rgb::ONE),
+            },
+        };
+        let id = self.textures.nodes.len() as u32;
+        self.textures.nodes.push(node);
+        match t.value {
+            TextureValue::Float => self.float_names.insert(t.name.clone(), id),
+            TextureValue::Spectrum => self.spectrum_names.insert(t.name.clone(), id),
+        };
+        Ok(())
+    }
+}
+
+fn load_texture_image(path: &Path, encoding: &str) -> Result<crate::imageio::Image, String> {
+    let is_png = path
+        .extension()
+        .is_some_and(|x| x.eq_ignore_ascii_case("png"));
+    let mut image = crate::imageio::read_image(path)?;
+    if is_png && encoding != "sRGB" {
+        // read_image decoded sRGB; re-encode and apply the requested encoding instead.
+        let gamma = match encoding {
+            "linear" => 1.0,
+            e if e.starts_with("gamma ") => e[6..]
+                .trim()
+                .parse::<f32>()
+                .map_err(|_| format!("imagemap: bad encoding \"{e}\""))?,
+            other => {
+                return Err(format!(
+                    "imagemap: unknown encoding \"{other}\" (sRGB, linear or \"gamma g\")"
+                ));
+            }
+        };
+        for p in &mut image.pixels {
+            let enc = |v: f32| {
+                if v <= 0.003_130_8 {
+                    12.92 * v
+                } else {
+                    1.055 * v.powf(1.0 / 2.4) - 0.055
+                }
+            };
+            *p = Rgb::new(
+                enc(p.x).powf(gamma),
+                enc(p.y).powf(gamma),
+                enc(p.z).powf(gamma),
+            );
+        }
+    }
+    Ok(image)
+}
+
+fn roughness(r: &Roughness, tb: &TextureBuilder, loc: &FileLoc) -> Result<RoughnessTex, Error> {
+    Ok(RoughnessTex {
+        u: tb.float(&r.u, loc)?,
+        v: tb.float(&r.v, loc)?,
+        remap: r.remap,
+    })
+}
+
+fn eta_value(eta: &Eta, cs: ColorSpace, loc: &FileLoc) -> Result<f32, Error> {
+    match eta {
+        Eta::Constant(v) => Ok(*v),
+        Eta::Spectrum(s) => dielectric_eta(s, cs).map_err(|e| err(loc, e.to_string())),
+    }
+}
+
+fn material(
+    e: &nimbus_parser::Entity,
+    tb: &TextureBuilder,
+    warnings: &mut Vec<Warning>,
+) -> Result<Material, Error> {
+    let settings = MaterialSettings::from_entity(e, warnings)?;
+    let cs = e.color_space;
+    let loc = &e.loc;
+    Ok(match &settings.kind {
+        MaterialKind::Diffuse { reflectance } => Material::Diffuse {
+            reflectance: tb.spectrum(reflectance, cs, loc)?,
+        },
+        MaterialKind::Conductor { spec, roughness: r } => {
+            let input = match spec {
+                ConductorSpec::Reflectance(r) => {
+                    ConductorInput::Reflectance(tb.spectrum(r, cs, loc)?)
+                }
+                ConductorSpec::EtaK {
+                    eta: SpectrumInput::Value(eta),
+                    k: SpectrumInput::Value(k),
+                } => {
+                    let fit = conductor_rgb(eta, k, cs, tb.film_cs)
+                        .map_err(|m| err(loc, m.to_string()))?;
+                    ConductorInput::EtaK {
+                        eta: Tex::Const(fit.eta),
+                        k: Tex::Const(fit.k),
+                        scale: fit.scale,
+                    }
+                }
+                ConductorSpec::EtaK { eta, k } => {
+                    // Textured optical constants: used per channel as given.
+                    let as_tex = |s: &SpectrumInput| -> Result<Tex, Error> {
+                        Ok(match s {
+                            SpectrumInput::Value(v) => {
+                                let fit = conductor_rgb(v, v, cs, tb.film_cs)
+                                    .map_err(|m| err(loc, m.to_string()))?;
+                                Tex::Const(fit.eta)
+                            }
+                            t => tb.spectrum(t, cs, loc)?,
+                        })
+                    };
+                    ConductorInput::EtaK {
+                        eta: as_tex(eta)?,
+                        k: as_tex(k)?,
+                        scale: Rgb::ONE,
+                    }
+                }
+            };
+            Material::Conductor {
+                input,
+                roughness: roughness(r, tb, loc)?,
+            }
+        }
+        MaterialKind::Dielectric { eta, roughness: r } => Material::Dielectric {
+            eta: eta_value(eta, cs, loc)?,
+            roughness: roughness(r, tb, loc)?,
+        },
+        MaterialKind::ThinDielectric { eta } => Material::ThinDielectric {
+            eta: eta_value(eta, cs, loc)?,
+        },
+        MaterialKind::Interface => Material::Interface,
+        MaterialKind::CoatedDiffuse {
+            reflectance,
+            roughness: r,
+            thickness,
+            eta,
+            albedo,
+            g,
+            max_depth,
+            n_samples,
+        } => Material::CoatedDiffuse {
+            reflectance: tb.spectrum(reflectance, cs, loc)?,
+            roughness: roughness(r, tb, loc)?,
+            thickness: tb.float(thickness, loc)?,
+            eta: eta_value(eta, cs, loc)?,
+            albedo: tb.spectrum(albedo, cs, loc)?,
+            g: tb.float(g, loc)?,
+            max_depth: *max_depth,
+            n_samples: *n_samples,
+        },
+        MaterialKind::Unsupported(_) => Material::Diffuse {
+            reflectance: Tex::Const(Rgb::splat(0.5)),
+        },
+    })
+}
+
+/// Emission of an area light: pbrt-v4's photometric normalisation and `power`.
+fn area_light_radiance(
+    settings: &AreaLightSettings,
+    e: &nimbus_parser::Entity,
+    area: f32,
+    film_cs: ColorSpace,
+) -> Result<Rgb, Error> {
+    let l = illuminant_rgb(&settings.radiance, e.color_space, film_cs)
+        .map_err(|m| err(&e.loc, m.to_string()))?;
+    let mut scale = settings.scale;
+    if let Some(phi) = settings.power {
+        let k_e = if settings.two_sided { 2.0 } else { 1.0 } * area * std::f32::consts::PI;
+        scale *= phi / k_e;
+    }
+    Ok(l * scale)
+}
+
+struct ShapeBuilder<'a> {
+    store: ShapeStore,
+    film_cs: ColorSpace,
+    material_ids: &'a dyn Fn(&MaterialRef) -> u32,
+    lights: Vec<Light>,
+    triangles: usize,
+    mesh_bytes: usize,
+}
+
+impl ShapeBuilder<'_> {
+    /// Adds a shape's primitives (and their area lights) to `prims`/`bounds`.
+    fn add(
+        &mut self,
+        shape: &ShapeEntity,
+        area_lights: &[nimbus_parser::Entity],
+        instanced: bool,
+        prims: &mut Vec<Primitive>,
+        bounds: &mut Vec<Bounds3>,
+    ) -> Result<(), Error> {
+        let e = &shape.entity;
+        let settings = ShapeSettings::from_entity(shape)?;
+        if let Some(mi) = &shape.medium_interface
+            && (mi.inside.is_some() || mi.outside.is_some())
+        {
+            return Err(err(
+                &e.loc,
+                "participating media (MediumInterface) are not supported by this build of nimbus yet",
+            ));
+        }
+        let world = fixed_transform(&shape.world_from_object, &e.loc, "shape")?;
+        let rev = shape.reverse_orientation;
+        let material = (self.material_ids)(&shape.material);
+        let first = prims.len();
+        let mut push = |g: Geometry, store: &ShapeStore| {
+            bounds.push(store.bounds(g));
+            prims.push(Primitive {
+                geometry: g,
+                material,
+                area_light: NONE,
+                interface: NONE,
+            });
+        };
+        match &settings.kind {
+            ShapeKind::Sphere {
+                radius,
+                zmin,
+                zmax,
+                phimax,
+            } => {
+                self.store
+                    .spheres
+                    .push(Sphere::new(world, rev, *radius, *zmin, *zmax, *phimax));
+                push(
+                    Geometry::Sphere(self.store.spheres.len() as u32 - 1),
+                    &self.store,
+                );
+            }
+            ShapeKind::Disk {
+                height,
+                radius,
+                inner_radius,
+                phimax,
+            } => {
+                self.store.disks.push(Disk::new(
+                    world,
+                    rev,
+                    *height,
+                    *radius,
+                    *inner_radius,
+                    *phimax,
+                ));
+                push(
+                    Geometry::Disk(self.store.disks.len() as u32 - 1),
+                    &self.store,
+                );
+            }
+            ShapeKind::Cylinder {
+                radius,
+                zmin,
+                zmax,
+                phimax,
+            } => {
+                self.store
+                    .cylinders
+                    .push(Cylinder::new(world, rev, *radius, *zmin, *zmax, *phimax));
+                push(
+                    Geometry::Cylinder(self.store.cylinders.len() as u32 - 1),
+                    &self.store,
+                );
+            }
+            ShapeKind::TriangleMesh(m) => {
+                let mesh = Mesh::new(
+                    &world,
+                    rev,
+                    m.positions,
+                    m.normals,
+                    m.uvs,
+                    m.indices.clone(),
+                );
+                self.add_mesh(mesh, material, prims, bounds);
+            }
+            ShapeKind::BilinearMesh(m) => {
+                let tris: Vec<u32> = m
+                    .indices
+                    .chunks_exact(4)
+                    .flat_map(|q| [q[0], q[1], q[3], q[0], q[3], q[2]])
+                    .collect();
+                let mesh = Mesh::new(&world, rev, m.positions, m.normals, m.uvs, tris);
+                self.add_mesh(mesh, material, prims, bounds);
+            }
+            ShapeKind::PlyMesh(path) => {
+                let ply = read_ply(path).map_err(|m| err(&e.loc, format!("plymesh: {m}")))?;
+                let mesh = Mesh::new(
+                    &world,
+                    rev,
+                    &ply.positions,
+                    &ply.normals,
+                    &ply.uvs,
+                    ply.indices,
+                );
+                self.add_mesh(mesh, material, prims, bounds);
+            }
+            ShapeKind::ObjMesh(path) | ShapeKind::GltfMesh(path) => {
+                let meshes = if matches!(settings.kind, ShapeKind::ObjMesh(_)) {
+                    crate::geometry::obj::read_obj(path)
+                } else {
+                    crate::geometry::gltf::read_gltf(path)
+                }
+                .map_err(|m| err(&e.loc, m))?;
+                for m in meshes {
+                    let mesh = Mesh::new(&world, rev, &m.positions, &m.normals, &m.uvs, m.indices);
+                    self.add_mesh(mesh, material, prims, bounds);
+                }
+            }
+        }
+        if let Some(al) = shape.area_light {
+            if instanced {
+                return Ok(());
+            }
+            let al_entity = &area_lights[al];
+            let settings = AreaLightSettings::from_entity(al_entity)?;
+            for prim in &mut prims[first..] {
+                let area = match prim.geometry {
+                    Geometry::Triangle { mesh, tri } => {
+                        self.store.meshes[mesh as usize].triangle_area(tri)
+                    }
+                    Geometry::Sphere(i) => {
+                        let s = &self.store.spheres[i as usize];
+                        let scale = uniform_scale(&world).ok_or_else(|| {
+                            err(
+                                &e.loc,
+                                "an emitting sphere must not be scaled non-uniformly",
+                            )
+                        })?;
+                        s.area() * scale * scale
+                    }
+                    Geometry::Disk(i) => {
+                        self.store.disks[i as usize].world_area().ok_or_else(|| {
+                            err(&e.loc, "an emitting disk must not be scaled non-uniformly")
+                        })?
+                    }
+                    Geometry::Cylinder(i) => self.store.cylinders[i as usize]
+                        .world_area()
+                        .ok_or_else(|| {
+                            err(
+                                &e.loc,
+                                "an emitting cylinder must not be scaled non-uniformly",
+                            )
+                        })?,
+                    Geometry::Instance(_) => continue,
+                };
+                let l = area_light_radiance(&settings, al_entity, area, self.film_cs)?;
+                prim.area_light = self.lights.len() as u32;
+                self.lights.push(Light {
+                    kind: LightKind::Area {
+                        geometry: prim.geometry,
+                        l,
+                        two_sided: settings.two_sided,
+                        area,
+                    },
+                    medium: NONE,
+                });
+            }
+        }
+        Ok(())
+    }
+
+    fn add_mesh(
+        &mut self,
+        mesh: Mesh,
+        material: u32,
+        prims: &mut Vec<Primitive>,
+        bounds: &mut Vec<Bounds3>,
+    ) {
+        let id = self.store.meshes.len() as u32;
+        self.triangles += mesh.triangle_count();
+        self.mesh_bytes += mesh.positions.len() * 12
+            + mesh.normals.len() * 12
+            + mesh.uvs.len() * 8
+            + mesh.indices.len() * 4;
+        for tri in 0..mesh.triangle_count() as u32 {
+            bounds.push(mesh.triangle_bounds(tri));
+            prims.push(Primitive {
+                geometry: Geometry::Triangle { mesh: id, tri },
+                material,
+                area_light: NONE,
+                interface: NONE,
+            });
+        }
+        self.store.meshes.push(mesh);
+    }
+}
+
+fn light(
+    l: &nimbus_parser::LightEntity,
+    film_cs: ColorSpace,
+    sphere: &SceneSphere,
+) -> Result<Light, Error> {
+    let e = &l.entity;
+    if l.medium.is_some() {
+        return Err(err(
+            &e.loc,
+            "participating media (a light inside a medium) are not supported by this build of nimbus yet",
+        ));
+    }
+    let settings = LightSettings::from_entity(l)?;
+    let world = fixed_transform(&l.world_from_light, &e.loc, "light")?;
+    let rgb = |s: &SpectrumSpec| {
+        illuminant_rgb(s, e.color_space, film_cs).map_err(|m| err(&e.loc, m.to_string()))
+    };
+    let kind = match &settings.kind {
+        LightSpec::Point {
+            intensity,
+            from,
+            power,
+        } => {
+            let mut scale = settings.scale;
+            if let Some(phi) = power {
+                scale *= phi / (4.0 * std::f32::consts::PI);
+            }
+            LightKind::Point {
+                p: world.transform_point3(Vec3::from(*from)),
+                i: rgb(intensity)? * scale,
+            }
+        }
+        LightSpec::Spot {
+            intensity,
+            from,
+            to,
+            cone_angle,
+            cone_delta_angle,
+            power,
+        } => {
+            let cos_end = cone_angle.to_radians().cos();
+            let cos_start = (cone_angle - cone_delta_angle).to_radians().cos();
+            let mut scale = settings.scale;
+            if let Some(phi) = power {
+                let k_e =
+                    2.0 * std::f32::consts::PI * ((1.0 - cos_start) + (cos_start - cos_end) / 2.0);
+                scale *= phi / k_e;
+            }
+            let p = world.transform_point3(Vec3::from(*from));
+            let dir = world.transform_vector3(Vec3::from(*to) - Vec3::from(*from));
+            if dir.length_squared() == 0.0 {
+                return Err(err(
+                    &e.loc,
+                    "spot light: \"from\" and \"to\" are the same point",
+                ));
+            }
+            LightKind::Spot {
+                p,
+                frame: Frame::from_z(dir.normalize()),
+                i: rgb(intensity)? * scale,
+                cos_falloff_start: cos_start,
+                cos_falloff_end: cos_end,
+            }
+        }
+        LightSpec::Distant {
+            radiance,
+            from,
+            to,
+            illuminance,
+        } => {
+            let w = world
+                .transform_vector3(Vec3::from(*from) - Vec3::from(*to))
+                .normalize();
+            let scale = settings.scale * illuminance.unwrap_or(1.0);
+            LightKind::Distant {
+                w,
+                l: rgb(radiance)? * scale,
+            }
+        }
+        LightSpec::Infinite {
+            radiance: Some(r),
+            illuminance,
+            ..
+        } => {
+            let scale = settings.scale * illuminance.map_or(1.0, |ev| ev / std::f32::consts::PI);
+            LightKind::UniformInfinite { l: rgb(r)? * scale }
+        }
+        LightSpec::Infinite {
+            radiance: None,
+            filename: Some(path),
+            illuminance,
+        } => {
+            let mut map =
+                EnvironmentMap::load(path, world, settings.scale).map_err(|m| err(&e.loc, m))?;
+            if let Some(ev) = illuminance {
+                let k_e = map.upper_hemisphere_illuminance();
+                if k_e > 0.0 {
+                    map = EnvironmentMap::load(path, world, settings.scale * ev / k_e)
+                        .map_err(|m| err(&e.loc, m))?;
+                }
+            }
+            LightKind::ImageInfinite(Box::new(map))
+        }
+        LightSpec::Infinite { .. } => {
+            return Err(err(&e.loc, "infinite light without radiance or image"));
+        }
+    };
+    let _ = sphere;
+    Ok(Light { kind, medium: NONE })
+}
+
+fn pixel_bounds(
+    film: &FilmSettings,
+    opts: &BuildOptions,
+    loc: &FileLoc,
+) -> Result<[u32; 4], Error> {
+    let [w, h] = film.resolution;
+    let from_crop = |c: [f32; 4]| -> [i64; 4] {
+        [
+            (w as f32 * c[0]).ceil() as i64,
+            (h as f32 * c[2]).ceil() as i64,
+            (w as f32 * c[1]).ceil() as i64,
+            (h as f32 * c[3]).ceil() as i64,
+        ]
+    };
+    let b: [i64; 4] = if let Some([x0, x1, y0, y1]) = opts.pixel_bounds.or(film.pixel_bounds) {
+        [x0 as i64, y0 as i64, x1 as i64, y1 as i64]
+    } else if let Some(c) = opts.crop_window.or(film.crop_window) {
+        from_crop(c)
+    } else {
+        [0, 0, w as i64, h as i64]
+    };
+    let clamped = [
+        b[0].clamp(0, w as i64),
+        b[1].clamp(0, h as i64),
+        b[2].clamp(0, w as i64),
+        b[3].clamp(0, h as i64),
+    ];
+    if clamped[0] >= clamped[2] || clamped[1] >= clamped[3] {
+        return Err(err(
+            loc,
+            format!("the pixel bounds {b:?} select no pixels of the {w}x{h} image"),
+        ));
+    }
+    Ok([
+        clamped[0] as u32,
+        clamped[1] as u32,
+        clamped[2] as u32,
+        clamped[3] as u32,
+    ])
+}
+
+/// Builds the render-time scene.
+pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions) -> Result<Scene, Error> {
+    let t0 = Instant::now();
+    let mut warnings = desc.warnings.clone();
+    let mut film = FilmSettings::from_entity(&desc.film)?;
+    if opts.quick {
+        film.resolution = [
+            (film.resolution[0] / 4).max(1),
+            (film.resolution[1] / 4).max(1),
+        ];
+    }
+    let film_cs = film.color_space;
+    let camera_settings = CameraSettings::from_entity(&desc.camera)?;
+    if desc.camera.medium.is_some() {
+        return Err(err(
+            &desc.camera.entity.loc,
+            "participating media (a camera inside a medium) are not supported by this build of nimbus yet",
+        ));
+    }
+    let world_from_camera = &desc.camera.world_from_camera;
+    if world_from_camera.is_animated() {
+        return Err(err(
+            &desc.camera.entity.loc,
+            "animated camera transforms are not supported by nimbus",
+        ));
+    }
+    let camera = Camera::new(&camera_settings, &world_from_camera.start, film.resolution);
+    let pixel_bounds = pixel_bounds(&film, opts, &desc.film.loc)?;
+    let mut sampler =
+        SamplerSettings::from_entity(&desc.sampler, desc.options.seed, &mut warnings)?;
+    if let Some(spp) = opts.spp {
+        sampler.pixel_samples = spp.max(1);
+    }
+    if opts.quick {
+        sampler.pixel_samples = (sampler.pixel_samples / 4).max(1);
+    }
+    if let Some(seed) = opts.seed {
+        sampler.seed = seed;
+    }
+    let filter = Filter::new(&FilterSettings::from_entity(&desc.filter)?);
+    let integrator = IntegratorSettings::from_entity(&desc.integrator, opts.integrator.as_deref())?;
+
+    // Textures, in definition order (a texture may use those defined before it).
+    let mut tb = TextureBuilder {
+        textures: Textures::default(),
+        float_names: HashMap::new(),
+        spectrum_names: HashMap::new(),
+        film_cs,
+    };
+    for t in &desc.textures {
+        tb.add(t, &mut warnings)?;
+    }
+
+    // Materials: anonymous ones by index, then named ones.
+    let mut materials = Vec::with_capacity(desc.materials.len() + desc.named_materials.len());
+    for m in &desc.materials {
+        materials.push(material(m, &tb, &mut warnings)?);
+    }
+    let mut named = HashMap::new();
+    for m in &desc.named_materials {
+        named.insert(m.name.clone(), materials.len() as u32);
+        materials.push(material(&m.entity, &tb, &mut warnings)?);
+    }
+    let has_interfaces = materials.iter().any(Material::is_interface);
+    let material_ids = |r: &MaterialRef| -> u32 {
+        match r {
+            MaterialRef::Index(i) => *i as u32,
+            // The parser checked that every named material exists.
+            MaterialRef::Named(n) => named.get(n).copied().unwrap_or(0),
+        }
+    };
+
+    // Shapes, object definitions and instances.
+    let tg = Instant::now();
+    let mut sb = ShapeBuilder {
+        store: ShapeStore::default(),
+        film_cs,
+        material_ids: &material_ids,
+        lights: Vec::new(),
+        triangles: 0,
+        mesh_bytes: 0,
+    };
+    let mut prims = Vec::new();
+    let mut bounds = Vec::new();
+    for shape in &desc.shapes {
+        sb.add(shape, &desc.area_lights, false, &mut prims, &mut bounds)?;
+    }
+    let mut blas = Vec::new();
+    let mut blas_of: HashMap<&str, Option<u32>> = HashMap::new();
+    for def in &desc.instance_definitions {
+        let mut p = Vec::new();
+        let mut b = Vec::new();
+        for shape in &def.shapes {
+            sb.add(shape, &desc.area_lights, true, &mut p, &mut b)?;
+        }
+        let accel = Accel::build(p, &b);
+        blas_of.insert(def.name.as_str(), accel.as_ref().map(|_| blas.len() as u32));
+        if let Some(a) = accel {
+            blas.push(a);
+        }
+    }
+    let mut instances = Vec::new();
+    for u in &desc.instances {
+        let Some(Some(accel)) = blas_of.get(u.name.as_str()).copied() else {
+            continue;
+        };
+        let world = fixed_transform(&u.world_from_instance, &u.loc, "object instance")?;
+        let object_bounds = blas[accel as usize].bounds();
+        instances.push(Instance {
+            accel,
+            world_from_instance: world,
+            instance_from_world: world.inverse(),
+        });
+        bounds.push(object_bounds.transformed(&world));
+        prims.push(Primitive {
+            geometry: Geometry::Instance(instances.len() as u32 - 1),
+            material: 0,
+            area_light: NONE,
+            interface: NONE,
+        });
+    }
+    let primitives = prims.len();
+    let top = Accel::build(prims, &bounds);
+    let triangles = sb.triangles;
+    let mesh_bytes = sb.mesh_bytes;
+    let mut lights = std::mem::take(&mut sb.lights);
+    let surfaces = Surfaces {
+        shapes: sb.store,
+        top,
+        blas,
+        instances,
+    };
+    let geometry_seconds = tg.elapsed().as_secs_f64();
+
+    let sb_bounds = surfaces.bounds();
+    let sphere = if sb_bounds.is_empty() {
+        SceneSphere {
+            center: camera.position(),
+            radius: 1.0,
+        }
+    } else {
+        let (center, radius) = sb_bounds.bounding_sphere();
+        SceneSphere {
+            center,
+            radius: radius.max(1e-3),
+        }
+    };
+    for l in &desc.lights {
+        lights.push(light(l, film_cs, &sphere)?);
+    }
+    let infinite_lights = lights
+        .iter()
+        .enumerate()
+        .filter(|(_, l)| l.is_infinite())
+        .map(|(i, _)| i as u32)
+        .collect();
+    let by_power = !matches!(&integrator, IntegratorSettings::VolPath(v) if v.light_sampler == crate::integrators::volpath::LightSamplerKind::Uniform);
+    let light_sampler = LightSampler::new(&lights, &sphere, by_power);
+    let camera_settings_exposure = camera_settings.shutter_close - camera_settings.shutter_open;
+    let imaging_ratio = camera_settings_exposure * film.iso / 100.0;
+    let _ = UVec2::ZERO;
+    Ok(Scene {
+        camera,
+        film,
+        pixel_bounds,
+        sampler,
+        filter,
+        integrator,
+        surfaces,
+        materials,
+        textures: tb.textures,
+        lights,
+        light_sampler,
+        infinite_lights,
+        sphere,
+        has_interfaces,
+        imaging_ratio,
+        stats: BuildStats {
+            geometry_seconds,
+            other_seconds: t0.elapsed().as_secs_f64() - geometry_seconds,
+            triangles,
+            primitives,
+            mesh_bytes,
+        },
+        warnings,
+    })
+}

@@ -25,6 +25,9 @@ pub struct PathConfig {
     pub max_depth: u32,
     /// Roughen near-specular BSDFs after the first non-specular bounce.
     pub regularize: bool,
+    /// Sample lights at vertices (next-event estimation with MIS). Without it, emission is
+    /// only found by scattering: a simpler unbiased estimator that tests use to check MIS.
+    pub next_event: bool,
 }
 
 /// The last scattering vertex, for MIS of emission found by the next ray.
@@ -74,7 +77,7 @@ pub fn trace_path<O: PathObserver>(
                 if le == Rgb::ZERO {
                     continue;
                 }
-                let c = if depth == 0 || specular_bounce {
+                let c = if depth == 0 || specular_bounce || !config.next_event {
                     beta * le / average(r_u)
                 } else {
                     let pdf = scene.light_sampler.pmf(i as usize)
@@ -103,7 +106,7 @@ pub fn trace_path<O: PathObserver>(
             let light = &scene.lights[hit.prim.area_light as usize];
             let le = light.emitted(s, wo);
             if le != Rgb::ZERO {
-                let c = if depth == 0 || specular_bounce {
+                let c = if depth == 0 || specular_bounce || !config.next_event {
                     beta * le / average(r_u)
                 } else {
                     let pdf = scene.light_sampler.pmf(hit.prim.area_light as usize)
@@ -142,7 +145,7 @@ pub fn trace_path<O: PathObserver>(
         let flags = bxdf.flags();
 
         // Next-event estimation.
-        if flags.is_non_specular() {
+        if config.next_event && flags.is_non_specular() {
             let u_pick = sampler.get_1d();
             let u_light = sampler.get_2d();
             if let Some(c) = sample_direct(

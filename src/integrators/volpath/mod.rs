@@ -24,8 +24,14 @@ impl VolPath {
             config: PathConfig {
                 max_depth: s.max_depth,
                 regularize: s.regularize,
+                next_event: true,
             },
         }
+    }
+
+    /// A tracer with an explicit loop configuration (tests switch next-event estimation off).
+    pub fn with_config(config: PathConfig) -> VolPath {
+        VolPath { config }
     }
 }
 

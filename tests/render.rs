@@ -241,3 +241,51 @@ fn cornell_surfaces_matches_pbrt_v4() {
     assert!(p.worst_mean_rel() < 0.01, "{p:?}");
     assert!(p.excess < 1.5, "{p:?}");
 }
+
+/// An environment image of constant radiance renders like the uniform environment light of
+/// that radiance (importance sampling and MIS of the image light are unbiased).
+#[test]
+fn constant_environment_image_matches_uniform_environment() {
+    let dir = crate::common::scratch_dir("envmap");
+    let mut img = Image::new(32, 32);
+    for p in &mut img.pixels {
+        *p = glam::Vec3::new(0.8, 0.6, 0.4);
+    }
+    let path = dir.join("sky.exr");
+    nimbus::imageio::write_image(&path, &img).unwrap();
+    let body = r#"LookAt 0 1 4  0 0 0  0 1 0
+Camera "perspective" "float fov" 40
+Sampler "sobol" "integer pixelsamples" 32
+Film "rgb" "integer xresolution" 32 "integer yresolution" 32
+Integrator "volpath" "integer maxdepth" 4
+WorldBegin
+LIGHT
+Material "diffuse" "rgb reflectance" [0.7 0.7 0.7]
+Shape "sphere" "float radius" 1
+Shape "trianglemesh" "integer indices" [0 1 2 0 2 3] "point3 P" [-5 -1 -5  5 -1 -5  5 -1 5  -5 -1 5]"#;
+    let uniform = scene(
+        &body.replace("LIGHT", r#"LightSource "infinite" "rgb L" [0.8 0.6 0.4]"#),
+        &BuildOptions::default(),
+    );
+    let image = scene(
+        &body.replace(
+            "LIGHT",
+            &format!(
+                r#"LightSource "infinite" "string filename" "{}""#,
+                path.display()
+            ),
+        ),
+        &BuildOptions::default(),
+    );
+    let (a, b) = (render_scene(&uniform), render_scene(&image));
+    let diff: Vec<f64> = a
+        .pixels
+        .iter()
+        .zip(&b.pixels)
+        .map(|(x, y)| ((*x - *y).x + (*x - *y).y + (*x - *y).z) as f64 / 3.0)
+        .collect();
+    let n = diff.len() as f64;
+    let md = diff.iter().sum::<f64>() / n;
+    let sd = (diff.iter().map(|d| (d - md) * (d - md)).sum::<f64>() / (n - 1.0) / n).sqrt();
+    assert!(md.abs() < 4.0 * sd + 1e-4, "difference {md} ± {sd}");
+}

@@ -1,6 +1,8 @@
 //! Subcommands of the `nimbus` binary.
 
+mod bench;
 mod check;
+mod convert;
 mod diff;
 mod parity;
 mod render;
@@ -23,6 +25,10 @@ enum Command {
     Check(check::CheckArgs),
     /// Render a scene to an image.
     Render(render::RenderArgs),
+    /// Time renders of the parity scenes against pbrt-v4's times (speed as a ratio).
+    Bench(bench::BenchArgs),
+    /// Convert an image between EXR (linear float) and PNG (8-bit sRGB).
+    Convert(convert::ConvertArgs),
     /// Compare an image with a reference: MSE, relMSE, MAE, MPE/MNE, means, error image.
     Diff(diff::DiffArgs),
     /// Judge two renders (different seeds) against a reference as the pbrt-v4 parity suite
@@ -39,6 +45,8 @@ pub fn run() -> ExitCode {
         Command::Render(args) => render::run(&args),
         Command::Parity(args) => parity::run(&args),
         Command::Diff(args) => diff::run(&args),
+        Command::Convert(args) => convert::run(&args),
+        Command::Bench(args) => bench::run(&args),
     };
     match result {
         Ok(code) => code,

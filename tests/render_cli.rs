@@ -1,0 +1,141 @@
+//! `nimbus render` from the command line: outputs, metadata, flags and errors.
+
+use crate::common::{nimbus, scratch_dir};
+
+const SMALL: &str = r#"LookAt 0 0 5  0 0 0  0 1 0
+Camera "perspective" "float fov" 30
+Sampler "independent" "integer pixelsamples" 2
+Film "rgb" "integer xresolution" 24 "integer yresolution" 16 "string filename" "small.exr"
+WorldBegin
+LightSource "infinite" "rgb L" [0.3 0.3 0.3]
+Material "diffuse"
+Shape "sphere"
+"#;
+
+#[test]
+fn renders_exr_with_metadata_and_png() {
+    let dir = scratch_dir("render-cli");
+    let scene = dir.join("s.pbrt");
+    std::fs::write(&scene, SMALL).unwrap();
+    let exr = dir.join("out.exr");
+    let out = nimbus(&[
+        "render",
+        scene.to_str().unwrap(),
+        "--quiet",
+        "--spp",
+        "3",
+        "--seed",
+        "7",
+        "--outfile",
+        exr.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let img = nimbus::imageio::read_exr(&exr).unwrap();
+    assert_eq!((img.width, img.height), (24, 16));
+    assert_eq!(
+        img.metadata.get("nimbus:spp").map(String::as_str),
+        Some("3")
+    );
+    assert_eq!(
+        img.metadata.get("nimbus:seed").map(String::as_str),
+        Some("7")
+    );
+    assert_eq!(
+        img.metadata.get("nimbus:integrator").map(String::as_str),
+        Some("volpath")
+    );
+    assert!(img.metadata.contains_key("nimbus:time"));
+    let png = dir.join("out.png");
+    let out = nimbus(&[
+        "render",
+        scene.to_str().unwrap(),
+        "--quiet",
+        "--outfile",
+        png.to_str().unwrap(),
+        "--pixelbounds",
+        "0",
+        "8",
+        "0",
+        "4",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let img = nimbus::imageio::read_image(&png).unwrap();
+    assert_eq!((img.width, img.height), (8, 4));
+}
+
+#[test]
+fn time_budget_renders_progressively() {
+    let dir = scratch_dir("render-time");
+    let scene = dir.join("s.pbrt");
+    std::fs::write(&scene, SMALL).unwrap();
+    let exr = dir.join("t.exr");
+    let out = nimbus(&[
+        "render",
+        scene.to_str().unwrap(),
+        "--quiet",
+        "--time",
+        "0.5",
+        "--outfile",
+        exr.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let img = nimbus::imageio::read_exr(&exr).unwrap();
+    let spp: u32 = img.metadata["nimbus:spp"].parse().unwrap();
+    assert!(spp >= 1);
+}
+
+#[test]
+fn unknown_integrator_lists_the_available_ones() {
+    let dir = scratch_dir("render-integrator");
+    let scene = dir.join("s.pbrt");
+    std::fs::write(
+        &scene,
+        SMALL.replace("WorldBegin", "Integrator \"bdpt\"\nWorldBegin"),
+    )
+    .unwrap();
+    let out = nimbus(&[
+        "render",
+        scene.to_str().unwrap(),
+        "--quiet",
+        "--outfile",
+        dir.join("x.exr").to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains(
+            "s.pbrt:5:1: error: integrator \"bdpt\" is not available in nimbus (it has: volpath"
+        ),
+        "{stderr}"
+    );
+    let out = nimbus(&["render", dir.join("nope.pbrt").to_str().unwrap(), "--quiet"]);
+    assert_eq!(out.status.code(), Some(1));
+}
+
+#[test]
+fn output_format_errors_are_clear() {
+    let dir = scratch_dir("render-format");
+    let scene = dir.join("s.pbrt");
+    std::fs::write(&scene, SMALL).unwrap();
+    let out = nimbus(&[
+        "render",
+        scene.to_str().unwrap(),
+        "--quiet",
+        "--outfile",
+        dir.join("x.tiff").to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("unsupported output format"));
+}

@@ -6,3 +6,4 @@ pub mod warp;
 
 #[cfg(test)]
 pub(crate) mod chi_square;
+pub mod rng;

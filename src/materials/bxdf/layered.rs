@@ -13,13 +13,13 @@ use std::f32::consts::PI;
 
 use glam::{Vec2, Vec3};
 
-use super::phase::HenyeyGreenstein;
-use super::random::{Pcg32, hash_sample, hash_seed_vec3, hash_vec3};
 use super::{
     BsdfSample, BxdfFlags, DielectricBxdf, DiffuseBxdf, ReflTransFlags, TransportMode, nonzero,
 };
 use crate::color::Rgb;
 use crate::math::{abs_cos_theta, same_hemisphere};
+use crate::media::phase::HenyeyGreenstein;
+use crate::sampling::rng::{Pcg32, hash_sample, hash_seed_vec3, hash_vec3};
 use crate::sampling::warp::{ONE_MINUS_EPSILON, power_heuristic};
 
 /// pbrt-v4's `Options->seed` default, which it hashes into every layered-BSDF generator.

@@ -38,8 +38,6 @@ mod diffuse;
 mod fresnel;
 mod layered;
 mod microfacet;
-mod phase;
-mod random;
 mod thin_dielectric;
 
 #[cfg(test)]

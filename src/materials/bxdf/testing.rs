@@ -12,9 +12,9 @@ use std::f64::consts::PI;
 
 use glam::{DVec3, Vec2, Vec3};
 
-use super::random::Pcg32;
 use super::{Bxdf, ReflTransFlags, TransportMode};
 use crate::math::same_hemisphere;
+use crate::sampling::rng::Pcg32;
 use crate::sampling::warp::ONE_MINUS_EPSILON;
 
 /// Outgoing directions used by the tests: normal, moderate, oblique and grazing incidence,

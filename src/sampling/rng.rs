@@ -12,7 +12,7 @@ const PCG32_MULT: u64 = 0x5851_f42d_4c95_7f2d;
 
 /// pbrt-v4's `RNG`: a PCG32 generator with a selectable sequence (stream).
 #[derive(Clone, Debug)]
-pub(crate) struct Pcg32 {
+pub struct Pcg32 {
     state: u64,
     inc: u64,
 }
@@ -28,7 +28,7 @@ impl Default for Pcg32 {
 
 impl Pcg32 {
     /// pbrt-v4's `RNG(seqIndex, start)`, i.e. `SetSequence(sequence_index, seed)`.
-    pub(crate) fn new(sequence_index: u64, seed: u64) -> Pcg32 {
+    pub fn new(sequence_index: u64, seed: u64) -> Pcg32 {
         let mut rng = Pcg32 {
             state: 0,
             inc: (sequence_index << 1) | 1,
@@ -41,7 +41,7 @@ impl Pcg32 {
 
     /// Next 32 random bits (PCG-XSH-RR).
     #[inline]
-    pub(crate) fn next_u32(&mut self) -> u32 {
+    pub fn next_u32(&mut self) -> u32 {
         let old = self.state;
         self.state = old.wrapping_mul(PCG32_MULT).wrapping_add(self.inc);
         let xorshifted = (((old >> 18) ^ old) >> 27) as u32;
@@ -51,13 +51,13 @@ impl Pcg32 {
 
     /// Uniform float in [0, 1).
     #[inline]
-    pub(crate) fn uniform(&mut self) -> f32 {
+    pub fn uniform(&mut self) -> f32 {
         (self.next_u32() as f32 * (1.0 / 4_294_967_296.0)).min(ONE_MINUS_EPSILON)
     }
 }
 
 /// MurmurHash64A (Appleby) of `key`, as pbrt-v4 uses it for `Hash(...)`.
-pub(crate) fn murmur_hash64a(key: &[u8], seed: u64) -> u64 {
+pub fn murmur_hash64a(key: &[u8], seed: u64) -> u64 {
     const M: u64 = 0xc6a4_a793_5bd1_e995;
     const R: u32 = 47;
     let mut h = seed ^ (key.len() as u64).wrapping_mul(M);
@@ -93,17 +93,17 @@ fn hash_f32s<const N: usize>(values: [f32; N]) -> u64 {
 }
 
 /// pbrt-v4's `Hash(seed, w)` for an `int` seed and a `Vector3f`.
-pub(crate) fn hash_seed_vec3(seed: i32, w: Vec3) -> u64 {
+pub fn hash_seed_vec3(seed: i32, w: Vec3) -> u64 {
     hash_f32s([f32::from_bits(seed as u32), w.x, w.y, w.z])
 }
 
 /// pbrt-v4's `Hash(w)` for a `Vector3f`.
-pub(crate) fn hash_vec3(w: Vec3) -> u64 {
+pub fn hash_vec3(w: Vec3) -> u64 {
     hash_f32s([w.x, w.y, w.z])
 }
 
 /// pbrt-v4's `Hash(uc, u)` for a `Float` and a `Point2f`.
-pub(crate) fn hash_sample(uc: f32, u: Vec2) -> u64 {
+pub fn hash_sample(uc: f32, u: Vec2) -> u64 {
     hash_f32s([uc, u.x, u.y])
 }
 

@@ -1,5 +1,5 @@
-//! The Henyey-Greenstein phase function of the medium between the layers of a layered BxDF
-//! (pbrt-v4 §11.3, `HGPhaseFunction`, `HenyeyGreenstein` and `SampleHenyeyGreenstein`).
+//! The Henyey-Greenstein phase function, for participating media and for the medium between
+//! the layers of a layered BxDF (pbrt-v4 §11.3, `HGPhaseFunction`, `HenyeyGreenstein` and `SampleHenyeyGreenstein`).
 //!
 //! pbrt-v4's convention: both directions point away from the scattering point, so
 //! p(ωo, ωi) = HG(ωo·ωi, g) with the sign of the cosine term flipped relative to the
@@ -15,7 +15,7 @@ use crate::math::{Frame, safe_sqrt, sqr};
 /// cos θ = ωo·ωi. |g| is clamped to
 /// 0.99, where the function is still numerically stable.
 #[inline]
-pub(crate) fn henyey_greenstein(cos_theta: f32, g: f32) -> f32 {
+pub fn henyey_greenstein(cos_theta: f32, g: f32) -> f32 {
     let g = g.clamp(-0.99, 0.99);
     let denom = 1.0 + sqr(g) + 2.0 * g * cos_theta;
     (1.0 - sqr(g)) / (4.0 * PI * denom * safe_sqrt(denom))
@@ -23,7 +23,7 @@ pub(crate) fn henyey_greenstein(cos_theta: f32, g: f32) -> f32 {
 
 /// A sampled direction of a phase function.
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct PhaseSample {
+pub struct PhaseSample {
     /// Phase function value.
     pub p: f32,
     /// Sampled direction, pointing away from the scattering point.
@@ -34,31 +34,31 @@ pub(crate) struct PhaseSample {
 
 /// The Henyey-Greenstein phase function with asymmetry `g`.
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct HenyeyGreenstein {
+pub struct HenyeyGreenstein {
     g: f32,
 }
 
 impl HenyeyGreenstein {
     /// A phase function with asymmetry `g` ∈ [−1, 1].
     #[inline]
-    pub(crate) fn new(g: f32) -> HenyeyGreenstein {
+    pub fn new(g: f32) -> HenyeyGreenstein {
         HenyeyGreenstein { g }
     }
 
     /// p(ωo, ωi).
     #[inline]
-    pub(crate) fn p(&self, wo: Vec3, wi: Vec3) -> f32 {
+    pub fn p(&self, wo: Vec3, wi: Vec3) -> f32 {
         henyey_greenstein(wo.dot(wi), self.g)
     }
 
     /// Density of [`HenyeyGreenstein::sample_p`], equal to p.
     #[inline]
-    pub(crate) fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+    pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
         self.p(wo, wi)
     }
 
     /// Samples ωi by inverting the CDF of cos θ (pbrt-v4 §11.3); never fails.
-    pub(crate) fn sample_p(&self, wo: Vec3, u: Vec2) -> Option<PhaseSample> {
+    pub fn sample_p(&self, wo: Vec3, u: Vec2) -> Option<PhaseSample> {
         let g = self.g.clamp(-0.99, 0.99);
         let cos_theta = if g.abs() < 1e-3 {
             1.0 - 2.0 * u.x

@@ -18,6 +18,17 @@ pub struct DiffArgs {
     /// Difference shown at full intensity in the error image (default: 4 × RMSE).
     #[arg(long)]
     scale: Option<f32>,
+    /// Print both images' values at these pixels (x,y).
+    #[arg(long, value_parser = parse_pixel)]
+    probe: Vec<(usize, usize)>,
+}
+
+fn parse_pixel(s: &str) -> Result<(usize, usize), String> {
+    let (x, y) = s.split_once(',').ok_or("expected x,y")?;
+    Ok((
+        x.trim().parse().map_err(|_| "bad x")?,
+        y.trim().parse().map_err(|_| "bad y")?,
+    ))
 }
 
 /// Prints the metrics; writes the error image if asked.
@@ -37,6 +48,15 @@ pub fn run(args: &DiffArgs) -> Result<ExitCode> {
         m.mean_reference,
         100.0 * (m.mean_test / m.mean_reference - 1.0)
     );
+    for &(x, y) in &args.probe {
+        if x < t.width && y < t.height {
+            let (a, b) = (t.get(x, y), r.get(x, y));
+            println!(
+                "pixel ({x},{y})  test {:.5} {:.5} {:.5}  reference {:.5} {:.5} {:.5}",
+                a.x, a.y, a.z, b.x, b.y, b.z
+            );
+        }
+    }
     if let Some(out) = &args.out {
         let scale = args.scale.unwrap_or((4.0 * m.rmse) as f32).max(1e-12);
         let img = nimbus::metrics::difference_image(&t, &r, scale);

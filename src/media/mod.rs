@@ -1,4 +1,12 @@
 //! Participating media: phase functions, media (homogeneous, grids, procedural, VDB), and
 //! majorant grids for delta tracking.
 
+pub mod cloud;
+pub mod dense;
+pub mod majorant;
+mod medium;
 pub mod phase;
+
+pub use medium::{
+    Density, Emission, GridMedium, Medium, MediumKind, MediumPoint, RgbGridMedium, Segments,
+};

@@ -18,6 +18,7 @@ use super::film::FilmSettings;
 use super::filter::FilterSettings;
 use super::lights::{AreaLightSettings, LightKind as LightSpec, LightSettings};
 use super::materials::{ConductorSpec, Eta, MaterialKind, MaterialSettings, Roughness};
+use super::media::{MediumKind as MediumSpec, MediumSettings};
 use super::sampler::SamplerSettings;
 use super::shapes::{ShapeKind, ShapeSettings};
 use super::textures::{Mapping, TexInput, TextureKind, TextureSettings};
@@ -32,8 +33,13 @@ use crate::integrators::IntegratorSettings;
 use crate::lights::{EnvironmentMap, Light, LightKind, LightSampler, SceneSphere};
 use crate::materials::{ConductorInput, Material, RoughnessTex};
 use crate::math::Frame;
+use crate::media::dense::DenseGrid;
+use crate::media::{Density, Emission, Medium};
 use crate::shapes::{Cylinder, Disk, Mesh, Sphere, uniform_scale};
-use crate::spectra::{conductor_rgb, dielectric_eta, illuminant_rgb, reflectance_rgb};
+use crate::spectra::{
+    BlackbodyRgbTable, conductor_rgb, convert_reflectance_rgb, dielectric_eta, emission_rgb,
+    illuminant_rgb, reflectance_rgb,
+};
 use crate::textures::{Tex, TexMapping, TexNode, Textures, Wrap};
 
 /// Command-line choices that override the scene file (pbrt-v4's flags).
@@ -98,6 +104,14 @@ pub struct Scene {
     pub sphere: SceneSphere,
     /// Whether any surface is an `interface` (shadow rays must pass through them).
     pub has_interfaces: bool,
+    /// Media the scene uses (unused named media are not built).
+    pub media: Vec<Medium>,
+    /// (inside, outside) medium of each boundary surface; primitives index this.
+    pub interfaces: Vec<[u32; 2]>,
+    /// Medium around the camera, or [`NONE`].
+    pub camera_medium: u32,
+    /// Whether any medium is chromatic (paths then pick a hero channel).
+    pub has_chromatic_media: bool,
     /// Imaging ratio: exposure time × ISO / 100 (pbrt-v4's cie1931 sensor).
     pub imaging_ratio: f32,
     /// Build statistics.
@@ -429,6 +443,7 @@ struct ShapeBuilder<'a> {
     store: ShapeStore,
     film_cs: ColorSpace,
     material_ids: &'a dyn Fn(&MaterialRef) -> u32,
+    interface_ids: &'a dyn Fn(&nimbus_parser::MediumInterface) -> Result<u32, Error>,
     lights: Vec<Light>,
     triangles: usize,
     mesh_bytes: usize,
@@ -446,14 +461,10 @@ impl ShapeBuilder<'_> {
     ) -> Result<(), Error> {
         let e = &shape.entity;
         let settings = ShapeSettings::from_entity(shape)?;
-        if let Some(mi) = &shape.medium_interface
-            && (mi.inside.is_some() || mi.outside.is_some())
-        {
-            return Err(err(
-                &e.loc,
-                "participating media (MediumInterface) are not supported by this build of nimbus yet",
-            ));
-        }
+        let interface = match &shape.medium_interface {
+            Some(mi) => (self.interface_ids)(mi)?,
+            None => NONE,
+        };
         let world = fixed_transform(&shape.world_from_object, &e.loc, "shape")?;
         let rev = shape.reverse_orientation;
         let material = (self.material_ids)(&shape.material);
@@ -464,7 +475,7 @@ impl ShapeBuilder<'_> {
                 geometry: g,
                 material,
                 area_light: NONE,
-                interface: NONE,
+                interface,
             });
         };
         match &settings.kind {
@@ -524,7 +535,7 @@ impl ShapeBuilder<'_> {
                     m.uvs,
                     m.indices.clone(),
                 );
-                self.add_mesh(mesh, material, prims, bounds);
+                self.add_mesh(mesh, material, interface, prims, bounds);
             }
             ShapeKind::BilinearMesh(m) => {
                 let tris: Vec<u32> = m
@@ -533,7 +544,7 @@ impl ShapeBuilder<'_> {
                     .flat_map(|q| [q[0], q[1], q[3], q[0], q[3], q[2]])
                     .collect();
                 let mesh = Mesh::new(&world, rev, m.positions, m.normals, m.uvs, tris);
-                self.add_mesh(mesh, material, prims, bounds);
+                self.add_mesh(mesh, material, interface, prims, bounds);
             }
             ShapeKind::PlyMesh(path) => {
                 let ply = read_ply(path).map_err(|m| err(&e.loc, format!("plymesh: {m}")))?;
@@ -545,7 +556,7 @@ impl ShapeBuilder<'_> {
                     &ply.uvs,
                     ply.indices,
                 );
-                self.add_mesh(mesh, material, prims, bounds);
+                self.add_mesh(mesh, material, interface, prims, bounds);
             }
             ShapeKind::ObjMesh(path) | ShapeKind::GltfMesh(path) => {
                 let meshes = if matches!(settings.kind, ShapeKind::ObjMesh(_)) {
@@ -556,7 +567,7 @@ impl ShapeBuilder<'_> {
                 .map_err(|m| err(&e.loc, m))?;
                 for m in meshes {
                     let mesh = Mesh::new(&world, rev, &m.positions, &m.normals, &m.uvs, m.indices);
-                    self.add_mesh(mesh, material, prims, bounds);
+                    self.add_mesh(mesh, material, interface, prims, bounds);
                 }
             }
         }
@@ -616,6 +627,7 @@ impl ShapeBuilder<'_> {
         &mut self,
         mesh: Mesh,
         material: u32,
+        interface: u32,
         prims: &mut Vec<Primitive>,
         bounds: &mut Vec<Bounds3>,
     ) {
@@ -631,7 +643,7 @@ impl ShapeBuilder<'_> {
                 geometry: Geometry::Triangle { mesh: id, tri },
                 material,
                 area_light: NONE,
-                interface: NONE,
+                interface,
             });
         }
         self.store.meshes.push(mesh);
@@ -642,14 +654,9 @@ fn light(
     l: &nimbus_parser::LightEntity,
     film_cs: ColorSpace,
     sphere: &SceneSphere,
+    medium: u32,
 ) -> Result<Light, Error> {
     let e = &l.entity;
-    if l.medium.is_some() {
-        return Err(err(
-            &e.loc,
-            "participating media (a light inside a medium) are not supported by this build of nimbus yet",
-        ));
-    }
     let settings = LightSettings::from_entity(l)?;
     let world = fixed_transform(&l.world_from_light, &e.loc, "light")?;
     let rgb = |s: &SpectrumSpec| {
@@ -746,7 +753,163 @@ fn light(
         }
     };
     let _ = sphere;
-    Ok(Light { kind, medium: NONE })
+    Ok(Light { kind, medium })
+}
+
+/// Names of the media that the camera, lights or boundary surfaces refer to.
+fn used_media(desc: &SceneDescription) -> std::collections::HashSet<&str> {
+    let shapes = desc.shapes.iter().chain(
+        desc.instance_definitions
+            .iter()
+            .flat_map(|d| d.shapes.iter()),
+    );
+    let from_shapes = shapes
+        .filter_map(|s| s.medium_interface.as_ref())
+        .flat_map(|mi| [&mi.inside, &mi.outside]);
+    std::iter::once(&desc.camera.medium)
+        .chain(desc.lights.iter().map(|l| &l.medium))
+        .chain(from_shapes)
+        .filter_map(|n| n.as_deref())
+        .collect()
+}
+
+/// Creates a render-time medium from its settings.
+fn build_medium(
+    m: &nimbus_parser::MediumEntity,
+    settings: &MediumSettings<'_>,
+    film_cs: ColorSpace,
+) -> Result<Medium, Error> {
+    let e = &m.entity;
+    let cs = e.color_space;
+    let unbounded =
+        |s: &SpectrumSpec| reflectance_rgb(s, cs, film_cs).map_err(|x| err(&e.loc, x.to_string()));
+    let sigma_a = unbounded(&settings.sigma_a)? * settings.scale;
+    let sigma_s = unbounded(&settings.sigma_s)? * settings.scale;
+    let le = match &settings.le {
+        Some(s) => {
+            illuminant_rgb(s, cs, film_cs).map_err(|x| err(&e.loc, x.to_string()))?
+                * settings.le_scale
+        }
+        None => Rgb::ZERO,
+    };
+    let world = fixed_transform(&m.world_from_medium, &e.loc, "medium")?;
+    let g = settings.g;
+    let dense = |n: [u32; 3], v: &[f32]| {
+        DenseGrid::new(glam::UVec3::from(n), v.to_vec())
+            .ok_or_else(|| err(&e.loc, "grid size mismatch"))
+    };
+    Ok(match &settings.kind {
+        MediumSpec::Homogeneous => Medium::homogeneous(m.name.clone(), sigma_a, sigma_s, le, g),
+        MediumSpec::UniformGrid {
+            n,
+            bounds,
+            density,
+            temperature,
+            le_scale_grid,
+        } => {
+            let scale_grid = || le_scale_grid.map(|v| dense(*n, v)).transpose();
+            let emission = match temperature {
+                Some(t) => Emission::Temperature {
+                    grid: dense(*n, t.values.unwrap_or(&[]))?,
+                    offset: t.offset,
+                    scale: t.scale,
+                    le_scale: settings.le_scale,
+                    scale_grid: scale_grid()?,
+                    table: BlackbodyRgbTable::new(film_cs),
+                },
+                None if le != Rgb::ZERO => Emission::Radiance {
+                    le,
+                    scale: scale_grid()?,
+                },
+                None => Emission::None,
+            };
+            let b = Bounds3::new(Vec3::from(bounds[0]), Vec3::from(bounds[1]));
+            Medium::grid(
+                m.name.clone(),
+                world,
+                b,
+                Density::Grid(dense(*n, density)?),
+                sigma_a,
+                sigma_s,
+                emission,
+                g,
+            )
+        }
+        MediumSpec::Cloud {
+            bounds,
+            density,
+            wispiness,
+            frequency,
+        } => {
+            let b = Bounds3::new(Vec3::from(bounds[0]), Vec3::from(bounds[1]));
+            let cloud = crate::media::cloud::Cloud {
+                density: *density,
+                wispiness: *wispiness,
+                frequency: *frequency,
+            };
+            let emission = if le != Rgb::ZERO {
+                Emission::Radiance { le, scale: None }
+            } else {
+                Emission::None
+            };
+            Medium::grid(
+                m.name.clone(),
+                world,
+                b,
+                Density::Cloud(cloud),
+                sigma_a,
+                sigma_s,
+                emission,
+                g,
+            )
+        }
+        MediumSpec::RgbGrid {
+            n,
+            bounds,
+            sigma_a: ga,
+            sigma_s: gs,
+            le: gl,
+        } => {
+            let scale = settings.scale;
+            let rgb_grid = |v: &[[f32; 3]], f: &dyn Fn(Rgb) -> Rgb| {
+                DenseGrid::new(
+                    glam::UVec3::from(*n),
+                    v.iter().map(|c| f(Rgb::from(*c))).collect(),
+                )
+                .ok_or_else(|| err(&e.loc, "grid size mismatch"))
+            };
+            let adapt = |c: Rgb| {
+                if cs == film_cs {
+                    c
+                } else {
+                    convert_reflectance_rgb(c, cs, film_cs)
+                }
+            };
+            // pbrt-v4 does not normalise rgbgrid emission: RGB illuminant spectra in film units.
+            let le_unit = emission_rgb(&SpectrumSpec::Rgb([1.0, 1.0, 1.0]), cs, film_cs)
+                .map_err(|x| err(&e.loc, x.to_string()))?;
+            let sa = ga.map(|v| rgb_grid(v, &|c| adapt(c) * scale)).transpose()?;
+            let ss = gs.map(|v| rgb_grid(v, &|c| adapt(c) * scale)).transpose()?;
+            let le_grid = gl
+                .map(|v| {
+                    rgb_grid(v, &|c| {
+                        crate::spectra::convert_rgb(c, cs, film_cs) * le_unit * settings.le_scale
+                    })
+                })
+                .transpose()?;
+            let b = Bounds3::new(Vec3::from(bounds[0]), Vec3::from(bounds[1]));
+            Medium::rgb_grid(m.name.clone(), world, b, sa, ss, le_grid, g)
+        }
+        MediumSpec::Vdb { .. } => {
+            return Err(err(
+                &e.loc,
+                format!(
+                    "{} media are not supported by this build of nimbus yet",
+                    e.name
+                ),
+            ));
+        }
+    })
 }
 
 fn pixel_bounds(
@@ -803,12 +966,6 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions) -> Result<Scene
     }
     let film_cs = film.color_space;
     let camera_settings = CameraSettings::from_entity(&desc.camera)?;
-    if desc.camera.medium.is_some() {
-        return Err(err(
-            &desc.camera.entity.loc,
-            "participating media (a camera inside a medium) are not supported by this build of nimbus yet",
-        ));
-    }
     let world_from_camera = &desc.camera.world_from_camera;
     if world_from_camera.is_animated() {
         return Err(err(
@@ -862,12 +1019,42 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions) -> Result<Scene
         }
     };
 
+    // Media: only those the camera, lights or boundary surfaces use are built.
+    let used = used_media(desc);
+    let mut media = Vec::new();
+    let mut media_ids: HashMap<String, u32> = HashMap::new();
+    for m in &desc.media {
+        let settings = MediumSettings::from_entity(m)?;
+        if used.contains(m.name.as_str()) {
+            media_ids.insert(m.name.clone(), media.len() as u32);
+            media.push(build_medium(m, &settings, film_cs)?);
+        }
+    }
+    let interfaces = std::cell::RefCell::new(Vec::<[u32; 2]>::new());
+    let medium_id = |name: &Option<String>| {
+        name.as_deref()
+            .map_or(NONE, |n| media_ids.get(n).copied().unwrap_or(NONE))
+    };
+    let interface_ids = |mi: &nimbus_parser::MediumInterface| -> Result<u32, Error> {
+        let pair = [medium_id(&mi.inside), medium_id(&mi.outside)];
+        let mut list = interfaces.borrow_mut();
+        Ok(match list.iter().position(|p| *p == pair) {
+            Some(i) => i as u32,
+            None => {
+                list.push(pair);
+                list.len() as u32 - 1
+            }
+        })
+    };
+    let camera_medium = medium_id(&desc.camera.medium);
+
     // Shapes, object definitions and instances.
     let tg = Instant::now();
     let mut sb = ShapeBuilder {
         store: ShapeStore::default(),
         film_cs,
         material_ids: &material_ids,
+        interface_ids: &interface_ids,
         lights: Vec::new(),
         triangles: 0,
         mesh_bytes: 0,
@@ -921,7 +1108,10 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions) -> Result<Scene
         top,
         blas,
         instances,
+        pass_through: materials.iter().map(Material::is_interface).collect(),
     };
+    let interfaces = interfaces.into_inner();
+    let has_chromatic_media = media.iter().any(|m| m.chromatic);
     let geometry_seconds = tg.elapsed().as_secs_f64();
 
     let sb_bounds = surfaces.bounds();
@@ -938,7 +1128,11 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions) -> Result<Scene
         }
     };
     for l in &desc.lights {
-        lights.push(light(l, film_cs, &sphere)?);
+        let medium = l
+            .medium
+            .as_deref()
+            .map_or(NONE, |n| media_ids.get(n).copied().unwrap_or(NONE));
+        lights.push(light(l, film_cs, &sphere, medium)?);
     }
     let infinite_lights = lights
         .iter()
@@ -966,6 +1160,10 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions) -> Result<Scene
         infinite_lights,
         sphere,
         has_interfaces,
+        media,
+        interfaces,
+        camera_medium,
+        has_chromatic_media,
         imaging_ratio,
         stats: BuildStats {
             geometry_seconds,

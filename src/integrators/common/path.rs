@@ -1,20 +1,25 @@
 //! The path loop of pbrt-v4's VolPathIntegrator (Pharr et al., PBR 4th ed., §14.2), written
-//! once: emission with MIS, next-event estimation with MIS between light and BSDF sampling,
-//! Russian roulette, `interface` surfaces skipped without counting a bounce. MIS uses pbrt-v4's
-//! rescaled path probabilities: `r_u` (unidirectional, per channel) and `r_l` (light
-//! sampling), with the balance heuristic over the two strategies.
+//! once: delta tracking through media with majorant grids, emission with MIS, next-event
+//! estimation with MIS between light and BSDF/phase sampling and ratio-tracking shadow rays,
+//! Russian roulette, `interface` surfaces crossed without counting a bounce. MIS uses
+//! pbrt-v4's rescaled path probabilities: `r_u` (unidirectional) and `r_l` (light sampling)
+//! per channel, with the balance heuristic; in chromatic media the channels are pbrt-v4's
+//! wavelengths, one of them (`hero`, chosen per path) driving distance sampling.
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 
 use super::RayStats;
+use super::media::{ShadowEstimate, ratio_tracking, sample_t_maj};
 use super::observer::{EmissionEvent, NeeEvent, PathObserver, VertexEvent};
 use crate::accel::{Hit, NONE};
 use crate::color::{Rgb, average};
-use crate::geometry::{Ray, spawn_ray, spawn_ray_to};
-use crate::lights::LightContext;
+use crate::geometry::{Ray, offset_origin, spawn_ray};
+use crate::lights::{LightContext, LightSample};
 use crate::materials::bxdf::{Bxdf, ReflTransFlags, TransportMode};
 use crate::math::Frame;
+use crate::media::phase::HenyeyGreenstein;
 use crate::samplers::Sampler;
+use crate::sampling::rng::{Pcg32, hash_sample};
 use crate::scene::Scene;
 use crate::textures::TexContext;
 
@@ -30,12 +35,6 @@ pub struct PathConfig {
     pub next_event: bool,
 }
 
-/// The last scattering vertex, for MIS of emission found by the next ray.
-#[derive(Clone, Copy, Debug)]
-struct PrevVertex {
-    p: Vec3,
-}
-
 /// Local shading frame at a surface hit.
 #[inline]
 fn shading_frame(hit: &Hit) -> Frame {
@@ -47,29 +46,238 @@ fn shading_frame(hit: &Hit) -> Frame {
     }
 }
 
+/// The medium on the side of a surface that `w` points into.
+#[inline]
+fn medium_after(scene: &Scene, hit: &Hit, w: Vec3, current: u32) -> u32 {
+    if hit.prim.interface == NONE {
+        return current;
+    }
+    let [inside, outside] = scene.interfaces[hit.prim.interface as usize];
+    if w.dot(hit.surface.n) > 0.0 {
+        outside
+    } else {
+        inside
+    }
+}
+
+/// What scatters at a vertex: a BSDF in a local frame, or a phase function.
+enum Scatterer<'a> {
+    Surface {
+        bxdf: &'a Bxdf,
+        frame: &'a Frame,
+        wo_local: Vec3,
+    },
+    Medium {
+        phase: HenyeyGreenstein,
+        wo: Vec3,
+    },
+}
+
+impl Scatterer<'_> {
+    /// f·|cos| (or p) and the sampling density for direction `wi`.
+    #[inline]
+    fn eval(&self, wi: Vec3) -> (Rgb, f32) {
+        match self {
+            Scatterer::Surface {
+                bxdf,
+                frame,
+                wo_local,
+            } => {
+                let wl = frame.to_local(wi);
+                let f = bxdf.f(*wo_local, wl, TransportMode::Radiance) * wl.z.abs();
+                if f == Rgb::ZERO {
+                    return (f, 0.0);
+                }
+                (
+                    f,
+                    bxdf.pdf(*wo_local, wl, TransportMode::Radiance, ReflTransFlags::ALL),
+                )
+            }
+            Scatterer::Medium { phase, wo } => {
+                let p = phase.p(*wo, wi);
+                (Rgb::splat(p), phase.pdf(*wo, wi))
+            }
+        }
+    }
+}
+
+/// Per-path state shared by the loop and its helpers.
+struct PathState {
+    beta: Rgb,
+    r_u: Rgb,
+    r_l: Rgb,
+    hero: usize,
+}
+
 /// Radiance arriving along `ray` (from the camera, in medium `medium`), estimated by one
 /// path. `observer` sees every vertex, light sample and emission event.
 pub fn trace_path<O: PathObserver>(
     scene: &Scene,
     mut ray: Ray,
+    mut medium: u32,
     sampler: &mut Sampler,
     config: &PathConfig,
     observer: &mut O,
     stats: &mut RayStats,
 ) -> Rgb {
     let mut l = Rgb::ZERO;
-    let mut beta = Rgb::ONE;
-    let r_u = Rgb::ONE;
-    let mut r_l = Rgb::ONE;
+    // Chromatic media need a randomly chosen hero channel for spectral MIS.
+    let hero = if scene.has_chromatic_media {
+        ((sampler.get_1d() * 3.0) as usize).min(2)
+    } else {
+        0
+    };
+    let mut st = PathState {
+        beta: Rgb::ONE,
+        r_u: Rgb::ONE,
+        r_l: Rgb::ONE,
+        hero,
+    };
     let mut specular_bounce = false;
     let mut any_non_specular = false;
     let mut eta_scale = 1.0f32;
     let mut depth = 0u32;
-    let mut prev = PrevVertex { p: ray.o };
+    let mut prev_p = ray.o;
 
     loop {
         stats.bounce += 1;
-        let Some(hit) = scene.surfaces.intersect(&ray, f32::INFINITY) else {
+        let hit = scene.surfaces.intersect(&ray, f32::INFINITY);
+
+        // Delta tracking through the current medium up to the surface.
+        if medium != NONE {
+            let m = &scene.media[medium as usize];
+            let t_max = hit.as_ref().map_or(f32::INFINITY, |h| h.surface.t);
+            let mut rng = Pcg32::new(
+                hash_sample(sampler.get_1d(), Vec2::ZERO),
+                hash_sample(sampler.get_1d(), Vec2::ONE),
+            );
+            let u = sampler.get_1d();
+            let (mut scattered, mut terminated) = (false, false);
+            let mut scatter_p = Vec3::ZERO;
+            let t_maj = sample_t_maj(
+                m,
+                &ray,
+                t_max,
+                u,
+                &mut rng,
+                hero,
+                |p, mp, sigma_maj, t_maj, rng| {
+                    if st.beta == Rgb::ZERO {
+                        terminated = true;
+                        return false;
+                    }
+                    // Medium emission, weighted by the chance of having reached it.
+                    if depth < config.max_depth && mp.le != Rgb::ZERO {
+                        let pdf = sigma_maj[hero] * t_maj[hero];
+                        let betap = st.beta * t_maj / pdf;
+                        let r_e = st.r_u * sigma_maj * t_maj / pdf;
+                        if r_e != Rgb::ZERO {
+                            let c = betap * mp.sigma_a * mp.le / average(r_e);
+                            l += c;
+                            observer.on_emission(&EmissionEvent {
+                                depth,
+                                contribution: c,
+                            });
+                        }
+                    }
+                    // Choose absorption, real scattering or null scattering with the hero
+                    // channel's probabilities.
+                    let p_absorb = mp.sigma_a[hero] / sigma_maj[hero];
+                    let p_scatter = mp.sigma_s[hero] / sigma_maj[hero];
+                    let um = rng.uniform();
+                    if um < p_absorb {
+                        terminated = true;
+                        false
+                    } else if um < p_absorb + p_scatter {
+                        if depth >= config.max_depth {
+                            terminated = true;
+                            return false;
+                        }
+                        depth += 1;
+                        let pdf = t_maj[hero] * mp.sigma_s[hero];
+                        st.beta *= t_maj * mp.sigma_s / pdf;
+                        st.r_u *= t_maj * mp.sigma_s / pdf;
+                        scattered = true;
+                        scatter_p = p;
+                        false
+                    } else {
+                        let sigma_n = (sigma_maj - mp.sigma_a - mp.sigma_s).max(Rgb::ZERO);
+                        let pdf = t_maj[hero] * sigma_n[hero];
+                        if pdf == 0.0 {
+                            st.beta = Rgb::ZERO;
+                        } else {
+                            st.beta *= t_maj * sigma_n / pdf;
+                            st.r_u *= t_maj * sigma_n / pdf;
+                            st.r_l *= t_maj * sigma_maj / pdf;
+                        }
+                        st.beta != Rgb::ZERO && st.r_u != Rgb::ZERO
+                    }
+                },
+            );
+            if terminated || st.beta == Rgb::ZERO || st.r_u == Rgb::ZERO {
+                return l;
+            }
+            if scattered {
+                // Real scattering: next-event estimation, then sample the phase function.
+                let phase = HenyeyGreenstein::new(m.g);
+                let wo = -ray.d;
+                if config.next_event {
+                    let u_pick = sampler.get_1d();
+                    let u_light = sampler.get_2d();
+                    let sc = Scatterer::Medium { phase, wo };
+                    if let Some(c) = sample_direct(
+                        scene,
+                        scatter_p,
+                        None,
+                        medium,
+                        &sc,
+                        u_pick,
+                        u_light,
+                        &st,
+                        depth - 1,
+                        observer,
+                        stats,
+                    ) {
+                        l += c;
+                    }
+                }
+                let u = sampler.get_2d();
+                let Some(ps) = phase.sample_p(wo, u) else {
+                    return l;
+                };
+                if ps.pdf == 0.0 {
+                    return l;
+                }
+                observer.on_vertex(&VertexEvent {
+                    depth: depth - 1,
+                    p: scatter_p,
+                    n: Vec3::ZERO,
+                    wo,
+                    wi: ps.wi,
+                    pdf: ps.pdf,
+                    f: Rgb::splat(ps.p),
+                    beta: st.beta,
+                    specular: false,
+                    in_medium: true,
+                });
+                st.beta *= ps.p / ps.pdf;
+                st.r_l = st.r_u / ps.pdf;
+                prev_p = scatter_p;
+                specular_bounce = false;
+                any_non_specular = true;
+                ray = Ray::new(scatter_p, ps.wi);
+                if rr(&mut st, eta_scale, depth, sampler) {
+                    return l;
+                }
+                continue;
+            }
+            let h = t_maj[hero];
+            st.beta *= t_maj / h;
+            st.r_u *= t_maj / h;
+            st.r_l *= t_maj / h;
+        }
+
+        let Some(hit) = hit else {
             // Escaped: environment emission.
             for &i in &scene.infinite_lights {
                 let light = &scene.lights[i as usize];
@@ -78,17 +286,16 @@ pub fn trace_path<O: PathObserver>(
                     continue;
                 }
                 let c = if depth == 0 || specular_bounce || !config.next_event {
-                    beta * le / average(r_u)
+                    st.beta * le / average(st.r_u)
                 } else {
                     let pdf = scene.light_sampler.pmf(i as usize)
                         * light.pdf_li(
-                            &LightContext { p: prev.p },
+                            &LightContext { p: prev_p },
                             ray.d,
                             None,
                             &scene.surfaces.shapes,
                         );
-                    let r_l_light = r_l * pdf;
-                    beta * le / average(r_u + r_l_light)
+                    st.beta * le / average(st.r_u + st.r_l * pdf)
                 };
                 l += c;
                 observer.on_emission(&EmissionEvent {
@@ -107,16 +314,16 @@ pub fn trace_path<O: PathObserver>(
             let le = light.emitted(s, wo);
             if le != Rgb::ZERO {
                 let c = if depth == 0 || specular_bounce || !config.next_event {
-                    beta * le / average(r_u)
+                    st.beta * le / average(st.r_u)
                 } else {
                     let pdf = scene.light_sampler.pmf(hit.prim.area_light as usize)
                         * light.pdf_li(
-                            &LightContext { p: prev.p },
+                            &LightContext { p: prev_p },
                             ray.d,
                             Some(s),
                             &scene.surfaces.shapes,
                         );
-                    beta * le / average(r_u + r_l * pdf)
+                    st.beta * le / average(st.r_u + st.r_l * pdf)
                 };
                 l += c;
                 observer.on_emission(&EmissionEvent {
@@ -129,7 +336,8 @@ pub fn trace_path<O: PathObserver>(
         let material = &scene.materials[hit.prim.material as usize];
         let tex_ctx = TexContext { p: s.p, uv: s.uv };
         let Some(mut bxdf) = material.bxdf(&scene.textures, &tex_ctx) else {
-            // An interface: continue through it without counting a bounce.
+            // An interface: cross it without counting a bounce.
+            medium = medium_after(scene, &hit, ray.d, medium);
             ray = spawn_ray(s.p, s.n, ray.d);
             continue;
         };
@@ -142,22 +350,25 @@ pub fn trace_path<O: PathObserver>(
         }
         let frame = shading_frame(&hit);
         let wo_local = frame.to_local(wo);
-        let flags = bxdf.flags();
 
         // Next-event estimation.
-        if config.next_event && flags.is_non_specular() {
+        if config.next_event && bxdf.flags().is_non_specular() {
             let u_pick = sampler.get_1d();
             let u_light = sampler.get_2d();
+            let sc = Scatterer::Surface {
+                bxdf: &bxdf,
+                frame: &frame,
+                wo_local,
+            };
             if let Some(c) = sample_direct(
                 scene,
-                &hit,
-                &frame,
-                &bxdf,
-                wo_local,
+                s.p,
+                Some(&hit),
+                medium,
+                &sc,
                 u_pick,
                 u_light,
-                beta,
-                r_u,
+                &st,
                 depth - 1,
                 observer,
                 stats,
@@ -188,148 +399,176 @@ pub fn trace_path<O: PathObserver>(
             wi,
             pdf: bs.pdf,
             f: f_cos,
-            beta,
+            beta: st.beta,
             specular: bs.is_specular(),
             in_medium: false,
         });
-        beta *= f_cos / bs.pdf;
-        r_l = if bs.pdf_is_proportional {
-            r_u / bxdf.pdf(
-                wo_local,
-                bs.wi,
-                TransportMode::Radiance,
-                ReflTransFlags::ALL,
-            )
+        st.beta *= f_cos / bs.pdf;
+        st.r_l = if bs.pdf_is_proportional {
+            st.r_u
+                / bxdf.pdf(
+                    wo_local,
+                    bs.wi,
+                    TransportMode::Radiance,
+                    ReflTransFlags::ALL,
+                )
         } else {
-            r_u / bs.pdf
+            st.r_u / bs.pdf
         };
         specular_bounce = bs.is_specular();
         any_non_specular |= !bs.is_specular();
         if bs.is_transmission() {
             eta_scale *= bs.eta * bs.eta;
         }
-        prev = PrevVertex { p: s.p };
+        prev_p = s.p;
+        medium = medium_after(scene, &hit, wi, medium);
         ray = spawn_ray(s.p, s.n, wi);
-
-        if beta == Rgb::ZERO || !beta.is_finite() {
+        if rr(&mut st, eta_scale, depth, sampler) {
             break;
-        }
-        // Russian roulette on the throughput with the radiance scaling of refraction undone.
-        let rr_beta = beta * eta_scale / average(r_u);
-        let rr_max = rr_beta.max_element();
-        let u_rr = sampler.get_1d();
-        if rr_max < 1.0 && depth > 1 {
-            let q = (1.0 - rr_max).max(0.0);
-            if u_rr < q {
-                break;
-            }
-            beta /= 1.0 - q;
         }
     }
     l
 }
 
-/// One light sample at a surface vertex, MIS-weighted against BSDF sampling (pbrt-v4's
-/// SampleLd). Shadow rays pass through `interface` surfaces.
+/// Russian roulette on the throughput with refraction's radiance scaling undone; true
+/// when the path ends.
+#[inline]
+fn rr(st: &mut PathState, eta_scale: f32, depth: u32, sampler: &mut Sampler) -> bool {
+    if st.beta == Rgb::ZERO || !st.beta.is_finite() {
+        return true;
+    }
+    let rr_beta = st.beta * eta_scale / average(st.r_u);
+    let rr_max = rr_beta.max_element();
+    let u_rr = sampler.get_1d();
+    if rr_max < 1.0 && depth > 1 {
+        let q = (1.0 - rr_max).max(0.0);
+        if u_rr < q {
+            return true;
+        }
+        st.beta /= 1.0 - q;
+    }
+    false
+}
+
+/// One light sample at a vertex at `p` (on the surface `hit`, or inside `medium` when there
+/// is none), MIS-weighted against BSDF/phase sampling (pbrt-v4's SampleLd). The shadow ray
+/// crosses `interface` surfaces and accumulates ratio-tracking transmittance through media.
 #[allow(clippy::too_many_arguments)]
 fn sample_direct<O: PathObserver>(
     scene: &Scene,
-    hit: &Hit,
-    frame: &Frame,
-    bxdf: &Bxdf,
-    wo_local: Vec3,
+    p: Vec3,
+    hit: Option<&Hit>,
+    medium: u32,
+    scatterer: &Scatterer<'_>,
     u_pick: f32,
-    u_light: glam::Vec2,
-    beta: Rgb,
-    r_p: Rgb,
+    u_light: Vec2,
+    st: &PathState,
     depth: u32,
     observer: &mut O,
     stats: &mut RayStats,
 ) -> Option<Rgb> {
-    let s = &hit.surface;
     let (index, pmf) = scene.light_sampler.sample(u_pick)?;
     let light = &scene.lights[index];
-    let ctx = LightContext { p: s.p };
-    let ls = light.sample_li(&ctx, u_light, &scene.surfaces.shapes, &scene.sphere)?;
+    let ls = light.sample_li(
+        &LightContext { p },
+        u_light,
+        &scene.surfaces.shapes,
+        &scene.sphere,
+    )?;
     if ls.pdf == 0.0 || ls.l == Rgb::ZERO {
         return None;
     }
-    let wi_local = frame.to_local(ls.wi);
-    let f = bxdf.f(wo_local, wi_local, TransportMode::Radiance) * wi_local.z.abs();
+    let (f, pdf_scatter) = scatterer.eval(ls.wi);
     if f == Rgb::ZERO {
         return None;
     }
-    if !unoccluded(scene, s.p, s.n, &ls, stats) {
-        return None;
-    }
+    // A shadow ray leaving a surface starts in the medium on the side it leaves towards.
+    let (n, medium) = match hit {
+        Some(h) => (h.surface.n, medium_after(scene, h, ls.wi, medium)),
+        None => (Vec3::ZERO, medium),
+    };
+    let ShadowEstimate { t_ray, r_u, r_l } =
+        transmittance(scene, p, n, medium, &ls, st.hero, stats)?;
     let pdf_light = pmf * ls.pdf;
+    let r_l = r_l * st.r_u * pdf_light;
+    let r_u = r_u * st.r_u * pdf_scatter;
     let contribution = if ls.delta {
-        beta * f * ls.l / average(r_p * pdf_light)
+        st.beta * f * t_ray * ls.l / average(r_l)
     } else {
-        let pdf_scatter = bxdf.pdf(
-            wo_local,
-            wi_local,
-            TransportMode::Radiance,
-            ReflTransFlags::ALL,
-        );
-        beta * f * ls.l / average(r_p * pdf_light + r_p * pdf_scatter)
+        st.beta * f * t_ray * ls.l / average(r_l + r_u)
     };
     observer.on_nee(&NeeEvent {
         depth,
-        p: s.p,
+        p,
         wi: ls.wi,
         pdf_light,
-        pdf_scatter: if ls.delta {
-            0.0
-        } else {
-            bxdf.pdf(
-                wo_local,
-                wi_local,
-                TransportMode::Radiance,
-                ReflTransFlags::ALL,
-            )
-        },
+        pdf_scatter: if ls.delta { 0.0 } else { pdf_scatter },
         contribution,
     });
     Some(contribution)
 }
 
-/// Whether the light sample is visible from `p`: nothing but `interface` surfaces between.
-fn unoccluded(
+/// Transmittance from `p` to the light sample, with the rescaled probabilities of the
+/// segments through media, or `None` when something opaque is in the way.
+fn transmittance(
     scene: &Scene,
     p: Vec3,
     n: Vec3,
-    ls: &crate::lights::LightSample,
+    mut medium: u32,
+    ls: &LightSample,
+    hero: usize,
     stats: &mut RayStats,
-) -> bool {
-    let (mut ray, mut t_max) = if ls.infinite {
-        (spawn_ray(p, n, ls.wi), f32::INFINITY)
-    } else if ls.n != Vec3::ZERO {
-        // Area light: stop just short of the sampled point on the light itself.
-        spawn_ray_to(p, n, ls.p)
+) -> Option<ShadowEstimate> {
+    let mut est = ShadowEstimate::default();
+    let origin = if n == Vec3::ZERO {
+        p
     } else {
-        let (r, d) = spawn_ray_to(p, n, ls.p);
-        (r, d)
+        offset_origin(p, n, ls.wi)
     };
-    if !scene.has_interfaces {
+    let mut ray = Ray::new(origin, ls.wi);
+    // Distance left to the light point; the light's own surface is not an occluder.
+    let mut remaining = if ls.infinite {
+        f32::INFINITY
+    } else {
+        (ls.p - origin).length() * (1.0 - 1e-4)
+    };
+    if medium == NONE && !scene.has_interfaces {
         stats.shadow += 1;
-        return !scene.surfaces.occluded(&ray, t_max);
+        return (!scene.surfaces.occluded(&ray, remaining)).then_some(est);
     }
+    let mut rng = Pcg32::new(
+        crate::sampling::rng::hash_vec3(ray.o),
+        crate::sampling::rng::hash_vec3(ray.d),
+    );
     loop {
         stats.shadow += 1;
-        let Some(h) = scene.surfaces.intersect(&ray, t_max) else {
-            return true;
-        };
-        if !scene.materials[h.prim.material as usize].is_interface() {
-            return false;
+        let hit = scene.surfaces.intersect(&ray, remaining);
+        if let Some(h) = &hit
+            && !scene.materials[h.prim.material as usize].is_interface()
+        {
+            return None;
         }
+        if medium != NONE {
+            let t_max = hit.as_ref().map_or(remaining, |h| h.surface.t);
+            ratio_tracking(
+                &scene.media[medium as usize],
+                &ray,
+                t_max,
+                &mut rng,
+                hero,
+                &mut est,
+            );
+            if est.t_ray == Rgb::ZERO {
+                return None;
+            }
+        }
+        let Some(h) = hit else { return Some(est) };
+        medium = medium_after(scene, &h, ray.d, medium);
         let travelled = h.surface.t;
         ray = spawn_ray(h.surface.p, h.surface.n, ray.d);
-        if t_max.is_finite() {
-            t_max -= travelled;
-            if t_max <= 0.0 {
-                return true;
-            }
+        remaining -= travelled;
+        if remaining <= 0.0 {
+            return Some(est);
         }
     }
 }

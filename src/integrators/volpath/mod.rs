@@ -41,6 +41,14 @@ impl Integrator for VolPath {
     }
 
     fn li(&self, scene: &Scene, ray: Ray, sampler: &mut Sampler, stats: &mut RayStats) -> Rgb {
-        trace_path(scene, ray, sampler, &self.config, &mut NoObserver, stats)
+        trace_path(
+            scene,
+            ray,
+            scene.camera_medium,
+            sampler,
+            &self.config,
+            &mut NoObserver,
+            stats,
+        )
     }
 }

@@ -41,7 +41,7 @@ mod microfacet;
 mod thin_dielectric;
 
 #[cfg(test)]
-mod testing;
+pub(crate) mod testing;
 
 use std::fmt;
 use std::ops::{BitAnd, BitOr, BitOrAssign, Not};

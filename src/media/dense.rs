@@ -1,0 +1,118 @@
+//! Dense voxel grids over the unit cube, as pbrt-v4's `SampledGrid` stores `uniformgrid` and
+//! `rgbgrid` data: sample (i, j, k) sits at ((i + ½)/nx, (j + ½)/ny, (k + ½)/nz), lookups
+//! interpolate trilinearly and are zero outside the samples.
+
+use glam::{UVec3, Vec3};
+
+/// A dense grid of `T` values, x fastest.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DenseGrid<T> {
+    n: UVec3,
+    values: Vec<T>,
+}
+
+/// Values a grid can hold: floats or RGB triples.
+pub trait GridValue:
+    Copy + Default + std::ops::Add<Output = Self> + std::ops::Mul<f32, Output = Self>
+{
+    /// The largest component (for majorants).
+    fn max_component(self) -> f32;
+}
+
+impl GridValue for f32 {
+    fn max_component(self) -> f32 {
+        self
+    }
+}
+
+impl GridValue for Vec3 {
+    fn max_component(self) -> f32 {
+        self.max_element()
+    }
+}
+
+impl<T: GridValue> DenseGrid<T> {
+    /// A grid of `n.x * n.y * n.z` values (x fastest). Returns `None` on a size mismatch.
+    pub fn new(n: UVec3, values: Vec<T>) -> Option<DenseGrid<T>> {
+        (values.len() == (n.x as usize) * (n.y as usize) * (n.z as usize) && n.min_element() > 0)
+            .then_some(DenseGrid { n, values })
+    }
+
+    /// Resolution.
+    pub fn resolution(&self) -> UVec3 {
+        self.n
+    }
+
+    /// Bytes of voxel data.
+    pub fn memory_bytes(&self) -> usize {
+        self.values.len() * std::mem::size_of::<T>()
+    }
+
+    #[inline]
+    fn at(&self, x: i32, y: i32, z: i32) -> T {
+        if x < 0
+            || y < 0
+            || z < 0
+            || x >= self.n.x as i32
+            || y >= self.n.y as i32
+            || z >= self.n.z as i32
+        {
+            return T::default();
+        }
+        self.values[(z as usize * self.n.y as usize + y as usize) * self.n.x as usize + x as usize]
+    }
+
+    /// Trilinear interpolation at `p` in [0, 1]³.
+    #[inline]
+    pub fn lookup(&self, p: Vec3) -> T {
+        let ps = p * self.n.as_vec3() - Vec3::splat(0.5);
+        let pf = ps.floor();
+        let d = ps - pf;
+        let (x, y, z) = (pf.x as i32, pf.y as i32, pf.z as i32);
+        let lerp = |t: f32, a: T, b: T| a * (1.0 - t) + b * t;
+        let d00 = lerp(d.x, self.at(x, y, z), self.at(x + 1, y, z));
+        let d10 = lerp(d.x, self.at(x, y + 1, z), self.at(x + 1, y + 1, z));
+        let d01 = lerp(d.x, self.at(x, y, z + 1), self.at(x + 1, y, z + 1));
+        let d11 = lerp(d.x, self.at(x, y + 1, z + 1), self.at(x + 1, y + 1, z + 1));
+        lerp(d.z, lerp(d.y, d00, d10), lerp(d.y, d01, d11))
+    }
+
+    /// The largest component of any sample that can influence lookups inside the box
+    /// [lo, hi] ⊂ [0, 1]³ (pbrt-v4's SampledGrid::MaxValue).
+    pub fn max_value(&self, lo: Vec3, hi: Vec3) -> f32 {
+        let n = self.n.as_vec3();
+        let p0 = (lo * n - Vec3::splat(0.5)).floor();
+        let p1 = (hi * n - Vec3::splat(0.5)).floor() + Vec3::ONE;
+        let max_i = self.n.as_ivec3() - glam::IVec3::ONE;
+        let i0 = p0.as_ivec3().max(glam::IVec3::ZERO);
+        let i1 = p1.as_ivec3().min(max_i);
+        let mut m = f32::NEG_INFINITY;
+        for z in i0.z..=i1.z {
+            for y in i0.y..=i1.y {
+                for x in i0.x..=i1.x {
+                    m = m.max(self.at(x, y, z).max_component());
+                }
+            }
+        }
+        if m == f32::NEG_INFINITY { 0.0 } else { m }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn lookups_interpolate_between_sample_centres_and_vanish_outside() {
+        let g = DenseGrid::new(UVec3::new(2, 1, 1), vec![1.0f32, 3.0]).unwrap();
+        // Sample centres at x = 0.25 and 0.75 (y, z at the centre).
+        assert!((g.lookup(Vec3::new(0.25, 0.5, 0.5)) - 1.0).abs() < 1e-6);
+        assert!((g.lookup(Vec3::new(0.5, 0.5, 0.5)) - 2.0).abs() < 1e-6);
+        assert!((g.lookup(Vec3::new(0.75, 0.5, 0.5)) - 3.0).abs() < 1e-6);
+        // Half a voxel from the edge the value falls towards zero.
+        assert!((g.lookup(Vec3::new(0.0, 0.5, 0.5)) - 0.5).abs() < 1e-6);
+        assert_eq!(g.max_value(Vec3::ZERO, Vec3::splat(0.2)), 1.0);
+        assert_eq!(g.max_value(Vec3::ZERO, Vec3::ONE), 3.0);
+        assert!(DenseGrid::new(UVec3::new(2, 2, 1), vec![1.0f32]).is_none());
+    }
+}

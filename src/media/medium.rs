@@ -1,0 +1,417 @@
+//! Media at render time: coefficients at points, and majorant segments along rays. Each
+//! medium stores what it needs: a homogeneous medium no grid, a density grid one float
+//! channel, an `rgbgrid` three.
+
+use glam::{Affine3A, UVec3, Vec3};
+
+use super::cloud::Cloud;
+use super::dense::DenseGrid;
+use super::majorant::{DdaIterator, MajorantGrid, Segment};
+use crate::color::{Rgb, is_gray};
+use crate::geometry::{Bounds3, Ray};
+use crate::spectra::BlackbodyRgbTable;
+
+/// Scattering properties at a point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MediumPoint {
+    /// Absorption coefficient.
+    pub sigma_a: Rgb,
+    /// Scattering coefficient.
+    pub sigma_s: Rgb,
+    /// Emitted radiance (emission is σa·Le).
+    pub le: Rgb,
+}
+
+/// Where a heterogeneous medium's density comes from.
+#[derive(Clone, Debug)]
+pub enum Density {
+    /// `uniformgrid`: a dense grid over the medium's box.
+    Grid(DenseGrid<f32>),
+    /// `cloud`: pbrt-v4's procedural cloud.
+    Cloud(Cloud),
+}
+
+impl Density {
+    #[inline]
+    fn at(&self, p_unit: Vec3) -> f32 {
+        match self {
+            Density::Grid(g) => g.lookup(p_unit),
+            Density::Cloud(c) => c.density_at(p_unit),
+        }
+    }
+
+    fn memory_bytes(&self) -> usize {
+        match self {
+            Density::Grid(g) => g.memory_bytes(),
+            Density::Cloud(_) => 0,
+        }
+    }
+}
+
+/// Emission of a density-grid medium.
+#[derive(Clone, Debug)]
+pub enum Emission {
+    /// No emission.
+    None,
+    /// A constant Le (already normalised) times a scale grid.
+    Radiance {
+        /// Le.
+        le: Rgb,
+        /// Per-voxel multiplier (pbrt-v4's `Lescale` array), or none for 1.
+        scale: Option<DenseGrid<f32>>,
+    },
+    /// Blackbody emission from a temperature grid: T' = (T − offset)·scale, emitting only
+    /// above 100 K, Le = scale_le · B(T') with B normalised to a peak of 1.
+    Temperature {
+        /// Temperatures.
+        grid: DenseGrid<f32>,
+        /// Subtracted from T.
+        offset: f32,
+        /// Multiplies T − offset.
+        scale: f32,
+        /// Multiplies the emission.
+        le_scale: f32,
+        /// Per-voxel multiplier (`Lescale` array), or none for 1.
+        scale_grid: Option<DenseGrid<f32>>,
+        /// RGB of the peak-normalised blackbody by temperature.
+        table: BlackbodyRgbTable,
+    },
+}
+
+/// A medium whose density varies: σ(p) = density(p) · (σa, σs).
+#[derive(Clone, Debug)]
+pub struct GridMedium {
+    /// Medium-from-world transform.
+    pub medium_from_world: Affine3A,
+    /// The box (medium space) the density covers.
+    pub bounds: Bounds3,
+    /// Density source.
+    pub density: Density,
+    /// σa at density 1 (scale applied).
+    pub sigma_a: Rgb,
+    /// σs at density 1 (scale applied).
+    pub sigma_s: Rgb,
+    /// Emission.
+    pub emission: Emission,
+    /// Majorant grid over `bounds`.
+    pub majorant: MajorantGrid,
+}
+
+/// Per-voxel RGB coefficients (pbrt-v4's `rgbgrid`).
+#[derive(Clone, Debug)]
+pub struct RgbGridMedium {
+    /// Medium-from-world transform.
+    pub medium_from_world: Affine3A,
+    /// The box the grids cover.
+    pub bounds: Bounds3,
+    /// σa per voxel (scale applied), or 1 everywhere when absent.
+    pub sigma_a: Option<DenseGrid<Vec3>>,
+    /// σs per voxel (scale applied), or 1 everywhere when absent.
+    pub sigma_s: Option<DenseGrid<Vec3>>,
+    /// Le per voxel (RGB already in film units, Lescale applied).
+    pub le: Option<DenseGrid<Vec3>>,
+    /// Majorant grid (of max σt over channels).
+    pub majorant: MajorantGrid,
+}
+
+/// What a medium is.
+#[derive(Clone, Debug)]
+pub enum MediumKind {
+    /// Constant coefficients everywhere.
+    Homogeneous {
+        /// σa.
+        sigma_a: Rgb,
+        /// σs.
+        sigma_s: Rgb,
+        /// Emitted radiance.
+        le: Rgb,
+    },
+    /// Density-scaled coefficients.
+    Grid(Box<GridMedium>),
+    /// Per-voxel RGB coefficients.
+    RgbGrid(Box<RgbGridMedium>),
+}
+
+/// A medium with its phase function.
+#[derive(Clone, Debug)]
+pub struct Medium {
+    /// The medium's name in the scene.
+    pub name: String,
+    /// Coefficients.
+    pub kind: MediumKind,
+    /// Henyey-Greenstein asymmetry.
+    pub g: f32,
+    /// True when coefficients differ between channels somewhere (chromatic media need
+    /// spectral MIS over channels; gray ones sample distances with any one channel).
+    pub chromatic: bool,
+    /// True when the medium emits.
+    pub emissive: bool,
+}
+
+/// Majorant segments along a ray.
+pub enum Segments<'a> {
+    /// One segment (homogeneous media) or none.
+    Single(Option<Segment>),
+    /// Cells of a majorant grid.
+    Dda(DdaIterator<'a>),
+}
+
+impl Iterator for Segments<'_> {
+    type Item = Segment;
+
+    #[inline]
+    fn next(&mut self) -> Option<Segment> {
+        match self {
+            Segments::Single(s) => s.take(),
+            Segments::Dda(it) => it.next(),
+        }
+    }
+}
+
+impl Medium {
+    /// A homogeneous medium.
+    pub fn homogeneous(name: String, sigma_a: Rgb, sigma_s: Rgb, le: Rgb, g: f32) -> Medium {
+        let chromatic = !is_gray(sigma_a) || !is_gray(sigma_s);
+        Medium {
+            name,
+            kind: MediumKind::Homogeneous {
+                sigma_a,
+                sigma_s,
+                le,
+            },
+            g,
+            chromatic,
+            emissive: le != Rgb::ZERO,
+        }
+    }
+
+    /// A density-grid medium; builds its majorant grid (pbrt-v4 uses 16³ for grids).
+    #[allow(clippy::too_many_arguments)] // mirrors pbrt-v4's GridMedium constructor
+    pub fn grid(
+        name: String,
+        world_from_medium: Affine3A,
+        bounds: Bounds3,
+        density: Density,
+        sigma_a: Rgb,
+        sigma_s: Rgb,
+        emission: Emission,
+        g: f32,
+    ) -> Medium {
+        let majorant = match &density {
+            Density::Grid(d) => {
+                MajorantGrid::new(bounds, UVec3::splat(16), |lo, hi| d.max_value(lo, hi))
+            }
+            // The procedural cloud's density never exceeds 1.
+            Density::Cloud(_) => MajorantGrid::new(bounds, UVec3::ONE, |_, _| 1.0),
+        };
+        let chromatic = !is_gray(sigma_a) || !is_gray(sigma_s);
+        let emissive = !matches!(emission, Emission::None);
+        Medium {
+            name,
+            kind: MediumKind::Grid(Box::new(GridMedium {
+                medium_from_world: world_from_medium.inverse(),
+                bounds,
+                density,
+                sigma_a,
+                sigma_s,
+                emission,
+                majorant,
+            })),
+            g,
+            chromatic,
+            emissive,
+        }
+    }
+
+    /// An `rgbgrid` medium; builds its 16³ majorant grid.
+    pub fn rgb_grid(
+        name: String,
+        world_from_medium: Affine3A,
+        bounds: Bounds3,
+        sigma_a: Option<DenseGrid<Vec3>>,
+        sigma_s: Option<DenseGrid<Vec3>>,
+        le: Option<DenseGrid<Vec3>>,
+        g: f32,
+    ) -> Medium {
+        let majorant = MajorantGrid::new(bounds, UVec3::splat(16), |lo, hi| {
+            sigma_a.as_ref().map_or(1.0, |s| s.max_value(lo, hi))
+                + sigma_s.as_ref().map_or(1.0, |s| s.max_value(lo, hi))
+        });
+        let emissive = le.is_some();
+        Medium {
+            name,
+            kind: MediumKind::RgbGrid(Box::new(RgbGridMedium {
+                medium_from_world: world_from_medium.inverse(),
+                bounds,
+                sigma_a,
+                sigma_s,
+                le,
+                majorant,
+            })),
+            g,
+            chromatic: true,
+            emissive,
+        }
+    }
+
+    /// Bytes of grid data (0 for homogeneous media), for `--stats`.
+    pub fn memory_bytes(&self) -> usize {
+        match &self.kind {
+            MediumKind::Homogeneous { .. } => 0,
+            MediumKind::Grid(g) => {
+                let e = match &g.emission {
+                    Emission::Radiance { scale, .. } => {
+                        scale.as_ref().map_or(0, |s| s.memory_bytes())
+                    }
+                    Emission::Temperature {
+                        grid, scale_grid, ..
+                    } => grid.memory_bytes() + scale_grid.as_ref().map_or(0, |s| s.memory_bytes()),
+                    _ => 0,
+                };
+                g.density.memory_bytes() + g.majorant.memory_bytes() + e
+            }
+            MediumKind::RgbGrid(g) => {
+                let s = |x: &Option<DenseGrid<Vec3>>| x.as_ref().map_or(0, |g| g.memory_bytes());
+                s(&g.sigma_a) + s(&g.sigma_s) + s(&g.le) + g.majorant.memory_bytes()
+            }
+        }
+    }
+
+    /// A one-line description of how the medium is represented, for `--stats`.
+    pub fn representation(&self) -> String {
+        let channels = if self.chromatic {
+            "chromatic (3-channel MIS)"
+        } else {
+            "gray (1 channel)"
+        };
+        match &self.kind {
+            MediumKind::Homogeneous { .. } => format!("homogeneous, closed-form, {channels}"),
+            MediumKind::Grid(g) => {
+                let src = match &g.density {
+                    Density::Grid(d) => {
+                        let n = d.resolution();
+                        format!("density grid {}x{}x{}", n.x, n.y, n.z)
+                    }
+                    Density::Cloud(_) => "procedural cloud".to_string(),
+                };
+                let r = g.majorant.res;
+                format!("{src}, majorant {}x{}x{}, {channels}", r.x, r.y, r.z)
+            }
+            MediumKind::RgbGrid(g) => {
+                let r = g.majorant.res;
+                format!(
+                    "rgb grid, majorant {}x{}x{}, chromatic (3-channel MIS)",
+                    r.x, r.y, r.z
+                )
+            }
+        }
+    }
+
+    /// Coefficients at world point `p`.
+    #[inline]
+    pub fn sample_point(&self, p: Vec3) -> MediumPoint {
+        match &self.kind {
+            MediumKind::Homogeneous {
+                sigma_a,
+                sigma_s,
+                le,
+            } => MediumPoint {
+                sigma_a: *sigma_a,
+                sigma_s: *sigma_s,
+                le: *le,
+            },
+            MediumKind::Grid(g) => {
+                let pm = g.medium_from_world.transform_point3(p);
+                let pu = (pm - g.bounds.min) / (g.bounds.max - g.bounds.min);
+                let d = g.density.at(pu);
+                let le = match &g.emission {
+                    Emission::None => Rgb::ZERO,
+                    Emission::Radiance { le, scale } => {
+                        *le * scale.as_ref().map_or(1.0, |s| s.lookup(pu))
+                    }
+                    Emission::Temperature {
+                        grid,
+                        offset,
+                        scale,
+                        le_scale,
+                        scale_grid,
+                        table,
+                    } => {
+                        let t = (grid.lookup(pu) - offset) * scale;
+                        if t > 100.0 {
+                            table.lookup(t)
+                                * *le_scale
+                                * scale_grid.as_ref().map_or(1.0, |s| s.lookup(pu))
+                        } else {
+                            Rgb::ZERO
+                        }
+                    }
+                };
+                MediumPoint {
+                    sigma_a: g.sigma_a * d,
+                    sigma_s: g.sigma_s * d,
+                    le,
+                }
+            }
+            MediumKind::RgbGrid(g) => {
+                let pm = g.medium_from_world.transform_point3(p);
+                let pu = (pm - g.bounds.min) / (g.bounds.max - g.bounds.min);
+                let sa = g.sigma_a.as_ref().map_or(Rgb::ONE, |s| s.lookup(pu));
+                let ss = g.sigma_s.as_ref().map_or(Rgb::ONE, |s| s.lookup(pu));
+                let le = g.le.as_ref().map_or(Rgb::ZERO, |l| l.lookup(pu));
+                MediumPoint {
+                    sigma_a: sa,
+                    sigma_s: ss,
+                    le,
+                }
+            }
+        }
+    }
+
+    /// Majorant segments along the world ray between 0 and `t_max` (unit direction).
+    #[inline]
+    pub fn segments(&self, ray: &Ray, t_max: f32) -> Segments<'_> {
+        match &self.kind {
+            MediumKind::Homogeneous {
+                sigma_a, sigma_s, ..
+            } => Segments::Single(Some(Segment {
+                t_min: 0.0,
+                t_max,
+                sigma_maj: *sigma_a + *sigma_s,
+            })),
+            MediumKind::Grid(g) => grid_segments(
+                &g.medium_from_world,
+                &g.bounds,
+                &g.majorant,
+                ray,
+                t_max,
+                g.sigma_a + g.sigma_s,
+            ),
+            MediumKind::RgbGrid(g) => grid_segments(
+                &g.medium_from_world,
+                &g.bounds,
+                &g.majorant,
+                ray,
+                t_max,
+                Rgb::ONE,
+            ),
+        }
+    }
+}
+
+#[inline]
+fn grid_segments<'a>(
+    medium_from_world: &Affine3A,
+    bounds: &Bounds3,
+    majorant: &'a MajorantGrid,
+    ray: &Ray,
+    t_max: f32,
+    sigma_t: Rgb,
+) -> Segments<'a> {
+    let o = medium_from_world.transform_point3(ray.o);
+    let d = medium_from_world.transform_vector3(ray.d);
+    match bounds.intersect_ray(o, d, t_max) {
+        Some((t0, t1)) => Segments::Dda(DdaIterator::new(majorant, o, d, t0, t1, sigma_t)),
+        None => Segments::Single(None),
+    }
+}

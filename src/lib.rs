@@ -15,6 +15,7 @@ pub mod integrators;
 pub mod lights;
 pub mod materials;
 pub mod math;
+pub mod media;
 pub mod metrics;
 pub mod render;
 pub mod samplers;

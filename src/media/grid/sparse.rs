@@ -1,0 +1,471 @@
+//! A float voxel grid stored sparsely as 8³ bricks.
+//!
+//! VDB grids are sparse: a cloud's active voxels fill a small part of their bounding box. The
+//! bricks here mirror VDB leaf nodes (8³ voxels at multiples of 8, values in VDB's x-major
+//! order) so a reader copies a leaf into a brick as is. Bricks are found through a dense table
+//! of brick indices over the active bounding box: one `u32` per 512 voxels, so a Disney-cloud
+//! bounding box of ~10⁹ voxels costs ~8 MB of table, and a lookup is one shift, one table read
+//! and one value read — no tree walk as in NanoVDB. Brick 0 is a brick of background values, so
+//! the table's empty cells need no branch; bricks of one constant value (VDB tiles, uniform
+//! leaves) are stored once and shared.
+
+use std::collections::HashMap;
+
+use glam::{Affine3A, DAffine3, DVec3, IVec3, UVec3, Vec3};
+
+use crate::geometry::Bounds3;
+
+/// log2 of the brick edge length.
+const BRICK_LOG2: i32 = 3;
+/// Voxels along a brick edge.
+pub const BRICK_DIM: i32 = 1 << BRICK_LOG2;
+/// Voxels in a brick.
+pub const BRICK_VOXELS: usize = 1 << (3 * BRICK_LOG2);
+/// Table cells beyond which a grid is refused (16 GiB of table): far above any real cloud,
+/// but it stops a corrupt bounding box from asking for terabytes.
+const MAX_TABLE_CELLS: u64 = 1 << 32;
+
+/// Offset of voxel `ijk` inside its brick, in VDB leaf order (z fastest, then y, then x).
+#[inline(always)]
+fn voxel_offset(ijk: IVec3) -> usize {
+    (((ijk.x & 7) << 6) | ((ijk.y & 7) << 3) | (ijk.z & 7)) as usize
+}
+
+/// A float voxel grid with a background value, stored as 8³ bricks, and the affine transform
+/// between its index space (voxel centres at integer coordinates) and world space.
+#[derive(Clone, Debug)]
+pub struct SparseGrid {
+    background: f32,
+    /// Active voxels' bounding box, inclusive.
+    index_min: IVec3,
+    index_max: IVec3,
+    /// The table's first brick (brick coordinates are index coordinates >> 3).
+    brick_min: IVec3,
+    /// The table's extent in bricks.
+    brick_dims: UVec3,
+    /// Brick number per table cell, z fastest; 0 is the background brick.
+    table: Vec<u32>,
+    /// `BRICK_VOXELS` values per brick.
+    values: Vec<f32>,
+    /// Largest value of each brick, so majorants need not visit voxels.
+    brick_max: Vec<f32>,
+    world_from_index: DAffine3,
+    index_from_world: DAffine3,
+    /// Single-precision copies: pbrt-v4 maps points with NanoVDB's float map
+    /// (`worldToIndexF`), and the renderer works in f32.
+    world_from_index_f32: Affine3A,
+    index_from_world_f32: Affine3A,
+    world_bounds: Bounds3,
+}
+
+impl SparseGrid {
+    /// A grid from dense values over the box `origin ..= origin + dims - 1`, given x fastest
+    /// (`values[(z * ny + y) * nx + x]`, pbrt-v4's order for grid media); every voxel of the
+    /// box counts as active, voxels outside it read `background`. The transform is the
+    /// identity until [`SparseGrid::with_transform`].
+    ///
+    /// # Panics
+    /// If a dimension is zero or `values` does not hold `nx * ny * nz` values.
+    pub fn from_dense(origin: IVec3, dims: UVec3, values: &[f32], background: f32) -> SparseGrid {
+        assert!(
+            dims.min_element() > 0,
+            "dense grid dimensions {dims} must be positive"
+        );
+        let (nx, ny, nz) = (dims.x as usize, dims.y as usize, dims.z as usize);
+        assert_eq!(
+            values.len(),
+            nx * ny * nz,
+            "dense grid of {dims} needs nx*ny*nz values"
+        );
+        let max = origin + dims.as_ivec3() - 1;
+        let mut builder = SparseGridBuilder::new(background);
+        let mut brick = [background; BRICK_VOXELS];
+        for bx in (origin.x >> BRICK_LOG2)..=(max.x >> BRICK_LOG2) {
+            for by in (origin.y >> BRICK_LOG2)..=(max.y >> BRICK_LOG2) {
+                for bz in (origin.z >> BRICK_LOG2)..=(max.z >> BRICK_LOG2) {
+                    let brick_origin = IVec3::new(bx, by, bz) << BRICK_LOG2;
+                    let mut mask = [0u64; 8];
+                    for (n, v) in brick.iter_mut().enumerate() {
+                        let ijk = brick_origin
+                            + IVec3::new((n >> 6) as i32, ((n >> 3) & 7) as i32, (n & 7) as i32);
+                        let local = ijk - origin;
+                        *v = if local.cmpge(IVec3::ZERO).all() && ijk.cmple(max).all() {
+                            mask[n >> 6] |= 1 << (n & 63);
+                            let (x, y, z) = (local.x as usize, local.y as usize, local.z as usize);
+                            values[(z * ny + y) * nx + x]
+                        } else {
+                            background
+                        };
+                    }
+                    builder.add_leaf(brick_origin, &brick, &mask);
+                }
+            }
+        }
+        builder
+            .build()
+            .expect("a dense grid has active voxels and a table of its own size")
+    }
+
+    /// This grid with `world_from_index` as its transform (and world bounds recomputed).
+    pub fn with_transform(mut self, world_from_index: DAffine3) -> SparseGrid {
+        self.set_transform(world_from_index);
+        self
+    }
+
+    /// Sets the transform; world bounds become the box of the active voxels' cells
+    /// `[min, max + 1]` mapped to world space, as NanoVDB computes its world bounding box.
+    pub(crate) fn set_transform(&mut self, world_from_index: DAffine3) {
+        self.world_from_index = world_from_index;
+        self.index_from_world = world_from_index.inverse();
+        self.world_from_index_f32 = Affine3A::from_mat3_translation(
+            world_from_index.matrix3.as_mat3(),
+            world_from_index.translation.as_vec3(),
+        );
+        self.index_from_world_f32 = Affine3A::from_mat3_translation(
+            self.index_from_world.matrix3.as_mat3(),
+            self.index_from_world.translation.as_vec3(),
+        );
+        let lo = self.index_min.as_dvec3();
+        let hi = (self.index_max + 1).as_dvec3();
+        let mut bounds = Bounds3::EMPTY;
+        for c in 0..8 {
+            let corner = DVec3::new(
+                if c & 1 == 0 { lo.x } else { hi.x },
+                if c & 2 == 0 { lo.y } else { hi.y },
+                if c & 4 == 0 { lo.z } else { hi.z },
+            );
+            bounds.extend(world_from_index.transform_point3(corner).as_vec3());
+        }
+        self.world_bounds = bounds;
+    }
+
+    /// Replaces the world bounds (a NanoVDB file stores the box pbrt-v4 uses).
+    pub(crate) fn set_world_bounds(&mut self, bounds: Bounds3) {
+        self.world_bounds = bounds;
+    }
+
+    /// The value of voxels that are not stored.
+    pub fn background(&self) -> f32 {
+        self.background
+    }
+
+    /// Bounding box of the active voxels in index space, inclusive: `(min, max)`.
+    pub fn index_bounds(&self) -> (IVec3, IVec3) {
+        (self.index_min, self.index_max)
+    }
+
+    /// World-space box of the active voxels' cells (`[min, max + 1]` in index space), as
+    /// pbrt-v4 bounds a `nanovdb` medium.
+    pub fn world_bounds(&self) -> Bounds3 {
+        self.world_bounds
+    }
+
+    /// Index space to world space.
+    pub fn world_from_index(&self) -> Affine3A {
+        self.world_from_index_f32
+    }
+
+    /// World space to index space.
+    pub fn index_from_world(&self) -> Affine3A {
+        self.index_from_world_f32
+    }
+
+    /// Index space to world space in double precision, as the file stores it.
+    pub fn world_from_index_f64(&self) -> DAffine3 {
+        self.world_from_index
+    }
+
+    /// World space to index space in double precision.
+    pub fn index_from_world_f64(&self) -> DAffine3 {
+        self.index_from_world
+    }
+
+    /// Bricks stored, counting the background brick and shared constant bricks once.
+    pub fn brick_count(&self) -> usize {
+        self.brick_max.len()
+    }
+
+    /// Heap and inline bytes this grid occupies.
+    pub fn memory_bytes(&self) -> usize {
+        std::mem::size_of::<SparseGrid>()
+            + self.table.capacity() * std::mem::size_of::<u32>()
+            + self.values.capacity() * std::mem::size_of::<f32>()
+            + self.brick_max.capacity() * std::mem::size_of::<f32>()
+    }
+
+    /// The table cell holding brick coordinate `b`, if inside the table.
+    #[inline(always)]
+    fn cell(&self, brick: IVec3) -> Option<usize> {
+        let b = (brick - self.brick_min).as_uvec3();
+        // Negative offsets wrap to huge unsigned values, so one compare per axis suffices.
+        if b.x < self.brick_dims.x && b.y < self.brick_dims.y && b.z < self.brick_dims.z {
+            Some(
+                ((b.x as usize * self.brick_dims.y as usize) + b.y as usize)
+                    * self.brick_dims.z as usize
+                    + b.z as usize,
+            )
+        } else {
+            None
+        }
+    }
+
+    /// First value of the brick holding voxel `ijk` (the background brick outside the table).
+    #[inline(always)]
+    fn brick_start(&self, ijk: IVec3) -> usize {
+        match self.cell(ijk >> BRICK_LOG2) {
+            Some(c) => self.table[c] as usize * BRICK_VOXELS,
+            None => 0,
+        }
+    }
+
+    /// The value of voxel `ijk`, active or not.
+    #[inline]
+    pub fn value(&self, ijk: IVec3) -> f32 {
+        self.values[self.brick_start(ijk) + voxel_offset(ijk)]
+    }
+
+    /// Trilinear interpolation at index-space point `p`, voxel centres at integer coordinates:
+    /// NanoVDB's `SampleFromVoxels<TreeT, 1>`, which pbrt-v4's `nanovdb` medium uses, with the
+    /// same order of interpolation (z, then y, then x). NanoVDB writes each lerp as an fma;
+    /// here it is a multiply and an add, which differs in the last bit at most and avoids a
+    /// libm call on CPUs built without FMA.
+    #[inline]
+    pub fn sample(&self, p: Vec3) -> f32 {
+        let f = p.floor();
+        let w = p - f;
+        let i = f.as_ivec3();
+        // v[x][y][z] as [x * 4 + y * 2 + z].
+        let v: [f32; 8] = if (i & 7).cmplt(IVec3::splat(7)).all() {
+            // All eight corners in one brick: one table lookup.
+            let o = self.brick_start(i) + voxel_offset(i);
+            let s = &self.values[o..o + 74];
+            [s[0], s[1], s[8], s[9], s[64], s[65], s[72], s[73]]
+        } else {
+            std::array::from_fn(|c| {
+                self.value(i + IVec3::new((c >> 2) as i32, ((c >> 1) & 1) as i32, (c & 1) as i32))
+            })
+        };
+        let lerp = |a: f32, b: f32, t: f32| a + t * (b - a);
+        lerp(
+            lerp(lerp(v[0], v[1], w.z), lerp(v[2], v[3], w.z), w.y),
+            lerp(lerp(v[4], v[5], w.z), lerp(v[6], v[7], w.z), w.y),
+            w.x,
+        )
+    }
+
+    /// Largest voxel value in the inclusive index box `min ..= max` (inactive voxels and the
+    /// background included where the box reaches them); the background for an empty box.
+    /// Bricks inside the box answer from their stored maxima, so a majorant grid costs a
+    /// visit per brick, not per voxel.
+    pub fn max_over(&self, min: IVec3, max: IVec3) -> f32 {
+        if min.cmpgt(max).any() {
+            return self.background;
+        }
+        let table_lo = self.brick_min << BRICK_LOG2;
+        let table_hi = ((self.brick_min + self.brick_dims.as_ivec3()) << BRICK_LOG2) - 1;
+        let lo = min.max(table_lo);
+        let hi = max.min(table_hi);
+        // Voxels of the box outside the table hold the background.
+        let mut best = if lo != min || hi != max {
+            self.background
+        } else {
+            f32::NEG_INFINITY
+        };
+        if lo.cmpgt(hi).any() {
+            return best;
+        }
+        for bx in (lo.x >> BRICK_LOG2)..=(hi.x >> BRICK_LOG2) {
+            for by in (lo.y >> BRICK_LOG2)..=(hi.y >> BRICK_LOG2) {
+                for bz in (lo.z >> BRICK_LOG2)..=(hi.z >> BRICK_LOG2) {
+                    let b = IVec3::new(bx, by, bz);
+                    let brick = self.table[self.cell(b).expect("brick inside the table")];
+                    let stored_max = self.brick_max[brick as usize];
+                    if stored_max <= best {
+                        continue;
+                    }
+                    let b_lo = b << BRICK_LOG2;
+                    let v_lo = lo.max(b_lo);
+                    let v_hi = hi.min(b_lo + (BRICK_DIM - 1));
+                    if v_lo == b_lo && v_hi == b_lo + (BRICK_DIM - 1) {
+                        best = stored_max;
+                        continue;
+                    }
+                    // A brick the box cuts: scan the voxels inside.
+                    let start = brick as usize * BRICK_VOXELS;
+                    for x in v_lo.x..=v_hi.x {
+                        for y in v_lo.y..=v_hi.y {
+                            for z in v_lo.z..=v_hi.z {
+                                let v = self.values[start + voxel_offset(IVec3::new(x, y, z))];
+                                best = best.max(v);
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        best
+    }
+}
+
+/// Why a builder could not make a grid.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum BuildIssue {
+    /// No voxel or tile was active.
+    NoActiveVoxels,
+    /// The active bounding box needs more table cells than allowed.
+    TooLarge {
+        /// Cells the table would need.
+        cells: u64,
+    },
+}
+
+/// Collects VDB leaves and tiles, then lays them out as a [`SparseGrid`] over the bounding
+/// box of the active voxels it saw (computed here, not trusted from file statistics).
+pub(crate) struct SparseGridBuilder {
+    background: f32,
+    /// Brick pool; brick 0 is all background.
+    values: Vec<f32>,
+    /// Leaf bricks: (brick coordinate, pool brick).
+    leaves: Vec<(IVec3, u32)>,
+    /// Constant regions: (first brick, last brick inclusive, pool brick).
+    tiles: Vec<(IVec3, IVec3, u32)>,
+    /// Pool brick of each constant value seen, by bit pattern.
+    constants: HashMap<u32, u32>,
+    active_min: IVec3,
+    active_max: IVec3,
+}
+
+impl SparseGridBuilder {
+    /// An empty builder.
+    pub(crate) fn new(background: f32) -> SparseGridBuilder {
+        let mut constants = HashMap::new();
+        constants.insert(background.to_bits(), 0);
+        SparseGridBuilder {
+            background,
+            values: vec![background; BRICK_VOXELS],
+            leaves: Vec::new(),
+            tiles: Vec::new(),
+            constants,
+            active_min: IVec3::MAX,
+            active_max: IVec3::MIN,
+        }
+    }
+
+    /// The pool brick filled with `value`, made on first use.
+    fn constant_brick(&mut self, value: f32) -> u32 {
+        if let Some(&b) = self.constants.get(&value.to_bits()) {
+            return b;
+        }
+        let b = (self.values.len() / BRICK_VOXELS) as u32;
+        self.values.extend(std::iter::repeat_n(value, BRICK_VOXELS));
+        self.constants.insert(value.to_bits(), b);
+        b
+    }
+
+    /// Adds a leaf: `origin` a multiple of 8, `values` in VDB order (index `x*64 + y*8 + z`),
+    /// `active` the 512-bit value mask (bit n in word n / 64).
+    pub(crate) fn add_leaf(&mut self, origin: IVec3, values: &[f32], active: &[u64; 8]) {
+        debug_assert_eq!(
+            origin & 7,
+            IVec3::ZERO,
+            "leaf origin {origin} not brick aligned"
+        );
+        assert_eq!(values.len(), BRICK_VOXELS, "a leaf holds 512 values");
+        for (w, &word) in active.iter().enumerate() {
+            let mut bits = word;
+            while bits != 0 {
+                let n = w * 64 + bits.trailing_zeros() as usize;
+                bits &= bits - 1;
+                let ijk =
+                    origin + IVec3::new((n >> 6) as i32, ((n >> 3) & 7) as i32, (n & 7) as i32);
+                self.active_min = self.active_min.min(ijk);
+                self.active_max = self.active_max.max(ijk);
+            }
+        }
+        let first = values[0].to_bits();
+        let brick = if values.iter().all(|v| v.to_bits() == first) {
+            self.constant_brick(values[0])
+        } else {
+            let b = (self.values.len() / BRICK_VOXELS) as u32;
+            self.values.extend_from_slice(values);
+            b
+        };
+        if brick != 0 {
+            self.leaves.push((origin >> BRICK_LOG2, brick));
+        }
+    }
+
+    /// Adds a tile: the cube `origin .. origin + size` (size a multiple of 8) holds `value`.
+    pub(crate) fn add_tile(&mut self, origin: IVec3, size: i32, value: f32, active: bool) {
+        debug_assert!(size >= BRICK_DIM && size % BRICK_DIM == 0);
+        if active {
+            self.active_min = self.active_min.min(origin);
+            self.active_max = self.active_max.max(origin + (size - 1));
+        }
+        if value.to_bits() == self.background.to_bits() {
+            return;
+        }
+        let brick = self.constant_brick(value);
+        let first = origin >> BRICK_LOG2;
+        self.tiles
+            .push((first, first + (size >> BRICK_LOG2) - 1, brick));
+    }
+
+    /// Lays out the grid over the active bounding box (identity transform).
+    pub(crate) fn build(self) -> Result<SparseGrid, BuildIssue> {
+        if self.active_min.cmpgt(self.active_max).any() {
+            return Err(BuildIssue::NoActiveVoxels);
+        }
+        let brick_min = self.active_min >> BRICK_LOG2;
+        let brick_max_c = self.active_max >> BRICK_LOG2;
+        let dims = (brick_max_c.as_i64vec3() - brick_min.as_i64vec3() + 1).as_u64vec3();
+        let cells = dims.x * dims.y * dims.z;
+        if cells > MAX_TABLE_CELLS {
+            return Err(BuildIssue::TooLarge { cells });
+        }
+        let brick_dims = dims.as_uvec3();
+        let mut grid = SparseGrid {
+            background: self.background,
+            index_min: self.active_min,
+            index_max: self.active_max,
+            brick_min,
+            brick_dims,
+            table: vec![0; cells as usize],
+            values: self.values,
+            brick_max: Vec::new(),
+            world_from_index: DAffine3::IDENTITY,
+            index_from_world: DAffine3::IDENTITY,
+            world_from_index_f32: Affine3A::IDENTITY,
+            index_from_world_f32: Affine3A::IDENTITY,
+            world_bounds: Bounds3::EMPTY,
+        };
+        for &(first, last, brick) in &self.tiles {
+            let lo = first.max(brick_min);
+            let hi = last.min(brick_max_c);
+            for bx in lo.x..=hi.x {
+                for by in lo.y..=hi.y {
+                    for bz in lo.z..=hi.z {
+                        let c = grid
+                            .cell(IVec3::new(bx, by, bz))
+                            .expect("clipped to the table");
+                        grid.table[c] = brick;
+                    }
+                }
+            }
+        }
+        // Leaves outside the table hold only inactive voxels; they read as background.
+        for &(b, brick) in &self.leaves {
+            if let Some(c) = grid.cell(b) {
+                grid.table[c] = brick;
+            }
+        }
+        grid.brick_max = grid
+            .values
+            .chunks_exact(BRICK_VOXELS)
+            .map(|brick| brick.iter().copied().fold(f32::NEG_INFINITY, f32::max))
+            .collect();
+        grid.values.shrink_to_fit();
+        grid.set_transform(DAffine3::IDENTITY);
+        Ok(grid)
+    }
+}

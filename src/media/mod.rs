@@ -1,0 +1,3 @@
+//! Participating media: the volume data they are built from.
+
+pub mod grid;

@@ -119,7 +119,7 @@ fn list_grids(available: &[String]) -> String {
     if available.is_empty() {
         "no grids".to_string()
     } else {
-        format!("{}", available.join(", "))
+        available.join(", ")
     }
 }
 

@@ -708,36 +708,3 @@ impl Walk<'_> {
         Ok(())
     }
 }
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn scratch_nanovdb_cloud() {
-        let f = NanoVdbFile::open(concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/../shared/pbrt-v4-references/scenes/vdb-cloud.nvdb"
-        ))
-        .unwrap();
-        println!("{:?}", f.grid_names());
-        let g = f.read_grid("density").unwrap();
-        println!(
-            "{:?} {:?} {:?} bricks {} mem {}",
-            g.index_bounds(),
-            g.world_bounds(),
-            g.world_from_index_f64(),
-            g.brick_count(),
-            g.memory_bytes()
-        );
-        for ijk in [
-            IVec3::new(0, 0, 0),
-            IVec3::new(-10, -10, -18),
-            IVec3::new(3, -2, 5),
-            IVec3::new(22, 16, 21),
-        ] {
-            println!("{ijk} {}", g.value(ijk));
-        }
-        println!("{:?}", f.read_grid("temperature").unwrap_err().to_string());
-    }
-}

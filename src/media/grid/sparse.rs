@@ -21,9 +21,9 @@ const BRICK_LOG2: i32 = 3;
 pub const BRICK_DIM: i32 = 1 << BRICK_LOG2;
 /// Voxels in a brick.
 pub const BRICK_VOXELS: usize = 1 << (3 * BRICK_LOG2);
-/// Table cells beyond which a grid is refused (16 GiB of table): far above any real cloud,
-/// but it stops a corrupt bounding box from asking for terabytes.
-const MAX_TABLE_CELLS: u64 = 1 << 32;
+/// Table cells beyond which a grid is refused (4 GiB of table, a 5·10¹¹-voxel box): far above
+/// any real cloud, but it stops a corrupt bounding box from asking for the whole machine.
+const MAX_TABLE_CELLS: u64 = 1 << 30;
 
 /// Offset of voxel `ijk` inside its brick, in VDB leaf order (z fastest, then y, then x).
 #[inline(always)]
@@ -241,8 +241,10 @@ impl SparseGrid {
             let s = &self.values[o..o + 74];
             [s[0], s[1], s[8], s[9], s[64], s[65], s[72], s[73]]
         } else {
+            // Wrapping: a point beyond i32 range must read background, not overflow.
             std::array::from_fn(|c| {
-                self.value(i + IVec3::new((c >> 2) as i32, ((c >> 1) & 1) as i32, (c & 1) as i32))
+                let o = IVec3::new((c >> 2) as i32, ((c >> 1) & 1) as i32, (c & 1) as i32);
+                self.value(i.wrapping_add(o))
             })
         };
         let lerp = |a: f32, b: f32, t: f32| a + t * (b - a);
@@ -467,5 +469,213 @@ impl SparseGridBuilder {
         grid.values.shrink_to_fit();
         grid.set_transform(DAffine3::IDENTITY);
         Ok(grid)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Deterministic test numbers (SplitMix64).
+    struct Numbers(u64);
+    impl Numbers {
+        fn next(&mut self) -> u64 {
+            self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+            let mut z = self.0;
+            z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+            z ^ (z >> 31)
+        }
+        fn int(&mut self, lo: i32, hi: i32) -> i32 {
+            lo + (self.next() % (hi - lo + 1) as u64) as i32
+        }
+        fn float(&mut self) -> f32 {
+            (self.next() >> 40) as f32 / (1u64 << 24) as f32
+        }
+    }
+
+    /// A dense test grid straddling the origin, so bricks at negative coordinates are used.
+    fn dense(f: impl Fn(IVec3) -> f32) -> (SparseGrid, IVec3, UVec3) {
+        let origin = IVec3::new(-11, -3, 5);
+        let dims = UVec3::new(21, 9, 17);
+        let mut values = Vec::new();
+        for z in 0..dims.z as i32 {
+            for y in 0..dims.y as i32 {
+                for x in 0..dims.x as i32 {
+                    values.push(f(origin + IVec3::new(x, y, z)));
+                }
+            }
+        }
+        (
+            SparseGrid::from_dense(origin, dims, &values, 0.0),
+            origin,
+            dims,
+        )
+    }
+
+    fn bumpy(p: IVec3) -> f32 {
+        let p = p.as_vec3();
+        1.0 + (0.7 * p.x).sin() * (0.3 * p.y).cos() + 0.05 * p.z
+    }
+
+    /// Trilinear interpolation written out from `value`, the reference for `sample`.
+    fn reference_sample(g: &SparseGrid, p: Vec3) -> f32 {
+        let i = p.floor().as_ivec3();
+        let w = p - p.floor();
+        let mut sum = 0.0;
+        for c in 0..8 {
+            let o = IVec3::new(c >> 2 & 1, c >> 1 & 1, c & 1);
+            let wx = if o.x == 1 { w.x } else { 1.0 - w.x };
+            let wy = if o.y == 1 { w.y } else { 1.0 - w.y };
+            let wz = if o.z == 1 { w.z } else { 1.0 - w.z };
+            sum += wx * wy * wz * g.value(i + o);
+        }
+        sum
+    }
+
+    #[test]
+    fn grid_dense_values_round_trip_and_outside_is_background() {
+        let (g, origin, dims) = dense(bumpy);
+        let max = origin + dims.as_ivec3() - 1;
+        assert_eq!(g.index_bounds(), (origin, max));
+        for x in origin.x - 2..=max.x + 2 {
+            for y in origin.y - 2..=max.y + 2 {
+                for z in origin.z - 2..=max.z + 2 {
+                    let p = IVec3::new(x, y, z);
+                    let inside = p.cmpge(origin).all() && p.cmple(max).all();
+                    assert_eq!(g.value(p), if inside { bumpy(p) } else { 0.0 }, "{p}");
+                }
+            }
+        }
+        assert_eq!(g.value(IVec3::splat(i32::MIN)), 0.0);
+        assert_eq!(g.value(IVec3::splat(i32::MAX)), 0.0);
+    }
+
+    #[test]
+    fn grid_sample_is_trilinear_with_voxel_centres_at_integers() {
+        let (g, origin, _) = dense(bumpy);
+        // At voxel centres the sample is the voxel.
+        for p in [
+            origin,
+            origin + IVec3::new(7, 2, 3),
+            IVec3::new(0, 0, 8),
+            IVec3::new(-8, -1, 15),
+        ] {
+            assert_eq!(g.sample(p.as_vec3()), g.value(p), "{p}");
+        }
+        // Elsewhere it matches trilinear weights, across brick edges and outside the box.
+        let mut n = Numbers(7);
+        for _ in 0..5000 {
+            let p = Vec3::new(
+                -14.0 + 28.0 * n.float(),
+                -5.0 + 14.0 * n.float(),
+                3.0 + 22.0 * n.float(),
+            );
+            let (s, r) = (g.sample(p), reference_sample(&g, p));
+            assert!((s - r).abs() <= 1e-5 * r.abs().max(1.0), "{p}: {s} vs {r}");
+        }
+        // A linear field is reproduced exactly (up to rounding) between voxel centres.
+        let (lin, _, _) =
+            dense(|p| 0.5 + 0.25 * p.x as f32 - 0.125 * p.y as f32 + 0.0625 * p.z as f32);
+        let p = Vec3::new(-7.3, 0.6, 9.9);
+        let expected = 0.5 + 0.25 * p.x - 0.125 * p.y + 0.0625 * p.z;
+        assert!((lin.sample(p) - expected).abs() < 1e-5);
+        // Non-finite points do not panic: NaN propagates, far points read the background.
+        assert!(g.sample(Vec3::splat(f32::NAN)).is_nan());
+        assert_eq!(g.sample(Vec3::splat(1e30)), 0.0);
+    }
+
+    #[test]
+    fn grid_max_over_matches_brute_force() {
+        let (g, _, _) = dense(bumpy);
+        let mut n = Numbers(11);
+        for _ in 0..400 {
+            let a = IVec3::new(n.int(-20, 15), n.int(-8, 10), n.int(0, 26));
+            let b = a + IVec3::new(n.int(0, 20), n.int(0, 12), n.int(0, 14));
+            let mut expected = f32::NEG_INFINITY;
+            for x in a.x..=b.x {
+                for y in a.y..=b.y {
+                    for z in a.z..=b.z {
+                        expected = expected.max(g.value(IVec3::new(x, y, z)));
+                    }
+                }
+            }
+            assert_eq!(g.max_over(a, b), expected, "{a} ..= {b}");
+        }
+        // Empty boxes give the background.
+        assert_eq!(g.max_over(IVec3::ONE, IVec3::ZERO), 0.0);
+    }
+
+    #[test]
+    fn grid_tiles_and_constant_leaves_share_bricks() {
+        let mut b = SparseGridBuilder::new(0.0);
+        let ones = [1.0f32; BRICK_VOXELS];
+        let full = [u64::MAX; 8];
+        b.add_leaf(IVec3::new(0, 0, 0), &ones, &full);
+        b.add_leaf(IVec3::new(8, 0, 0), &ones, &full);
+        b.add_tile(IVec3::new(16, 0, 0), 8, 1.0, true);
+        // An inactive tile of background adds nothing; an active one extends the bounds.
+        b.add_tile(IVec3::new(-128, 0, 0), 128, 0.0, true);
+        let g = b.build().unwrap();
+        // Background brick + one shared brick of ones.
+        assert_eq!(g.brick_count(), 2);
+        assert_eq!(
+            g.index_bounds(),
+            (IVec3::new(-128, 0, 0), IVec3::new(23, 127, 127))
+        );
+        assert_eq!(g.value(IVec3::new(20, 3, 3)), 1.0);
+        assert_eq!(g.value(IVec3::new(-5, 3, 3)), 0.0);
+        assert_eq!(
+            g.max_over(IVec3::new(-100, 0, 0), IVec3::new(-1, 50, 50)),
+            0.0
+        );
+        assert_eq!(g.max_over(IVec3::new(-100, 0, 0), IVec3::new(0, 0, 0)), 1.0);
+        assert_eq!(
+            SparseGridBuilder::new(0.0).build().unwrap_err(),
+            BuildIssue::NoActiveVoxels
+        );
+    }
+
+    #[test]
+    fn grid_a_cloud_sized_bounding_box_costs_table_not_voxels() {
+        // Two leaves at opposite corners of a ~2000 × 1350 × 2450 box (6.6·10⁹ voxels, the
+        // Disney cloud's extent): one u32 per brick, ~51 MB, instead of 26 GB of voxels.
+        let mut b = SparseGridBuilder::new(0.0);
+        let v: Vec<f32> = (0..BRICK_VOXELS).map(|i| i as f32).collect();
+        b.add_leaf(IVec3::new(-992, -680, -1224), &v, &[1; 8]);
+        b.add_leaf(IVec3::new(992, 664, 1216), &v, &[1 << 63; 8]);
+        let g = b.build().unwrap();
+        let (lo, hi) = g.index_bounds();
+        let voxels = (hi - lo + 1).as_i64vec3();
+        assert!(voxels.x * voxels.y * voxels.z > 6_000_000_000);
+        assert!(g.memory_bytes() < 60 << 20, "{} bytes", g.memory_bytes());
+        assert_eq!(
+            g.value(IVec3::new(992, 664, 1216) + IVec3::new(0, 0, 1)),
+            1.0
+        );
+        assert_eq!(g.max_over(lo, hi), 511.0);
+    }
+
+    #[test]
+    fn grid_transform_maps_index_to_world_and_bounds_cover_cells() {
+        let (g, origin, dims) = dense(bumpy);
+        let m = DAffine3::from_scale_rotation_translation(
+            DVec3::splat(0.5),
+            glam::DQuat::from_rotation_z(0.3),
+            DVec3::new(1.0, -2.0, 3.0),
+        );
+        let g = g.with_transform(m);
+        let p = Vec3::new(-3.25, 1.5, 9.75);
+        let w = g.world_from_index().transform_point3(p);
+        assert!((w.as_dvec3() - m.transform_point3(p.as_dvec3())).length() < 1e-5);
+        assert!((g.index_from_world().transform_point3(w) - p).length() < 1e-4);
+        let b = g.world_bounds();
+        for c in [origin, origin + dims.as_ivec3()] {
+            let w = m.transform_point3(c.as_dvec3()).as_vec3();
+            assert!(
+                w.cmpge(b.min - 1e-5).all() && w.cmple(b.max + 1e-5).all(),
+                "{w} in {b:?}"
+            );
+        }
     }
 }

@@ -124,7 +124,9 @@ fn list_grids(available: &[String]) -> String {
 }
 
 fn hint_for(value_type: &str) -> &'static str {
-    if value_type.contains("vec3") || value_type.contains("Vec3") {
+    if value_type == "half" {
+        " (NanoVDB half grids are not read: write float, or quantise with nanovdb_convert --fp16)"
+    } else if value_type.contains("vec3") || value_type.contains("Vec3") {
         " (a vector grid, e.g. velocity, cannot be a density or temperature)"
     } else {
         ""

@@ -120,6 +120,8 @@ struct Entry {
     codec: Codec,
     /// Uncompressed bytes.
     grid_size: u64,
+    /// Bytes in the file (compressed, with byte counts).
+    file_size: u64,
     /// Where the (possibly compressed) buffer starts.
     offset: u64,
 }
@@ -266,6 +268,12 @@ impl NanoVdbFile {
                 let entry = read_raw_entry(&mut file, pos)
                     .map_err(io)?
                     .map_err(malformed)?;
+                if entry.grid_size > len - pos {
+                    return Err(malformed(format!(
+                        "grid \"{}\" runs past the end of the file",
+                        entry.name
+                    )));
+                }
                 pos += entry.grid_size;
                 grids.push(entry);
                 continue;
@@ -305,11 +313,13 @@ impl NanoVdbFile {
                     grid_class: m.u32(36).map_err(malformed)?,
                     codec,
                     grid_size: m.u64(0).map_err(malformed)?,
+                    file_size: 0,
                     offset: 0,
                 });
             }
             for (entry, file_size) in grids[first..].iter_mut().zip(sizes) {
                 entry.offset = pos;
+                entry.file_size = file_size;
                 pos = pos
                     .checked_add(file_size)
                     .filter(|&end| end <= len)
@@ -411,6 +421,15 @@ impl NanoVdbFile {
         })?;
         match entry.codec {
             Codec::None => {
+                if entry.grid_size > entry.file_size {
+                    return Err(GridError::Malformed {
+                        path: self.path.clone(),
+                        message: format!(
+                            "grid \"{}\" of {} bytes stored in {}",
+                            entry.name, entry.grid_size, entry.file_size
+                        ),
+                    });
+                }
                 let mut buffer = vec![0u8; size];
                 file.read_exact(&mut buffer).map_err(io)?;
                 Ok(buffer)
@@ -419,7 +438,9 @@ impl NanoVdbFile {
                 let mut n = [0u8; 8];
                 file.read_exact(&mut n).map_err(io)?;
                 let zipped = u64::from_le_bytes(n);
-                let mut buffer = Vec::with_capacity(size);
+                // A corrupt size must not reserve memory up front; the buffer grows as
+                // the data inflates and is checked against the size after.
+                let mut buffer = Vec::with_capacity(size.min(1 << 30));
                 let decoder =
                     flate2::read::ZlibDecoder::new(std::io::BufReader::new(file.take(zipped)));
                 decoder
@@ -476,12 +497,14 @@ fn read_raw_entry(file: &mut File, pos: u64) -> std::io::Result<Result<Entry, St
     let entry = (|| {
         let name_bytes = &data[40..296];
         let name = String::from_utf8_lossy(name_bytes.split(|&b| b == 0).next().unwrap_or(&[]));
+        let grid_size = g.u64(32)?.max(GRID_DATA_BYTES as u64);
         Ok(Entry {
             name: name.into_owned(),
             grid_type: g.u32(636)?,
             grid_class: g.u32(632)?,
             codec: Codec::None,
-            grid_size: g.u64(32)?.max(GRID_DATA_BYTES as u64),
+            grid_size,
+            file_size: grid_size,
             offset: pos,
         })
     })();
@@ -619,7 +642,8 @@ impl Walk<'_> {
         let mask_bytes = 1usize << (3 * log2 - 3);
         let value_mask = at + 32;
         let child_mask = value_mask + mask_bytes;
-        let table = (child_mask + mask_bytes + 16).next_multiple_of(32);
+        // The table is aligned to 32 bytes within the node (nodes start 32-byte aligned).
+        let table = at + (32 + 2 * mask_bytes + 16).next_multiple_of(32);
         let child_total = if log2 == 5 { 7 } else { 3 };
         for n in 0..1usize << (3 * log2) {
             let local = IVec3::new(

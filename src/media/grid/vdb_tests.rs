@@ -497,6 +497,26 @@ fn vdb_truncated_openvdb_file_is_an_error() {
 }
 
 #[test]
+fn vdb_rs_panics_become_errors() {
+    // vdb-rs asserts that a file has grid offsets; a file claiming none makes it panic.
+    let dir = scratch("panic");
+    let mut bytes = std::fs::read(fixture("half.vdb")).unwrap();
+    assert_eq!(
+        bytes[20], 1,
+        "the has-grid-offsets flag follows magic and versions"
+    );
+    bytes[20] = 0;
+    let path = dir.join("no-offsets.vdb");
+    std::fs::write(&path, &bytes).unwrap();
+    let e = OpenVdbFile::open(&path).unwrap_err().to_string();
+    assert!(
+        e.contains("vdb-rs failed reading the header") && e.contains("has_grid_offsets"),
+        "{e}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
 fn vdb_cloud_nanovdb_and_openvdb_files_hold_the_same_grid() {
     let start = Instant::now();
     let nvdb = NanoVdbFile::open(reference_scene("vdb-cloud.nvdb"))
@@ -507,6 +527,10 @@ fn vdb_cloud_nanovdb_and_openvdb_files_hold_the_same_grid() {
         .and_then(|f| f.read_grid("density"))
         .unwrap();
     // Well under a second even unoptimised (release: milliseconds).
+    println!(
+        "vdb-cloud.nvdb read in {nvdb_time:?}, {} bytes",
+        nvdb.memory_bytes()
+    );
     assert!(
         nvdb_time.as_secs_f64() < 1.0,
         "reading vdb-cloud.nvdb took {nvdb_time:?}"

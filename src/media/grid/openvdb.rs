@@ -13,10 +13,14 @@
 //! - vdb-rs drops the root's background and tiles: both are read by the layout walk; a
 //!   nonzero background is refused because vdb-rs fills inactive values as if it were zero.
 //!
-//! Both halves are shown the grid as vdb-rs would see it by appending rewritten pieces after
-//! the file's end ([`SplicedStream`]) — a supported transform, the topology and buffers with
-//! the omitted arrays written in — and pointing the grid's descriptor there. Any panic left
-//! in vdb-rs is caught and reported as an error.
+//! - Instance grids (sharing another grid's tree): vdb-rs would read a tree that is not there;
+//!   the parent's tree is read with the instance's transform.
+//!
+//! vdb-rs is shown each grid in a form it reads: pieces appended after the file's end
+//! ([`SplicedStream`]) hold a header with a transform it understands, then the tree's
+//! topology and leaf buffers with the omitted arrays written in, and the grid's descriptor
+//! points there. The file is neither copied nor changed. Any panic left in vdb-rs is caught
+//! and reported as an error.
 
 use std::fs::File;
 use std::io::Read;

@@ -309,6 +309,24 @@ impl SparseGrid {
     }
 }
 
+/// The inclusive box of a leaf's set mask bits, in leaf coordinates. Word `x` of the mask
+/// holds the slice `x` (bit `8y + z`), so the x range comes from the nonzero words and the
+/// y and z ranges from the words' union: eight operations, not 512.
+fn mask_bounds(active: &[u64; 8]) -> Option<(IVec3, IVec3)> {
+    let x_lo = active.iter().position(|&w| w != 0)?;
+    let x_hi = active.iter().rposition(|&w| w != 0)?;
+    let union = active.iter().fold(0, |a, &w| a | w);
+    // Byte y of the union is nonzero when row y has a set bit; OR-ing the bytes gives the z's.
+    let rows = (0..8).filter(|y| (union >> (8 * y)) & 0xff != 0);
+    let (y_lo, y_hi) = (rows.clone().min()?, rows.max()?);
+    let columns = (0..8).fold(0u8, |a, y| a | (union >> (8 * y)) as u8);
+    let (z_lo, z_hi) = (columns.trailing_zeros(), 7 - columns.leading_zeros());
+    Some((
+        IVec3::new(x_lo as i32, y_lo, z_lo as i32),
+        IVec3::new(x_hi as i32, y_hi, z_hi as i32),
+    ))
+}
+
 /// Why a builder could not make a grid.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum BuildIssue {
@@ -373,16 +391,9 @@ impl SparseGridBuilder {
             "leaf origin {origin} not brick aligned"
         );
         assert_eq!(values.len(), BRICK_VOXELS, "a leaf holds 512 values");
-        for (w, &word) in active.iter().enumerate() {
-            let mut bits = word;
-            while bits != 0 {
-                let n = w * 64 + bits.trailing_zeros() as usize;
-                bits &= bits - 1;
-                let ijk =
-                    origin + IVec3::new((n >> 6) as i32, ((n >> 3) & 7) as i32, (n & 7) as i32);
-                self.active_min = self.active_min.min(ijk);
-                self.active_max = self.active_max.max(ijk);
-            }
+        if let Some((lo, hi)) = mask_bounds(active) {
+            self.active_min = self.active_min.min(origin + lo);
+            self.active_max = self.active_max.max(origin + hi);
         }
         let first = values[0].to_bits();
         let brick = if values.iter().all(|v| v.to_bits() == first) {
@@ -604,6 +615,24 @@ mod tests {
         }
         // Empty boxes give the background.
         assert_eq!(g.max_over(IVec3::ONE, IVec3::ZERO), 0.0);
+    }
+
+    #[test]
+    fn grid_leaf_mask_bounds_match_the_set_bits() {
+        let mut n = Numbers(3);
+        for _ in 0..500 {
+            let mut mask = [0u64; 8];
+            for _ in 0..n.int(0, 6) {
+                let bit = n.int(0, 511) as usize;
+                mask[bit / 64] |= 1 << (bit % 64);
+            }
+            let mut expected: Option<(IVec3, IVec3)> = None;
+            for bit in (0..512).filter(|&b| mask[b / 64] >> (b % 64) & 1 == 1) {
+                let p = IVec3::new(bit as i32 >> 6, (bit as i32 >> 3) & 7, bit as i32 & 7);
+                expected = Some(expected.map_or((p, p), |(lo, hi)| (lo.min(p), hi.max(p))));
+            }
+            assert_eq!(mask_bounds(&mask), expected, "{mask:x?}");
+        }
     }
 
     #[test]

@@ -1,12 +1,11 @@
-//! Participating media: phase functions, media (homogeneous, grids, procedural, VDB), and
-//! majorant grids for delta tracking.
+//! Participating media: phase functions, media (homogeneous, grids, procedural, VDB), the
+//! volume data they are built from, and majorant grids for delta tracking.
 
 pub mod cloud;
 pub mod dense;
+pub mod grid;
 pub mod majorant;
 mod medium;
 pub mod phase;
 
-pub use medium::{
-    Density, Emission, GridMedium, Medium, MediumKind, MediumPoint, RgbGridMedium, Segments,
-};
+pub use medium::{Density, Emission, GridMedium, Medium, MediumKind, MediumPoint, RgbGridMedium, Segments};

@@ -25,11 +25,7 @@ pub struct Camera {
 
 impl Camera {
     /// A camera for a film of `full_resolution` pixels.
-    pub fn new(
-        settings: &CameraSettings,
-        world_from_camera: &DMat4,
-        full_resolution: [u32; 2],
-    ) -> Camera {
+    pub fn new(settings: &CameraSettings, world_from_camera: &DMat4, full_resolution: [u32; 2]) -> Camera {
         let res = Vec2::new(full_resolution[0] as f32, full_resolution[1] as f32);
         let frame = settings.frame_aspect_ratio.unwrap_or(res.x / res.y);
         let (screen_min, screen_max) = match settings.screen_window {
@@ -62,15 +58,10 @@ impl Camera {
     /// [x, x+1)×[y, y+1)), with `u_lens` sampling the thin lens.
     pub fn generate_ray(&self, p_film: Vec2, u_lens: Vec2) -> Ray {
         // Raster → screen: x grows right, y grows down in raster space but up on screen.
-        let sx = self.screen_min.x
-            + p_film.x / self.resolution.x * (self.screen_max.x - self.screen_min.x);
-        let sy = self.screen_max.y
-            - p_film.y / self.resolution.y * (self.screen_max.y - self.screen_min.y);
+        let sx = self.screen_min.x + p_film.x / self.resolution.x * (self.screen_max.x - self.screen_min.x);
+        let sy = self.screen_max.y - p_film.y / self.resolution.y * (self.screen_max.y - self.screen_min.y);
         let (mut o, mut d) = if self.perspective {
-            (
-                Vec3::ZERO,
-                Vec3::new(sx * self.tan_half_fov, sy * self.tan_half_fov, 1.0).normalize(),
-            )
+            (Vec3::ZERO, Vec3::new(sx * self.tan_half_fov, sy * self.tan_half_fov, 1.0).normalize())
         } else {
             (Vec3::new(sx, sy, 0.0), Vec3::Z)
         };
@@ -81,10 +72,7 @@ impl Camera {
             o = Vec3::new(o.x + lens.x, o.y + lens.y, 0.0);
             d = (focus - o).normalize();
         }
-        Ray::new(
-            self.world_from_camera.transform_point3(o),
-            self.world_from_camera.transform_vector3(d).normalize(),
-        )
+        Ray::new(self.world_from_camera.transform_point3(o), self.world_from_camera.transform_vector3(d).normalize())
     }
 }
 

@@ -23,12 +23,7 @@ pub struct Image {
 impl Image {
     /// A black image.
     pub fn new(width: usize, height: usize) -> Image {
-        Image {
-            width,
-            height,
-            pixels: vec![Rgb::ZERO; width * height],
-            metadata: BTreeMap::new(),
-        }
+        Image { width, height, pixels: vec![Rgb::ZERO; width * height], metadata: BTreeMap::new() }
     }
 
     /// The pixel at (x, y).
@@ -50,17 +45,11 @@ impl Image {
 }
 
 fn temp_path(path: &Path) -> PathBuf {
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
+    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
     path.with_file_name(format!(".{name}.{}.tmp", std::process::id()))
 }
 
-fn write_atomically(
-    path: &Path,
-    write: impl FnOnce(&Path) -> Result<(), String>,
-) -> Result<(), String> {
+fn write_atomically(path: &Path, write: impl FnOnce(&Path) -> Result<(), String>) -> Result<(), String> {
     let tmp = temp_path(path);
     if let Err(e) = write(&tmp) {
         let _ = std::fs::remove_file(&tmp);
@@ -74,17 +63,10 @@ fn write_atomically(
 
 /// Writes `image` as `.exr` (32-bit float RGB) or `.png` (8-bit sRGB), chosen by extension.
 pub fn write_image(path: &Path, image: &Image) -> Result<(), String> {
-    match path
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(|e| e.to_ascii_lowercase())
-    {
+    match path.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase()) {
         Some(e) if e == "exr" => write_atomically(path, |tmp| write_exr(tmp, image)),
         Some(e) if e == "png" => write_atomically(path, |tmp| write_png(tmp, image)),
-        _ => Err(format!(
-            "{}: unsupported output format (use .exr or .png)",
-            path.display()
-        )),
+        _ => Err(format!("{}: unsupported output format (use .exr or .png)", path.display())),
     }
 }
 
@@ -95,10 +77,7 @@ fn write_exr(path: &Path, image: &crate::imageio::Image) -> Result<(), String> {
     let mut attributes = LayerAttributes::named("");
     attributes.software_name = Some(Text::from("nimbus"));
     for (k, v) in &image.metadata {
-        attributes.other.insert(
-            Text::from(k.as_str()),
-            AttributeValue::Text(Text::from(v.as_str())),
-        );
+        attributes.other.insert(Text::from(k.as_str()), AttributeValue::Text(Text::from(v.as_str())));
     }
     let layer = Layer::new(
         (w, h),
@@ -109,74 +88,43 @@ fn write_exr(path: &Path, image: &crate::imageio::Image) -> Result<(), String> {
             (p.x, p.y, p.z)
         }),
     );
-    Image::from_layer(layer)
-        .write()
-        .to_file(path)
-        .map_err(|e| format!("{}: {e}", path.display()))
+    Image::from_layer(layer).write().to_file(path).map_err(|e| format!("{}: {e}", path.display()))
 }
 
 /// sRGB opto-electronic transfer function.
 fn srgb_encode(v: f32) -> u8 {
     let v = if v.is_nan() { 0.0 } else { v.clamp(0.0, 1.0) };
-    let s = if v <= 0.003_130_8 {
-        12.92 * v
-    } else {
-        1.055 * v.powf(1.0 / 2.4) - 0.055
-    };
+    let s = if v <= 0.003_130_8 { 12.92 * v } else { 1.055 * v.powf(1.0 / 2.4) - 0.055 };
     (s * 255.0 + 0.5) as u8
 }
 
 fn write_png(path: &Path, image: &Image) -> Result<(), String> {
     let file = std::fs::File::create(path).map_err(|e| format!("{}: {e}", path.display()))?;
-    let mut enc = png::Encoder::new(
-        std::io::BufWriter::new(file),
-        image.width as u32,
-        image.height as u32,
-    );
+    let mut enc = png::Encoder::new(std::io::BufWriter::new(file), image.width as u32, image.height as u32);
     enc.set_color(png::ColorType::Rgb);
     enc.set_depth(png::BitDepth::Eight);
     enc.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
     for (k, v) in &image.metadata {
         let _ = enc.add_text_chunk(k.clone(), v.clone());
     }
-    let mut writer = enc
-        .write_header()
-        .map_err(|e| format!("{}: {e}", path.display()))?;
-    let data: Vec<u8> = image
-        .pixels
-        .iter()
-        .flat_map(|p| [srgb_encode(p.x), srgb_encode(p.y), srgb_encode(p.z)])
-        .collect();
-    writer
-        .write_image_data(&data)
-        .map_err(|e| format!("{}: {e}", path.display()))?;
-    writer
-        .finish()
-        .map_err(|e| format!("{}: {e}", path.display()))
+    let mut writer = enc.write_header().map_err(|e| format!("{}: {e}", path.display()))?;
+    let data: Vec<u8> =
+        image.pixels.iter().flat_map(|p| [srgb_encode(p.x), srgb_encode(p.y), srgb_encode(p.z)]).collect();
+    writer.write_image_data(&data).map_err(|e| format!("{}: {e}", path.display()))?;
+    writer.finish().map_err(|e| format!("{}: {e}", path.display()))
 }
 
 /// Reads an EXR (linear) or PNG (sRGB-encoded 8 or 16 bit) image as linear RGB.
 pub fn read_image(path: &Path) -> Result<crate::imageio::Image, String> {
-    match path
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(|e| e.to_ascii_lowercase())
-    {
+    match path.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase()) {
         Some(e) if e == "exr" => read_exr(path),
         Some(e) if e == "png" => read_png(path),
-        _ => Err(format!(
-            "{}: unsupported image format (nimbus reads .exr and .png)",
-            path.display()
-        )),
+        _ => Err(format!("{}: unsupported image format (nimbus reads .exr and .png)", path.display())),
     }
 }
 
 fn srgb_decode(v: f32) -> f32 {
-    if v <= 0.04045 {
-        v / 12.92
-    } else {
-        ((v + 0.055) / 1.055).powf(2.4)
-    }
+    if v <= 0.04045 { v / 12.92 } else { ((v + 0.055) / 1.055).powf(2.4) }
 }
 
 /// Reads a PNG, decoding sRGB to linear.
@@ -186,42 +134,24 @@ pub fn read_png(path: &Path) -> Result<crate::imageio::Image, String> {
     let mut decoder = png::Decoder::new(std::io::BufReader::new(file));
     decoder.set_transformations(png::Transformations::EXPAND);
     let mut reader = decoder.read_info().map_err(|e| err(&e))?;
-    let mut buf = vec![
-        0;
-        reader
-            .output_buffer_size()
-            .ok_or_else(|| err(&"image too large"))?
-    ];
+    let mut buf = vec![0; reader.output_buffer_size().ok_or_else(|| err(&"image too large"))?];
     let info = reader.next_frame(&mut buf).map_err(|e| err(&e))?;
     let (w, h) = (info.width as usize, info.height as usize);
     let channels = info.color_type.samples();
     let sixteen = info.bit_depth == png::BitDepth::Sixteen;
     let value = |i: usize| -> f32 {
-        if sixteen {
-            u16::from_be_bytes([buf[2 * i], buf[2 * i + 1]]) as f32 / 65535.0
-        } else {
-            buf[i] as f32 / 255.0
-        }
+        if sixteen { u16::from_be_bytes([buf[2 * i], buf[2 * i + 1]]) as f32 / 65535.0 } else { buf[i] as f32 / 255.0 }
     };
     let mut pixels = Vec::with_capacity(w * h);
     for k in 0..w * h {
         let base = k * channels;
         let rgb = match channels {
             1 | 2 => Rgb::splat(srgb_decode(value(base))),
-            _ => Rgb::new(
-                srgb_decode(value(base)),
-                srgb_decode(value(base + 1)),
-                srgb_decode(value(base + 2)),
-            ),
+            _ => Rgb::new(srgb_decode(value(base)), srgb_decode(value(base + 1)), srgb_decode(value(base + 2))),
         };
         pixels.push(rgb);
     }
-    Ok(crate::imageio::Image {
-        width: w,
-        height: h,
-        pixels,
-        metadata: BTreeMap::new(),
-    })
+    Ok(crate::imageio::Image { width: w, height: h, pixels, metadata: BTreeMap::new() })
 }
 
 /// Reads the first RGB(A) layer of an OpenEXR file (alpha ignored) and its text attributes.
@@ -229,13 +159,7 @@ pub fn read_exr(path: &Path) -> Result<crate::imageio::Image, String> {
     use exr::prelude::*;
     let img = read_first_rgba_layer_from_file(
         path,
-        |res, _| {
-            (
-                res.width(),
-                res.height(),
-                vec![Rgb::ZERO; res.width() * res.height()],
-            )
-        },
+        |res, _| (res.width(), res.height(), vec![Rgb::ZERO; res.width() * res.height()]),
         |(w, _h, px): &mut (usize, usize, Vec<Rgb>), pos, (r, g, b, _a): (f32, f32, f32, f32)| {
             px[pos.y() * *w + pos.x()] = Rgb::new(r, g, b);
         },
@@ -249,17 +173,9 @@ pub fn read_exr(path: &Path) -> Result<crate::imageio::Image, String> {
         }
     }
     if pixels.iter().any(|p| !p.is_finite()) {
-        return Err(format!(
-            "{}: image contains NaN or infinite values",
-            path.display()
-        ));
+        return Err(format!("{}: image contains NaN or infinite values", path.display()));
     }
-    Ok(crate::imageio::Image {
-        width,
-        height,
-        pixels,
-        metadata,
-    })
+    Ok(crate::imageio::Image { width, height, pixels, metadata })
 }
 
 #[cfg(test)]
@@ -278,10 +194,7 @@ mod tests {
         let back = read_exr(&path).unwrap();
         assert_eq!((back.width, back.height), (3, 2));
         assert_eq!(back.pixels, img.pixels);
-        assert_eq!(
-            back.metadata.get("nimbus:spp").map(String::as_str),
-            Some("16")
-        );
+        assert_eq!(back.metadata.get("nimbus:spp").map(String::as_str), Some("16"));
         write_image(&dir.join("t.png"), &img).unwrap();
         assert!(write_image(&dir.join("t.bmp"), &img).is_err());
         assert_eq!(srgb_encode(1.0), 255);

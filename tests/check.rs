@@ -5,19 +5,12 @@ use crate::common::{nimbus, reference_scenes, scratch_dir};
 #[test]
 fn every_parity_scene_checks_clean() {
     let scenes = reference_scenes();
-    assert!(
-        scenes.len() >= 9,
-        "expected the parity scenes, found {scenes:?}"
-    );
+    assert!(scenes.len() >= 9, "expected the parity scenes, found {scenes:?}");
     for scene in scenes {
         let out = nimbus(&["check", "--strict", scene.to_str().unwrap()]);
         let stderr = String::from_utf8_lossy(&out.stderr);
         assert!(out.status.success(), "{}: {stderr}", scene.display());
-        assert!(
-            stderr.is_empty(),
-            "{}: unexpected warnings: {stderr}",
-            scene.display()
-        );
+        assert!(stderr.is_empty(), "{}: unexpected warnings: {stderr}", scene.display());
         let stdout = String::from_utf8_lossy(&out.stdout);
         assert!(stdout.contains("film        128x128"), "{stdout}");
     }
@@ -44,21 +37,11 @@ Shape "trianglemesh" "integer indices" [0 1 2 0 2 3] "point3 P" [0 0 0 1 0 0 1 1
     )
     .unwrap();
     let out = nimbus(&["check", scene.to_str().unwrap()]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(stdout.contains("film        64x32"), "{stdout}");
-    assert!(
-        stdout.contains("integrator  volpath maxdepth 7"),
-        "{stdout}"
-    );
-    assert!(
-        stdout.contains("shapes      2 (sphere 1, trianglemesh 1), 2 triangles"),
-        "{stdout}"
-    );
+    assert!(stdout.contains("integrator  volpath maxdepth 7"), "{stdout}");
+    assert!(stdout.contains("shapes      2 (sphere 1, trianglemesh 1), 2 triangles"), "{stdout}");
     assert!(stdout.contains("lights      1 (distant 1)"), "{stdout}");
     assert!(stdout.contains("media       1 (homogeneous 1)"), "{stdout}");
 }
@@ -68,18 +51,12 @@ Shape "trianglemesh" "integer indices" [0 1 2 0 2 3] "point3 P" [0 0 0 1 0 0 1 1
 fn malformed_scenes_fail_with_their_location() {
     let dir = scratch_dir("malformed");
     let cases: &[(&str, &str)] = &[
-        (
-            "WorldBegin\nShpe \"sphere\"\n",
-            "bad.pbrt:2:1: error: unknown directive \"Shpe\"",
-        ),
+        ("WorldBegin\nShpe \"sphere\"\n", "bad.pbrt:2:1: error: unknown directive \"Shpe\""),
         (
             "WorldBegin\nCamera \"perspective\"\n",
             "bad.pbrt:2:1: error: Camera is not allowed after WorldBegin (options block only)",
         ),
-        (
-            "Shape \"sphere\"\n",
-            "bad.pbrt:1:1: error: Shape is not allowed before WorldBegin (world block only)",
-        ),
+        ("Shape \"sphere\"\n", "bad.pbrt:1:1: error: Shape is not allowed before WorldBegin (world block only)"),
         (
             "WorldBegin\nShape \"sphere\" \"integer radius\" 2\n",
             "bad.pbrt:2:16: error: parameter \"radius\" has type \"integer\" but must be \"float\"",
@@ -104,10 +81,7 @@ fn malformed_scenes_fail_with_their_location() {
             "WorldBegin\nShape \"sphere\" \"string name\" \"abc\n",
             "bad.pbrt:2:30: error: unterminated string: newline before the closing '\"'",
         ),
-        (
-            "WorldBegin\nTranslate 1 2\n",
-            "bad.pbrt:3:1: error: premature end of file: expected a number for Translate",
-        ),
+        ("WorldBegin\nTranslate 1 2\n", "bad.pbrt:3:1: error: premature end of file: expected a number for Translate"),
         (
             "WorldBegin\nShape \"curve\"\n",
             "bad.pbrt:2:1: error: shape \"curve\" is not supported by nimbus (it has sphere, disk, cylinder, trianglemesh, bilinearmesh, plymesh, and the extensions objmesh and gltfmesh)",
@@ -124,22 +98,14 @@ fn malformed_scenes_fail_with_their_location() {
             .unwrap();
         assert_eq!(out.status.code(), Some(1), "{text}");
         let stderr = String::from_utf8_lossy(&out.stderr);
-        assert_eq!(
-            stderr.lines().next().unwrap_or(""),
-            *expected,
-            "scene:\n{text}"
-        );
+        assert_eq!(stderr.lines().next().unwrap_or(""), *expected, "scene:\n{text}");
     }
 }
 
 #[test]
 fn missing_include_names_the_include_directive() {
     let dir = scratch_dir("include");
-    std::fs::write(
-        dir.join("main.pbrt"),
-        "WorldBegin\n  Include \"parts/missing.pbrt\"\n",
-    )
-    .unwrap();
+    std::fs::write(dir.join("main.pbrt"), "WorldBegin\n  Include \"parts/missing.pbrt\"\n").unwrap();
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_nimbus"))
         .current_dir(&dir)
         .args(["check", "main.pbrt"])
@@ -147,28 +113,18 @@ fn missing_include_names_the_include_directive() {
         .unwrap();
     assert_eq!(out.status.code(), Some(1));
     let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(
-        stderr.starts_with("main.pbrt:2:3: error: Include \"parts/missing.pbrt\": cannot read"),
-        "{stderr}"
-    );
+    assert!(stderr.starts_with("main.pbrt:2:3: error: Include \"parts/missing.pbrt\": cannot read"), "{stderr}");
 }
 
 #[test]
 fn unused_parameters_warn_and_fail_under_strict() {
     let dir = scratch_dir("unused");
     let scene = dir.join("u.pbrt");
-    std::fs::write(
-        &scene,
-        "WorldBegin\nShape \"sphere\" \"float radius\" 1 \"float raduis\" 2\n",
-    )
-    .unwrap();
+    std::fs::write(&scene, "WorldBegin\nShape \"sphere\" \"float radius\" 1 \"float raduis\" 2\n").unwrap();
     let out = nimbus(&["check", scene.to_str().unwrap()]);
     assert!(out.status.success());
     let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(
-        stderr.contains("u.pbrt:2:33: warning: \"float raduis\": unused parameter"),
-        "{stderr}"
-    );
+    assert!(stderr.contains("u.pbrt:2:33: warning: \"float raduis\": unused parameter"), "{stderr}");
     let strict = nimbus(&["check", "--strict", scene.to_str().unwrap()]);
     assert_eq!(strict.status.code(), Some(1));
 }
@@ -178,10 +134,7 @@ fn missing_scene_file_is_an_error_not_a_panic() {
     let out = nimbus(&["check", "/nonexistent/scene.pbrt"]);
     assert_eq!(out.status.code(), Some(1));
     let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(
-        stderr.contains("/nonexistent/scene.pbrt: cannot read scene file"),
-        "{stderr}"
-    );
+    assert!(stderr.contains("/nonexistent/scene.pbrt: cannot read scene file"), "{stderr}");
 }
 
 #[test]

@@ -16,15 +16,7 @@ fn scene(text: &str, opts: &BuildOptions) -> Scene {
 }
 
 fn render_with(scene: &Scene, integrator: &dyn Integrator) -> Image {
-    render(
-        scene,
-        integrator,
-        &RenderOptions {
-            time_budget: None,
-            quiet: true,
-        },
-    )
-    .image
+    render(scene, integrator, &RenderOptions { time_budget: None, quiet: true }).image
 }
 
 fn render_scene(scene: &Scene) -> Image {
@@ -36,11 +28,7 @@ fn render_scene(scene: &Scene) -> Image {
 /// spread of per-pixel values (pixels are independent estimates of the same quantity in
 /// these scenes).
 fn mean_and_stderr(img: &Image) -> (f64, f64) {
-    let v: Vec<f64> = img
-        .pixels
-        .iter()
-        .map(|p| (p.x + p.y + p.z) as f64 / 3.0)
-        .collect();
+    let v: Vec<f64> = img.pixels.iter().map(|p| (p.x + p.y + p.z) as f64 / 3.0).collect();
     let n = v.len() as f64;
     let mean = v.iter().sum::<f64>() / n;
     let var = v.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / (n - 1.0);
@@ -75,10 +63,7 @@ Shape "sphere" "float radius" 1"#
         let img = render_scene(&scene(&text, &BuildOptions::default()));
         let (mean, se) = mean_and_stderr(&img);
         let expected = 1.0 - 0.5f64.powi(30);
-        assert!(
-            (mean - expected).abs() < 4.0 * se + 1e-3,
-            "{sampler}: mean {mean} ± {se}, expected {expected}"
-        );
+        assert!((mean - expected).abs() < 4.0 * se + 1e-3, "{sampler}: mean {mean} ± {se}, expected {expected}");
     }
 }
 
@@ -102,10 +87,7 @@ Shape "sphere" "float radius" 1"#
         let img = render_scene(&scene(&text, &BuildOptions::default()));
         let (mean, se) = mean_and_stderr(&img);
         let expected = 1.0 - 0.5f64.powi(31);
-        assert!(
-            (mean - expected).abs() < 4.0 * se + 1e-3,
-            "{sampler}: mean {mean} ± {se}, expected {expected}"
-        );
+        assert!((mean - expected).abs() < 4.0 * se + 1e-3, "{sampler}: mean {mean} ± {se}, expected {expected}");
     }
 }
 
@@ -126,10 +108,7 @@ Shape "trianglemesh" "integer indices" [0 1 2 0 2 3] "point3 P" [-10 -10 0  10 -
     let cos = 4.0 / 5.0;
     let expected = glam::Vec3::new(0.5 * 2.0, 0.25 * 4.0, 0.75 * 6.0) * cos / std::f32::consts::PI;
     for p in &img.pixels {
-        assert!(
-            (*p - expected).abs().max_element() < 1e-4,
-            "{p:?} vs {expected:?}"
-        );
+        assert!((*p - expected).abs().max_element() < 1e-4, "{p:?} vs {expected:?}");
     }
 }
 
@@ -154,22 +133,9 @@ Shape "trianglemesh" "integer indices" [0 1 2 0 2 3  4 5 6 4 6 7  8 9 10 8 10 11
 Material "conductor" "float roughness" 0.3
 Shape "sphere" "float radius" 0.4"#;
     let s = scene(text, &BuildOptions::default());
-    let mis = render_with(
-        &s,
-        &VolPath::with_config(PathConfig {
-            max_depth: 5,
-            regularize: false,
-            next_event: true,
-        }),
-    );
-    let bsdf = render_with(
-        &s,
-        &VolPath::with_config(PathConfig {
-            max_depth: 5,
-            regularize: false,
-            next_event: false,
-        }),
-    );
+    let mis = render_with(&s, &VolPath::with_config(PathConfig { max_depth: 5, regularize: false, next_event: true }));
+    let bsdf =
+        render_with(&s, &VolPath::with_config(PathConfig { max_depth: 5, regularize: false, next_event: false }));
     let (m1, e1) = mean_and_stderr(&mis);
     let (m2, e2) = mean_and_stderr(&bsdf);
     // Pixels differ in expectation here, so the per-pixel spread overstates the noise of the
@@ -183,10 +149,7 @@ Shape "sphere" "float radius" 0.4"#;
     let n = diff.len() as f64;
     let md = diff.iter().sum::<f64>() / n;
     let sd = (diff.iter().map(|d| (d - md) * (d - md)).sum::<f64>() / (n - 1.0) / n).sqrt();
-    assert!(
-        md.abs() < 4.0 * sd,
-        "MIS {m1} ± {e1}, BSDF-only {m2} ± {e2}: difference {md} ± {sd}"
-    );
+    assert!(md.abs() < 4.0 * sd, "MIS {m1} ± {e1}, BSDF-only {m2} ± {e2}: difference {md} ± {sd}");
     assert!(m1 > 0.05, "the scene is lit: {m1}");
 }
 
@@ -204,16 +167,8 @@ Shape "sphere" "float radius" 0.5
 Material "diffuse"
 Shape "trianglemesh" "integer indices" [0 1 2 0 2 3] "point3 P" [-5 -0.5 -5  5 -0.5 -5  5 -0.5 5  -5 -0.5 5]"#;
     let s = scene(text, &BuildOptions::default());
-    let one = rayon::ThreadPoolBuilder::new()
-        .num_threads(1)
-        .build()
-        .unwrap()
-        .install(|| render_scene(&s));
-    let three = rayon::ThreadPoolBuilder::new()
-        .num_threads(3)
-        .build()
-        .unwrap()
-        .install(|| render_scene(&s));
+    let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap().install(|| render_scene(&s));
+    let three = rayon::ThreadPoolBuilder::new().num_threads(3).build().unwrap().install(|| render_scene(&s));
     assert_eq!(one.pixels, three.pixels);
 }
 
@@ -225,15 +180,7 @@ fn cornell_surfaces_matches_pbrt_v4() {
     let desc = nimbus::parser::load_file(&dir.join("cornell-surfaces.pbrt")).unwrap();
     let reference = nimbus::imageio::read_exr(&dir.join("../images/cornell-surfaces.exr")).unwrap();
     let render_seed = |seed| {
-        let s = build_scene(
-            &desc,
-            &BuildOptions {
-                spp: Some(32),
-                seed: Some(seed),
-                ..Default::default()
-            },
-        )
-        .unwrap();
+        let s = build_scene(&desc, &BuildOptions { spp: Some(32), seed: Some(seed), ..Default::default() }).unwrap();
         render_scene(&s)
     };
     let (a, b) = (render_seed(11), render_seed(12));
@@ -263,27 +210,15 @@ LIGHT
 Material "diffuse" "rgb reflectance" [0.7 0.7 0.7]
 Shape "sphere" "float radius" 1
 Shape "trianglemesh" "integer indices" [0 1 2 0 2 3] "point3 P" [-5 -1 -5  5 -1 -5  5 -1 5  -5 -1 5]"#;
-    let uniform = scene(
-        &body.replace("LIGHT", r#"LightSource "infinite" "rgb L" [0.8 0.6 0.4]"#),
-        &BuildOptions::default(),
-    );
+    let uniform =
+        scene(&body.replace("LIGHT", r#"LightSource "infinite" "rgb L" [0.8 0.6 0.4]"#), &BuildOptions::default());
     let image = scene(
-        &body.replace(
-            "LIGHT",
-            &format!(
-                r#"LightSource "infinite" "string filename" "{}""#,
-                path.display()
-            ),
-        ),
+        &body.replace("LIGHT", &format!(r#"LightSource "infinite" "string filename" "{}""#, path.display())),
         &BuildOptions::default(),
     );
     let (a, b) = (render_scene(&uniform), render_scene(&image));
-    let diff: Vec<f64> = a
-        .pixels
-        .iter()
-        .zip(&b.pixels)
-        .map(|(x, y)| ((*x - *y).x + (*x - *y).y + (*x - *y).z) as f64 / 3.0)
-        .collect();
+    let diff: Vec<f64> =
+        a.pixels.iter().zip(&b.pixels).map(|(x, y)| ((*x - *y).x + (*x - *y).y + (*x - *y).z) as f64 / 3.0).collect();
     let n = diff.len() as f64;
     let md = diff.iter().sum::<f64>() / n;
     let sd = (diff.iter().map(|d| (d - md) * (d - md)).sum::<f64>() / (n - 1.0) / n).sqrt();

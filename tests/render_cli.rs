@@ -29,25 +29,12 @@ fn renders_exr_with_metadata_and_png() {
         "--outfile",
         exr.to_str().unwrap(),
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let img = nimbus::imageio::read_exr(&exr).unwrap();
     assert_eq!((img.width, img.height), (24, 16));
-    assert_eq!(
-        img.metadata.get("nimbus:spp").map(String::as_str),
-        Some("3")
-    );
-    assert_eq!(
-        img.metadata.get("nimbus:seed").map(String::as_str),
-        Some("7")
-    );
-    assert_eq!(
-        img.metadata.get("nimbus:integrator").map(String::as_str),
-        Some("volpath")
-    );
+    assert_eq!(img.metadata.get("nimbus:spp").map(String::as_str), Some("3"));
+    assert_eq!(img.metadata.get("nimbus:seed").map(String::as_str), Some("7"));
+    assert_eq!(img.metadata.get("nimbus:integrator").map(String::as_str), Some("volpath"));
     assert!(img.metadata.contains_key("nimbus:time"));
     let png = dir.join("out.png");
     let out = nimbus(&[
@@ -62,11 +49,7 @@ fn renders_exr_with_metadata_and_png() {
         "0",
         "4",
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let img = nimbus::imageio::read_image(&png).unwrap();
     assert_eq!((img.width, img.height), (8, 4));
 }
@@ -77,20 +60,9 @@ fn time_budget_renders_progressively() {
     let scene = dir.join("s.pbrt");
     std::fs::write(&scene, SMALL).unwrap();
     let exr = dir.join("t.exr");
-    let out = nimbus(&[
-        "render",
-        scene.to_str().unwrap(),
-        "--quiet",
-        "--time",
-        "0.5",
-        "--outfile",
-        exr.to_str().unwrap(),
-    ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let out =
+        nimbus(&["render", scene.to_str().unwrap(), "--quiet", "--time", "0.5", "--outfile", exr.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let img = nimbus::imageio::read_exr(&exr).unwrap();
     let spp: u32 = img.metadata["nimbus:spp"].parse().unwrap();
     assert!(spp >= 1);
@@ -100,24 +72,12 @@ fn time_budget_renders_progressively() {
 fn unknown_integrator_lists_the_available_ones() {
     let dir = scratch_dir("render-integrator");
     let scene = dir.join("s.pbrt");
-    std::fs::write(
-        &scene,
-        SMALL.replace("WorldBegin", "Integrator \"bdpt\"\nWorldBegin"),
-    )
-    .unwrap();
-    let out = nimbus(&[
-        "render",
-        scene.to_str().unwrap(),
-        "--quiet",
-        "--outfile",
-        dir.join("x.exr").to_str().unwrap(),
-    ]);
+    std::fs::write(&scene, SMALL.replace("WorldBegin", "Integrator \"bdpt\"\nWorldBegin")).unwrap();
+    let out = nimbus(&["render", scene.to_str().unwrap(), "--quiet", "--outfile", dir.join("x.exr").to_str().unwrap()]);
     assert_eq!(out.status.code(), Some(1));
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(
-        stderr.contains(
-            "s.pbrt:5:1: error: integrator \"bdpt\" is not available in nimbus (it has: volpath"
-        ),
+        stderr.contains("s.pbrt:5:1: error: integrator \"bdpt\" is not available in nimbus (it has: volpath"),
         "{stderr}"
     );
     let out = nimbus(&["render", dir.join("nope.pbrt").to_str().unwrap(), "--quiet"]);
@@ -129,13 +89,8 @@ fn output_format_errors_are_clear() {
     let dir = scratch_dir("render-format");
     let scene = dir.join("s.pbrt");
     std::fs::write(&scene, SMALL).unwrap();
-    let out = nimbus(&[
-        "render",
-        scene.to_str().unwrap(),
-        "--quiet",
-        "--outfile",
-        dir.join("x.tiff").to_str().unwrap(),
-    ]);
+    let out =
+        nimbus(&["render", scene.to_str().unwrap(), "--quiet", "--outfile", dir.join("x.tiff").to_str().unwrap()]);
     assert_eq!(out.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&out.stderr).contains("unsupported output format"));
 }

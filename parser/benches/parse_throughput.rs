@@ -29,16 +29,7 @@ fn generated_scene() -> String {
     for j in 0..n - 1 {
         for i in 0..n - 1 {
             let a = j * n + i;
-            let _ = writeln!(
-                s,
-                "    {} {} {} {} {} {}",
-                a,
-                a + 1,
-                a + n + 1,
-                a,
-                a + n + 1,
-                a + n
-            );
+            let _ = writeln!(s, "    {} {} {} {} {} {}", a, a + 1, a + n + 1, a, a + n + 1, a + n);
         }
     }
     s.push_str("  ]\n");
@@ -60,16 +51,9 @@ fn main() {
     let mut triangles = 0;
     for _ in 0..5 {
         let t = Instant::now();
-        let scene =
-            nimbus_parser::load_str(&text, "generated.pbrt").expect("generated scene parses");
+        let scene = nimbus_parser::load_str(&text, "generated.pbrt").expect("generated scene parses");
         let dt = t.elapsed().as_secs_f64();
-        triangles = scene.shapes[0]
-            .entity
-            .params
-            .get_ints("indices")
-            .unwrap()
-            .len()
-            / 3;
+        triangles = scene.shapes[0].entity.params.get_ints("indices").unwrap().len() / 3;
         best = best.min(dt);
     }
     // Baseline in the same run: the time just to scan every byte for whitespace, the floor any

@@ -95,29 +95,16 @@ impl GraphicsState {
     }
 
     fn transform(&self) -> AnimatedTransform {
-        AnimatedTransform {
-            start: self.ctm[0],
-            end: self.ctm[1],
-            start_time: self.start_time,
-            end_time: self.end_time,
-        }
+        AnimatedTransform { start: self.ctm[0], end: self.ctm[1], start_time: self.start_time, end_time: self.end_time }
     }
 
     fn entity(&self, name: String, own: Vec<Param>, defaults: &[Param], loc: FileLoc) -> Entity {
-        Entity {
-            name,
-            params: ParameterDictionary::new(own, defaults),
-            loc,
-            color_space: self.color_space,
-        }
+        Entity { name, params: ParameterDictionary::new(own, defaults), loc, color_space: self.color_space }
     }
 }
 
 /// Adds every texture name `params` refers to, for checking once all textures are known.
-fn texture_references(
-    params: &ParameterDictionary,
-    out: &mut Vec<(&'static str, String, FileLoc)>,
-) {
+fn texture_references(params: &ParameterDictionary, out: &mut Vec<(&'static str, String, FileLoc)>) {
     for p in params.iter() {
         if p.ty == ParamType::Texture
             && let ParamValues::Strings(names) = &p.values
@@ -200,20 +187,14 @@ impl SceneBuilder {
 
     fn options_only(&self, what: &str, loc: &FileLoc) -> Result<()> {
         if self.block == Block::World {
-            return Err(Error::new(
-                loc,
-                format!("{what} is not allowed after WorldBegin (options block only)"),
-            ));
+            return Err(Error::new(loc, format!("{what} is not allowed after WorldBegin (options block only)")));
         }
         Ok(())
     }
 
     fn world_only(&self, what: &str, loc: &FileLoc) -> Result<()> {
         if self.block == Block::Options {
-            return Err(Error::new(
-                loc,
-                format!("{what} is not allowed before WorldBegin (world block only)"),
-            ));
+            return Err(Error::new(loc, format!("{what} is not allowed before WorldBegin (world block only)")));
         }
         Ok(())
     }
@@ -249,10 +230,7 @@ impl SceneBuilder {
                 Push::Attribute => ("AttributeBegin", "ObjectEnd"),
                 Push::Object => ("ObjectBegin", "AttributeEnd"),
             };
-            return Err(Error::new(
-                loc,
-                format!("mismatched nesting: {close} closes the {open} at {begin}"),
-            ));
+            return Err(Error::new(loc, format!("mismatched nesting: {close} closes the {open} at {begin}")));
         }
         self.gs = gs;
         Ok(())
@@ -264,14 +242,11 @@ impl SceneBuilder {
 
     fn shape(&mut self, name: String, params: Vec<Param>, loc: FileLoc) -> Result<()> {
         self.world_only("Shape", &loc)?;
-        let entity = self
-            .gs
-            .entity(name, params, &self.gs.shape_attributes, loc.clone());
+        let entity = self.gs.entity(name, params, &self.gs.shape_attributes, loc.clone());
         self.check_texture_references(&entity.params);
         self.use_media();
         if let (MaterialRef::Named(n), Some(at)) = (&self.gs.material, &self.gs.material_loc) {
-            self.pending_names
-                .push(("named material", n.clone(), at.clone()));
+            self.pending_names.push(("named material", n.clone(), at.clone()));
         }
         let mut area_light = None;
         if let Some(al) = &self.gs.area_light {
@@ -288,10 +263,8 @@ impl SceneBuilder {
                 area_light = Some(self.scene.area_lights.len() - 1);
             }
         }
-        let medium_interface = (self.gs.inside != self.gs.outside).then(|| MediumInterface {
-            inside: medium_name(&self.gs.inside),
-            outside: medium_name(&self.gs.outside),
-        });
+        let medium_interface = (self.gs.inside != self.gs.outside)
+            .then(|| MediumInterface { inside: medium_name(&self.gs.inside), outside: medium_name(&self.gs.outside) });
         let shape = ShapeEntity {
             entity,
             world_from_object: self.gs.transform(),
@@ -322,20 +295,14 @@ impl SceneBuilder {
             match v.trim_matches('"') {
                 "true" => Ok(true),
                 "false" => Ok(false),
-                _ => Err(Error::new(
-                    loc,
-                    format!("Option \"{name}\": expected true or false, found {v}"),
-                )),
+                _ => Err(Error::new(loc, format!("Option \"{name}\": expected true or false, found {v}"))),
             }
         };
         let quoted = |v: &str| -> Result<String> {
             if v.len() >= 2 && v.starts_with('"') && v.ends_with('"') {
                 Ok(v[1..v.len() - 1].to_string())
             } else {
-                Err(Error::new(
-                    loc,
-                    format!("Option \"{name}\": expected a quoted string, found {v}"),
-                ))
+                Err(Error::new(loc, format!("Option \"{name}\": expected a quoted string, found {v}")))
             }
         };
         let o = &mut self.scene.options;
@@ -347,20 +314,17 @@ impl SceneBuilder {
             "pixelstats" => o.pixel_stats = flag(value)?,
             "wavefront" => o.wavefront = flag(value)?,
             "displacementedgescale" => {
-                o.displacement_edge_scale = Some(value.parse().map_err(|_| {
-                    Error::new(
-                        loc,
-                        format!("Option \"{name}\": expected a number, found {value}"),
-                    )
-                })?)
+                o.displacement_edge_scale = Some(
+                    value
+                        .parse()
+                        .map_err(|_| Error::new(loc, format!("Option \"{name}\": expected a number, found {value}")))?,
+                )
             }
             "seed" => {
-                o.seed = Some(value.trim_matches('"').parse().map_err(|_| {
-                    Error::new(
-                        loc,
-                        format!("Option \"{name}\": expected an integer, found {value}"),
-                    )
-                })?)
+                o.seed =
+                    Some(value.trim_matches('"').parse().map_err(|_| {
+                        Error::new(loc, format!("Option \"{name}\": expected an integer, found {value}"))
+                    })?)
             }
             "msereferenceimage" => o.mse_reference_image = Some(quoted(value)?),
             "msereferenceout" => o.mse_reference_out = Some(quoted(value)?),
@@ -377,10 +341,7 @@ impl SceneBuilder {
                 o.render_coord_sys = Some(v);
             }
             _ => {
-                return Err(Error::new(
-                    loc,
-                    format!("Option \"{name}\": unknown option"),
-                ));
+                return Err(Error::new(loc, format!("Option \"{name}\": unknown option")));
             }
         }
         Ok(())
@@ -389,9 +350,7 @@ impl SceneBuilder {
     /// Checks that the scene is complete and every name it uses is defined, and returns it.
     pub fn finish(mut self) -> Result<SceneDescription> {
         if self.block != Block::World {
-            return Err(Error::general(
-                "end of scene before WorldBegin: a pbrt-v4 scene needs a WorldBegin",
-            ));
+            return Err(Error::general("end of scene before WorldBegin: a pbrt-v4 scene needs a WorldBegin"));
         }
         if let Some((_, kind, loc)) = self.pushed.last() {
             let what = if *kind == Push::Object {
@@ -402,51 +361,31 @@ impl SceneBuilder {
             return Err(Error::new(loc, what));
         }
         let scene = &self.scene;
-        let entities = scene
-            .materials
-            .iter()
-            .chain(scene.named_materials.iter().map(|m| &m.entity));
-        let entities = entities
-            .chain(scene.textures.iter().map(|t| &t.entity))
-            .chain(scene.lights.iter().map(|l| &l.entity));
+        let entities = scene.materials.iter().chain(scene.named_materials.iter().map(|m| &m.entity));
+        let entities =
+            entities.chain(scene.textures.iter().map(|t| &t.entity)).chain(scene.lights.iter().map(|l| &l.entity));
         for e in entities {
             texture_references(&e.params, &mut self.pending_names);
         }
         let media: HashSet<&str> = self.scene.media.iter().map(|m| m.name.as_str()).collect();
-        let materials: HashSet<&str> = self
-            .scene
-            .named_materials
-            .iter()
-            .map(|m| m.name.as_str())
-            .collect();
+        let materials: HashSet<&str> = self.scene.named_materials.iter().map(|m| m.name.as_str()).collect();
         for (kind, name, loc) in &self.pending_names {
             let defined = match *kind {
                 "medium" => media.contains(name.as_str()),
                 "named material" => materials.contains(name.as_str()),
-                "texture" => {
-                    self.float_texture_names.contains(name)
-                        || self.spectrum_texture_names.contains(name)
-                }
+                "texture" => self.float_texture_names.contains(name) || self.spectrum_texture_names.contains(name),
                 _ => true,
             };
             if !defined {
                 return Err(Error::new(loc, format!("{kind} \"{name}\" is not defined")));
             }
         }
-        let objects: HashSet<&str> = self
-            .scene
-            .instance_definitions
-            .iter()
-            .map(|d| d.name.as_str())
-            .collect();
+        let objects: HashSet<&str> = self.scene.instance_definitions.iter().map(|d| d.name.as_str()).collect();
         for u in &self.scene.instances {
             if !objects.contains(u.name.as_str()) {
                 return Err(Error::new(
                     &u.loc,
-                    format!(
-                        "object \"{}\" is not defined (ObjectInstance needs an ObjectBegin of that name)",
-                        u.name
-                    ),
+                    format!("object \"{}\" is not defined (ObjectInstance needs an ObjectBegin of that name)", u.name),
                 ));
             }
         }
@@ -464,12 +403,7 @@ impl ParserTarget for SceneBuilder {
             Directive::ActiveTransform(a) => self.gs.active = a,
             Directive::AreaLightSource(name, params) => {
                 self.world_only("AreaLightSource", &loc)?;
-                self.gs.area_light = Some(AreaLight {
-                    name,
-                    params,
-                    loc,
-                    color_space: self.gs.color_space,
-                });
+                self.gs.area_light = Some(AreaLight { name, params, loc, color_space: self.gs.color_space });
             }
             Directive::Attribute(target, params) => {
                 let list = match target.as_str() {
@@ -505,16 +439,11 @@ impl ParserTarget for SceneBuilder {
                 self.options_only("Camera", &loc)?;
                 let camera_from_world = self.gs.ctm;
                 let inv = |m: &DMat4| {
-                    transform::try_inverse(m).ok_or_else(|| {
-                        Error::new(
-                            &loc,
-                            "the camera transform is singular (cannot be inverted)",
-                        )
-                    })
+                    transform::try_inverse(m)
+                        .ok_or_else(|| Error::new(&loc, "the camera transform is singular (cannot be inverted)"))
                 };
                 let world_from_camera = [inv(&camera_from_world[0])?, inv(&camera_from_world[1])?];
-                self.named_coordinate_systems
-                    .insert("camera".into(), world_from_camera);
+                self.named_coordinate_systems.insert("camera".into(), world_from_camera);
                 if !self.gs.outside.is_empty() {
                     self.pending_names.push((
                         "medium",
@@ -535,12 +464,7 @@ impl ParserTarget for SceneBuilder {
             }
             Directive::ColorSpace(name) => {
                 self.gs.color_space = ColorSpace::from_name(&name).ok_or_else(|| {
-                    Error::new(
-                        &loc,
-                        format!(
-                            "unknown color space \"{name}\" (srgb, rec2020, aces2065-1 or dci-p3)"
-                        ),
-                    )
+                    Error::new(&loc, format!("unknown color space \"{name}\" (srgb, rec2020, aces2065-1 or dci-p3)"))
                 })?;
             }
             Directive::ConcatTransform(m) => self.gs.apply(|t| t * transform::from_pbrt_array(&m)),
@@ -549,10 +473,7 @@ impl ParserTarget for SceneBuilder {
             }
             Directive::CoordSysTransform(name) => match self.named_coordinate_systems.get(&name) {
                 Some(m) => self.gs.ctm = *m,
-                None => self.warn(
-                    &loc,
-                    format!("couldn't find named coordinate system \"{name}\""),
-                ),
+                None => self.warn(&loc, format!("couldn't find named coordinate system \"{name}\"")),
             },
             Directive::Film(name, params) => {
                 self.options_only("Film", &loc)?;
@@ -561,10 +482,7 @@ impl ParserTarget for SceneBuilder {
             Directive::Identity => self.gs.apply(|_| DMat4::IDENTITY),
             Directive::Import(_) | Directive::Include(_) => {
                 // The parser reads these files itself when building a scene.
-                return Err(Error::new(
-                    &loc,
-                    "internal: Include/Import reached the scene builder",
-                ));
+                return Err(Error::new(&loc, "internal: Include/Import reached the scene builder"));
             }
             Directive::Integrator(name, params) => {
                 self.options_only("Integrator", &loc)?;
@@ -587,30 +505,17 @@ impl ParserTarget for SceneBuilder {
                 });
             }
             Directive::LookAt(v) => {
-                let m =
-                    transform::look_at([v[0], v[1], v[2]], [v[3], v[4], v[5]], [v[6], v[7], v[8]])
-                        .ok_or_else(|| {
-                            Error::new(
-                                &loc,
-                                "LookAt: the view direction is zero or parallel to the up vector",
-                            )
-                        })?;
+                let m = transform::look_at([v[0], v[1], v[2]], [v[3], v[4], v[5]], [v[6], v[7], v[8]]).ok_or_else(
+                    || Error::new(&loc, "LookAt: the view direction is zero or parallel to the up vector"),
+                )?;
                 self.gs.apply(|t| t * m);
             }
             Directive::MakeNamedMaterial(name, params) => {
                 self.world_only("MakeNamedMaterial", &loc)?;
                 if self.scene.named_material(&name).is_some() {
-                    return Err(Error::new(
-                        &loc,
-                        format!("named material \"{name}\" redefined"),
-                    ));
+                    return Err(Error::new(&loc, format!("named material \"{name}\" redefined")));
                 }
-                let entity = self.gs.entity(
-                    String::new(),
-                    params,
-                    &self.gs.material_attributes,
-                    loc.clone(),
-                );
+                let entity = self.gs.entity(String::new(), params, &self.gs.material_attributes, loc.clone());
                 let ty = entity.params.get_opt_string("type")?.map(str::to_string);
                 let Some(ty) = ty else {
                     return Err(Error::new(
@@ -618,24 +523,13 @@ impl ParserTarget for SceneBuilder {
                         format!("MakeNamedMaterial \"{name}\": missing \"string type\" parameter"),
                     ));
                 };
-                self.scene.named_materials.push(NamedMaterialEntity {
-                    name,
-                    entity: Entity { name: ty, ..entity },
-                });
+                self.scene.named_materials.push(NamedMaterialEntity { name, entity: Entity { name: ty, ..entity } });
             }
             Directive::MakeNamedMedium(name, params) => {
                 if self.scene.medium(&name).is_some() {
-                    return Err(Error::new(
-                        &loc,
-                        format!("named medium \"{name}\" redefined"),
-                    ));
+                    return Err(Error::new(&loc, format!("named medium \"{name}\" redefined")));
                 }
-                let entity = self.gs.entity(
-                    String::new(),
-                    params,
-                    &self.gs.medium_attributes,
-                    loc.clone(),
-                );
+                let entity = self.gs.entity(String::new(), params, &self.gs.medium_attributes, loc.clone());
                 let ty = entity.params.get_opt_string("type")?.map(str::to_string);
                 let Some(ty) = ty else {
                     return Err(Error::new(
@@ -651,9 +545,7 @@ impl ParserTarget for SceneBuilder {
             }
             Directive::Material(name, params) => {
                 self.world_only("Material", &loc)?;
-                let entity = self
-                    .gs
-                    .entity(name, params, &self.gs.material_attributes, loc);
+                let entity = self.gs.entity(name, params, &self.gs.material_attributes, loc);
                 self.scene.materials.push(entity);
                 self.gs.material = MaterialRef::Index(self.scene.materials.len() - 1);
                 self.gs.material_loc = None;
@@ -671,21 +563,13 @@ impl ParserTarget for SceneBuilder {
             Directive::ObjectBegin(name) => {
                 self.world_only("ObjectBegin", &loc)?;
                 if self.active_instance.is_some() {
-                    return Err(Error::new(
-                        &loc,
-                        "ObjectBegin inside another object definition",
-                    ));
+                    return Err(Error::new(&loc, "ObjectBegin inside another object definition"));
                 }
                 if !self.instance_names.insert(name.clone()) {
                     return Err(Error::new(&loc, format!("object \"{name}\" redefined")));
                 }
-                self.pushed
-                    .push((self.gs.clone(), Push::Object, loc.clone()));
-                self.active_instance = Some(InstanceDefinition {
-                    name,
-                    shapes: Vec::new(),
-                    loc,
-                });
+                self.pushed.push((self.gs.clone(), Push::Object, loc.clone()));
+                self.active_instance = Some(InstanceDefinition { name, shapes: Vec::new(), loc });
             }
             Directive::ObjectEnd => {
                 self.world_only("ObjectEnd", &loc)?;
@@ -699,16 +583,9 @@ impl ParserTarget for SceneBuilder {
             Directive::ObjectInstance(name) => {
                 self.world_only("ObjectInstance", &loc)?;
                 if self.active_instance.is_some() {
-                    return Err(Error::new(
-                        &loc,
-                        "ObjectInstance inside an object definition",
-                    ));
+                    return Err(Error::new(&loc, "ObjectInstance inside an object definition"));
                 }
-                self.scene.instances.push(InstanceUse {
-                    name,
-                    world_from_instance: self.gs.transform(),
-                    loc,
-                });
+                self.scene.instances.push(InstanceUse { name, world_from_instance: self.gs.transform(), loc });
             }
             Directive::Option(name, value) => self.option(&name, &value, &loc)?,
             Directive::PixelFilter(name, params) => {
@@ -730,12 +607,7 @@ impl ParserTarget for SceneBuilder {
             }
             Directive::Scale(s) => self.gs.apply(|t| t * transform::scale(s)),
             Directive::Shape(name, params) => self.shape(name, params, loc)?,
-            Directive::Texture {
-                name,
-                value_type,
-                class,
-                params,
-            } => {
+            Directive::Texture { name, value_type, class, params } => {
                 self.world_only("Texture", &loc)?;
                 let (value, names) = match value_type.as_str() {
                     "float" => (TextureValue::Float, &mut self.float_texture_names),
@@ -743,18 +615,14 @@ impl ParserTarget for SceneBuilder {
                     _ => {
                         return Err(Error::new(
                             &loc,
-                            format!(
-                                "texture type \"{value_type}\" unknown: must be \"float\" or \"spectrum\""
-                            ),
+                            format!("texture type \"{value_type}\" unknown: must be \"float\" or \"spectrum\""),
                         ));
                     }
                 };
                 if !names.insert(name.clone()) {
                     return Err(Error::new(&loc, format!("texture \"{name}\" redefined")));
                 }
-                let entity = self
-                    .gs
-                    .entity(class, params, &self.gs.texture_attributes, loc);
+                let entity = self.gs.entity(class, params, &self.gs.texture_attributes, loc);
                 self.scene.textures.push(TextureEntity {
                     name,
                     value,
@@ -774,8 +642,7 @@ impl ParserTarget for SceneBuilder {
                 self.block = Block::World;
                 self.gs.ctm = [DMat4::IDENTITY; 2];
                 self.gs.active = ActiveTransform::All;
-                self.named_coordinate_systems
-                    .insert("world".into(), self.gs.ctm);
+                self.named_coordinate_systems.insert("world".into(), self.gs.ctm);
             }
         }
         Ok(())
@@ -787,11 +654,7 @@ impl ParserTarget for SceneBuilder {
 
     fn import_begin(&mut self, loc: &FileLoc) -> Result<()> {
         self.world_only("Import", loc)?;
-        self.imports.push((
-            self.gs.clone(),
-            self.pushed.len(),
-            self.named_coordinate_systems.clone(),
-        ));
+        self.imports.push((self.gs.clone(), self.pushed.len(), self.named_coordinate_systems.clone()));
         Ok(())
     }
 
@@ -801,9 +664,7 @@ impl ParserTarget for SceneBuilder {
             let (_, _, open) = self.pushed.last().expect("deeper than at import");
             return Err(Error::new(
                 open,
-                format!(
-                    "AttributeBegin has no matching AttributeEnd in the file imported at {loc}"
-                ),
+                format!("AttributeBegin has no matching AttributeEnd in the file imported at {loc}"),
             ));
         }
         self.gs = gs;

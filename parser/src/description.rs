@@ -61,12 +61,7 @@ pub struct AnimatedTransform {
 impl AnimatedTransform {
     /// A transform that does not move.
     pub fn fixed(m: DMat4) -> AnimatedTransform {
-        AnimatedTransform {
-            start: m,
-            end: m,
-            start_time: 0.0,
-            end_time: 1.0,
-        }
+        AnimatedTransform { start: m, end: m, start_time: 0.0, end_time: 1.0 }
     }
 
     /// True when the start and end transforms differ.
@@ -307,9 +302,7 @@ impl SceneDescription {
 
     /// The texture `name` of the given value type.
     pub fn texture(&self, name: &str, value: TextureValue) -> Option<&TextureEntity> {
-        self.textures
-            .iter()
-            .find(|t| t.name == name && t.value == value)
+        self.textures.iter().find(|t| t.name == name && t.value == value)
     }
 
     /// The material entity a shape refers to.

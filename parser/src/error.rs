@@ -18,18 +18,12 @@ pub struct Error {
 impl Error {
     /// An error at `loc`.
     pub fn new(loc: &FileLoc, message: impl Into<String>) -> Error {
-        Error {
-            loc: Some(loc.clone()),
-            message: message.into(),
-        }
+        Error { loc: Some(loc.clone()), message: message.into() }
     }
 
     /// An error that belongs to no particular place.
     pub fn general(message: impl Into<String>) -> Error {
-        Error {
-            loc: None,
-            message: message.into(),
-        }
+        Error { loc: None, message: message.into() }
     }
 }
 
@@ -58,10 +52,7 @@ pub struct Warning {
 impl Warning {
     /// A warning at `loc`.
     pub fn new(loc: &FileLoc, message: impl Into<String>) -> Warning {
-        Warning {
-            loc: Some(loc.clone()),
-            message: message.into(),
-        }
+        Warning { loc: Some(loc.clone()), message: message.into() }
     }
 }
 
@@ -76,9 +67,6 @@ impl fmt::Display for Warning {
 
 impl From<Warning> for Error {
     fn from(w: Warning) -> Error {
-        Error {
-            loc: w.loc,
-            message: w.message,
-        }
+        Error { loc: w.loc, message: w.message }
     }
 }

@@ -33,16 +33,15 @@ use std::path::Path;
 
 pub use builder::SceneBuilder;
 pub use description::{
-    AnimatedTransform, CameraEntity, ColorSpace, Entity, InstanceDefinition, InstanceUse,
-    LightEntity, MaterialRef, MediumEntity, MediumInterface, NamedMaterialEntity, SceneDescription,
-    SceneOptions, ShapeEntity, TextureEntity, TextureValue,
+    AnimatedTransform, CameraEntity, ColorSpace, Entity, InstanceDefinition, InstanceUse, LightEntity, MaterialRef,
+    MediumEntity, MediumInterface, NamedMaterialEntity, SceneDescription, SceneOptions, ShapeEntity, TextureEntity,
+    TextureValue,
 };
 pub use directive::{ActiveTransform, Directive};
 pub use error::{Error, Result, Warning};
 pub use loc::FileLoc;
 pub use params::{
-    FloatOrTexture, Param, ParamType, ParamValues, ParameterDictionary, SpectrumOrTexture,
-    SpectrumParam, SpectrumValue,
+    FloatOrTexture, Param, ParamType, ParamValues, ParameterDictionary, SpectrumOrTexture, SpectrumParam, SpectrumValue,
 };
 pub use parser::{DirectiveRecorder, ParserTarget, parse_bytes, parse_file, parse_str};
 pub use printer::{directive_to_string, quote, to_pbrt};

@@ -38,11 +38,7 @@ impl FileLoc {
     /// ones are taken relative to [`FileLoc::directory`].
     pub fn resolve(&self, path: &str) -> PathBuf {
         let p = Path::new(path);
-        if p.is_absolute() {
-            p.to_path_buf()
-        } else {
-            self.directory().join(p)
-        }
+        if p.is_absolute() { p.to_path_buf() } else { self.directory().join(p) }
     }
 }
 

@@ -4,8 +4,8 @@
 
 /// Powers of ten that are exact in an `f64`.
 const POW10: [f64; 23] = [
-    1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16,
-    1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
+    1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16, 1e17, 1e18, 1e19, 1e20,
+    1e21, 1e22,
 ];
 
 /// Parses a decimal floating-point number (`-1`, `2.5`, `.5`, `1e-3`, `+4.`). Rejects
@@ -85,11 +85,7 @@ pub(crate) fn parse_f64(s: &[u8]) -> Option<f64> {
     }
     let value = if exact && mantissa < (1u64 << 53) && (-22..=22).contains(&exp10) {
         let m = mantissa as f64;
-        if exp10 >= 0 {
-            m * POW10[exp10 as usize]
-        } else {
-            m / POW10[(-exp10) as usize]
-        }
+        if exp10 >= 0 { m * POW10[exp10 as usize] } else { m / POW10[(-exp10) as usize] }
     } else {
         // Rare: long mantissas or large exponents. The syntax is already validated, so the
         // standard library's correctly rounded parser accepts it.
@@ -168,9 +164,7 @@ mod tests {
 
     #[test]
     fn rejects_non_numbers() {
-        for s in [
-            "", "-", ".", "e5", "1e", "1.2.3", "inf", "nan", "NaN", "0x10", "1,5", "--1", "1e+",
-        ] {
+        for s in ["", "-", ".", "e5", "1e", "1.2.3", "inf", "nan", "NaN", "0x10", "1,5", "--1", "1e+"] {
             assert_eq!(parse_f64(s.as_bytes()), None, "{s}");
         }
     }

@@ -170,14 +170,7 @@ impl PartialEq for Param {
 impl Param {
     /// A parameter as parsed at `loc`.
     pub fn new(ty: ParamType, name: impl Into<String>, values: ParamValues, loc: FileLoc) -> Param {
-        Param {
-            ty,
-            name: name.into(),
-            values,
-            loc,
-            looked_up: AtomicBool::new(false),
-            may_be_unused: false,
-        }
+        Param { ty, name: name.into(), values, loc, looked_up: AtomicBool::new(false), may_be_unused: false }
     }
 
     /// Marks the parameter as an `Attribute` default, which entities may ignore.
@@ -257,12 +250,7 @@ impl ParameterDictionary {
     pub fn new(own: Vec<Param>, defaults: &[Param]) -> ParameterDictionary {
         let mut params = own;
         params.reverse();
-        params.extend(
-            defaults
-                .iter()
-                .rev()
-                .map(|p| p.clone().into_attribute_default()),
-        );
+        params.extend(defaults.iter().rev().map(|p| p.clone().into_attribute_default()));
         ParameterDictionary { params }
     }
 
@@ -301,12 +289,7 @@ impl ParameterDictionary {
                 let list: Vec<&str> = accepted.iter().map(|t| t.name()).collect();
                 return Err(Error::new(
                     &p.loc,
-                    format!(
-                        "parameter \"{}\" has type \"{}\" but must be {}",
-                        name,
-                        p.ty,
-                        quoted_alternatives(&list)
-                    ),
+                    format!("parameter \"{}\" has type \"{}\" but must be {}", name, p.ty, quoted_alternatives(&list)),
                 ));
             }
         }
@@ -324,9 +307,7 @@ impl ParameterDictionary {
 
     /// A single `float`, or `default`.
     pub fn get_one_float(&self, name: &str, default: f32) -> Result<f32> {
-        Ok(self
-            .one_float_item(name, ParamType::Float)?
-            .map_or(default, |v| v[0]))
+        Ok(self.one_float_item(name, ParamType::Float)?.map_or(default, |v| v[0]))
     }
 
     /// A single `float` if given.
@@ -344,10 +325,7 @@ impl ParameterDictionary {
                 check_single(p, v.len(), 1)?;
                 Ok(v[0])
             }
-            _ => Err(Error::new(
-                &p.loc,
-                format!("parameter \"{name}\" holds no integers"),
-            )),
+            _ => Err(Error::new(&p.loc, format!("parameter \"{name}\" holds no integers"))),
         }
     }
 
@@ -361,10 +339,7 @@ impl ParameterDictionary {
                 check_single(p, v.len(), 1)?;
                 Ok(v[0])
             }
-            _ => Err(Error::new(
-                &p.loc,
-                format!("parameter \"{name}\" holds no Boolean values"),
-            )),
+            _ => Err(Error::new(&p.loc, format!("parameter \"{name}\" holds no Boolean values"))),
         }
     }
 
@@ -378,10 +353,7 @@ impl ParameterDictionary {
                 check_single(p, v.len(), 1)?;
                 Ok(Some(&v[0]))
             }
-            _ => Err(Error::new(
-                &p.loc,
-                format!("parameter \"{name}\" holds no strings"),
-            )),
+            _ => Err(Error::new(&p.loc, format!("parameter \"{name}\" holds no strings"))),
         }
     }
 
@@ -392,37 +364,27 @@ impl ParameterDictionary {
 
     /// A single `point2`, or `default`.
     pub fn get_one_point2(&self, name: &str, default: [f32; 2]) -> Result<[f32; 2]> {
-        Ok(self
-            .one_float_item(name, ParamType::Point2)?
-            .map_or(default, |v| [v[0], v[1]]))
+        Ok(self.one_float_item(name, ParamType::Point2)?.map_or(default, |v| [v[0], v[1]]))
     }
 
     /// A single `vector2`, or `default`.
     pub fn get_one_vector2(&self, name: &str, default: [f32; 2]) -> Result<[f32; 2]> {
-        Ok(self
-            .one_float_item(name, ParamType::Vector2)?
-            .map_or(default, |v| [v[0], v[1]]))
+        Ok(self.one_float_item(name, ParamType::Vector2)?.map_or(default, |v| [v[0], v[1]]))
     }
 
     /// A single `point3`, or `default`.
     pub fn get_one_point3(&self, name: &str, default: [f32; 3]) -> Result<[f32; 3]> {
-        Ok(self
-            .one_float_item(name, ParamType::Point3)?
-            .map_or(default, |v| [v[0], v[1], v[2]]))
+        Ok(self.one_float_item(name, ParamType::Point3)?.map_or(default, |v| [v[0], v[1], v[2]]))
     }
 
     /// A single `vector3`, or `default`.
     pub fn get_one_vector3(&self, name: &str, default: [f32; 3]) -> Result<[f32; 3]> {
-        Ok(self
-            .one_float_item(name, ParamType::Vector3)?
-            .map_or(default, |v| [v[0], v[1], v[2]]))
+        Ok(self.one_float_item(name, ParamType::Vector3)?.map_or(default, |v| [v[0], v[1], v[2]]))
     }
 
     /// A single `normal`, or `default`.
     pub fn get_one_normal(&self, name: &str, default: [f32; 3]) -> Result<[f32; 3]> {
-        Ok(self
-            .one_float_item(name, ParamType::Normal)?
-            .map_or(default, |v| [v[0], v[1], v[2]]))
+        Ok(self.one_float_item(name, ParamType::Normal)?.map_or(default, |v| [v[0], v[1], v[2]]))
     }
 
     fn float_array(&self, name: &str, ty: ParamType) -> Result<&[f32]> {
@@ -431,10 +393,7 @@ impl ParameterDictionary {
         };
         let v = p.floats();
         if v.is_empty() {
-            return Err(Error::new(
-                &p.loc,
-                format!("no values provided for \"{name}\""),
-            ));
+            return Err(Error::new(&p.loc, format!("no values provided for \"{name}\"")));
         }
         // The parser already checked that the count is a multiple of the item size.
         Ok(v)
@@ -452,10 +411,7 @@ impl ParameterDictionary {
         };
         match &p.values {
             ParamValues::Ints(v) if !v.is_empty() => Ok(v),
-            _ => Err(Error::new(
-                &p.loc,
-                format!("no values provided for \"{name}\""),
-            )),
+            _ => Err(Error::new(&p.loc, format!("no values provided for \"{name}\""))),
         }
     }
 
@@ -466,51 +422,33 @@ impl ParameterDictionary {
         };
         match &p.values {
             ParamValues::Strings(v) if !v.is_empty() => Ok(v),
-            _ => Err(Error::new(
-                &p.loc,
-                format!("no values provided for \"{name}\""),
-            )),
+            _ => Err(Error::new(&p.loc, format!("no values provided for \"{name}\""))),
         }
     }
 
     /// All items of a `point2` array.
     pub fn get_point2s(&self, name: &str) -> Result<&[[f32; 2]]> {
-        Ok(self
-            .float_array(name, ParamType::Point2)?
-            .as_chunks::<2>()
-            .0)
+        Ok(self.float_array(name, ParamType::Point2)?.as_chunks::<2>().0)
     }
 
     /// All items of a `vector2` array.
     pub fn get_vector2s(&self, name: &str) -> Result<&[[f32; 2]]> {
-        Ok(self
-            .float_array(name, ParamType::Vector2)?
-            .as_chunks::<2>()
-            .0)
+        Ok(self.float_array(name, ParamType::Vector2)?.as_chunks::<2>().0)
     }
 
     /// All items of a `point3` array.
     pub fn get_point3s(&self, name: &str) -> Result<&[[f32; 3]]> {
-        Ok(self
-            .float_array(name, ParamType::Point3)?
-            .as_chunks::<3>()
-            .0)
+        Ok(self.float_array(name, ParamType::Point3)?.as_chunks::<3>().0)
     }
 
     /// All items of a `vector3` array.
     pub fn get_vector3s(&self, name: &str) -> Result<&[[f32; 3]]> {
-        Ok(self
-            .float_array(name, ParamType::Vector3)?
-            .as_chunks::<3>()
-            .0)
+        Ok(self.float_array(name, ParamType::Vector3)?.as_chunks::<3>().0)
     }
 
     /// All items of a `normal` array.
     pub fn get_normals(&self, name: &str) -> Result<&[[f32; 3]]> {
-        Ok(self
-            .float_array(name, ParamType::Normal)?
-            .as_chunks::<3>()
-            .0)
+        Ok(self.float_array(name, ParamType::Normal)?.as_chunks::<3>().0)
     }
 
     /// All items of an `rgb` array.
@@ -520,11 +458,7 @@ impl ParameterDictionary {
 
     /// A single spectrum given as `rgb`, `blackbody` or `spectrum`, if present.
     pub fn get_one_spectrum(&self, name: &str) -> Result<Option<SpectrumParam<'_>>> {
-        let Some(p) = self.find(
-            name,
-            &[ParamType::Rgb, ParamType::Blackbody, ParamType::Spectrum],
-        )?
-        else {
+        let Some(p) = self.find(name, &[ParamType::Rgb, ParamType::Blackbody, ParamType::Spectrum])? else {
             return Ok(None);
         };
         spectrum_of(p).map(Some)
@@ -553,15 +487,8 @@ impl ParameterDictionary {
 
     /// A spectrum given as `rgb`, `blackbody`, `spectrum` or a `texture` name, if present.
     pub fn get_spectrum_or_texture(&self, name: &str) -> Result<Option<SpectrumOrTexture<'_>>> {
-        let Some(p) = self.find(
-            name,
-            &[
-                ParamType::Rgb,
-                ParamType::Blackbody,
-                ParamType::Spectrum,
-                ParamType::Texture,
-            ],
-        )?
+        let Some(p) =
+            self.find(name, &[ParamType::Rgb, ParamType::Blackbody, ParamType::Spectrum, ParamType::Texture])?
         else {
             return Ok(None);
         };
@@ -586,10 +513,7 @@ impl ParameterDictionary {
                     seen.push((p.ty, &p.name));
                 }
             } else if !shadowed {
-                out.push(Warning::new(
-                    &p.loc,
-                    format!("\"{} {}\": unused parameter", p.ty, p.name),
-                ));
+                out.push(Warning::new(&p.loc, format!("\"{} {}\": unused parameter", p.ty, p.name)));
             }
         }
         out
@@ -609,18 +533,12 @@ fn quoted_alternatives(list: &[&str]) -> String {
 
 fn check_single(p: &Param, len: usize, per_item: usize) -> Result<()> {
     if len == 0 {
-        return Err(Error::new(
-            &p.loc,
-            format!("no values provided for parameter \"{}\"", p.name),
-        ));
+        return Err(Error::new(&p.loc, format!("no values provided for parameter \"{}\"", p.name)));
     }
     if len > per_item {
         return Err(Error::new(
             &p.loc,
-            format!(
-                "more than one value provided for parameter \"{}\" (expected one {})",
-                p.name, p.ty
-            ),
+            format!("more than one value provided for parameter \"{}\" (expected one {})", p.name, p.ty),
         ));
     }
     Ok(())
@@ -629,14 +547,10 @@ fn check_single(p: &Param, len: usize, per_item: usize) -> Result<()> {
 fn texture_name(p: &Param) -> Result<&str> {
     match &p.values {
         ParamValues::Strings(v) if v.len() == 1 => Ok(&v[0]),
-        ParamValues::Strings(v) if v.len() > 1 => Err(Error::new(
-            &p.loc,
-            format!("more than one texture name provided for \"{}\"", p.name),
-        )),
-        _ => Err(Error::new(
-            &p.loc,
-            format!("no texture name provided for \"{}\"", p.name),
-        )),
+        ParamValues::Strings(v) if v.len() > 1 => {
+            Err(Error::new(&p.loc, format!("more than one texture name provided for \"{}\"", p.name)))
+        }
+        _ => Err(Error::new(&p.loc, format!("no texture name provided for \"{}\"", p.name))),
     }
 }
 
@@ -652,10 +566,7 @@ fn spectrum_of(p: &Param) -> Result<SpectrumParam<'_>> {
         }
         (ParamType::Spectrum, ParamValues::Floats(v)) => {
             if v.is_empty() {
-                return Err(Error::new(
-                    &p.loc,
-                    format!("no values provided for \"{}\"", p.name),
-                ));
+                return Err(Error::new(&p.loc, format!("no values provided for \"{}\"", p.name)));
             }
             SpectrumValue::Samples(v)
         }
@@ -664,10 +575,7 @@ fn spectrum_of(p: &Param) -> Result<SpectrumParam<'_>> {
             SpectrumValue::Named(&v[0])
         }
         _ => {
-            return Err(Error::new(
-                &p.loc,
-                format!("no values provided for \"{}\"", p.name),
-            ));
+            return Err(Error::new(&p.loc, format!("no values provided for \"{}\"", p.name)));
         }
     };
     Ok(SpectrumParam { value, loc: &p.loc })
@@ -683,89 +591,51 @@ mod tests {
     }
 
     fn float(name: &str, v: &[f32], line: u32) -> Param {
-        Param::new(
-            ParamType::Float,
-            name,
-            ParamValues::Floats(v.to_vec()),
-            loc(line),
-        )
+        Param::new(ParamType::Float, name, ParamValues::Floats(v.to_vec()), loc(line))
     }
 
     #[test]
     fn last_occurrence_wins_and_shadowed_is_not_unused() {
-        let d = ParameterDictionary::new(
-            vec![float("fov", &[30.0], 1), float("fov", &[45.0], 2)],
-            &[],
-        );
+        let d = ParameterDictionary::new(vec![float("fov", &[30.0], 1), float("fov", &[45.0], 2)], &[]);
         assert_eq!(d.get_one_float("fov", 90.0).unwrap(), 45.0);
         assert!(d.report_unused().is_empty());
     }
 
     #[test]
     fn unused_parameters_are_named() {
-        let d = ParameterDictionary::new(
-            vec![float("fov", &[30.0], 1), float("lensradius", &[0.1], 2)],
-            &[],
-        );
+        let d = ParameterDictionary::new(vec![float("fov", &[30.0], 1), float("lensradius", &[0.1], 2)], &[]);
         d.get_one_float("fov", 90.0).unwrap();
         let w = d.report_unused();
         assert_eq!(w.len(), 1);
-        assert_eq!(
-            w[0].to_string(),
-            "t.pbrt:2:1: \"float lensradius\": unused parameter"
-        );
+        assert_eq!(w[0].to_string(), "t.pbrt:2:1: \"float lensradius\": unused parameter");
     }
 
     #[test]
     fn wrong_type_is_an_error() {
-        let p = Param::new(
-            ParamType::Integer,
-            "fov",
-            ParamValues::Ints(vec![30]),
-            loc(3),
-        );
+        let p = Param::new(ParamType::Integer, "fov", ParamValues::Ints(vec![30]), loc(3));
         let d = ParameterDictionary::new(vec![p], &[]);
         let e = d.get_one_float("fov", 90.0).unwrap_err();
-        assert_eq!(
-            e.to_string(),
-            "t.pbrt:3:1: parameter \"fov\" has type \"integer\" but must be \"float\""
-        );
+        assert_eq!(e.to_string(), "t.pbrt:3:1: parameter \"fov\" has type \"integer\" but must be \"float\"");
     }
 
     #[test]
     fn too_many_values_is_an_error() {
         let d = ParameterDictionary::new(vec![float("fov", &[30.0, 40.0], 4)], &[]);
-        assert!(
-            d.get_one_float("fov", 90.0)
-                .unwrap_err()
-                .message
-                .contains("more than one value")
-        );
+        assert!(d.get_one_float("fov", 90.0).unwrap_err().message.contains("more than one value"));
     }
 
     #[test]
     fn attribute_defaults_apply_and_may_go_unused() {
-        let d = ParameterDictionary::new(
-            vec![],
-            &[float("radius", &[2.0], 1), float("other", &[1.0], 2)],
-        );
+        let d = ParameterDictionary::new(vec![], &[float("radius", &[2.0], 1), float("other", &[1.0], 2)]);
         assert_eq!(d.get_one_float("radius", 1.0).unwrap(), 2.0);
         assert!(d.report_unused().is_empty());
-        let own = ParameterDictionary::new(
-            vec![float("radius", &[3.0], 5)],
-            &[float("radius", &[2.0], 1)],
-        );
+        let own = ParameterDictionary::new(vec![float("radius", &[3.0], 5)], &[float("radius", &[2.0], 1)]);
         assert_eq!(own.get_one_float("radius", 1.0).unwrap(), 3.0);
     }
 
     #[test]
     fn arrays_come_back_as_items() {
-        let p = Param::new(
-            ParamType::Point3,
-            "P",
-            ParamValues::Floats(vec![0., 1., 2., 3., 4., 5.]),
-            loc(1),
-        );
+        let p = Param::new(ParamType::Point3, "P", ParamValues::Floats(vec![0., 1., 2., 3., 4., 5.]), loc(1));
         let d = ParameterDictionary::new(vec![p], &[]);
         assert_eq!(d.get_point3s("P").unwrap(), &[[0., 1., 2.], [3., 4., 5.]]);
         assert!(d.get_point3s("missing").unwrap().is_empty());
@@ -773,18 +643,8 @@ mod tests {
 
     #[test]
     fn spectra_and_textures() {
-        let rgb = Param::new(
-            ParamType::Rgb,
-            "reflectance",
-            ParamValues::Floats(vec![0.5, 0.25, 0.125]),
-            loc(1),
-        );
-        let tex = Param::new(
-            ParamType::Texture,
-            "roughness",
-            ParamValues::Strings(vec!["r".into()]),
-            loc(2),
-        );
+        let rgb = Param::new(ParamType::Rgb, "reflectance", ParamValues::Floats(vec![0.5, 0.25, 0.125]), loc(1));
+        let tex = Param::new(ParamType::Texture, "roughness", ParamValues::Strings(vec!["r".into()]), loc(2));
         let d = ParameterDictionary::new(vec![rgb, tex], &[]);
         match d.get_spectrum_or_texture("reflectance").unwrap() {
             Some(SpectrumOrTexture::Value(s)) => {

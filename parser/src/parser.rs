@@ -61,13 +61,8 @@ impl ParserTarget for DirectiveRecorder {
 
 /// Reads a file into `target`. `.gz` files are decompressed; `-` is standard input.
 pub fn parse_file(path: &Path, target: &mut dyn ParserTarget) -> Result<()> {
-    let name: Arc<str> = if path.as_os_str() == "-" {
-        Arc::from("<stdin>")
-    } else {
-        Arc::from(path.to_string_lossy())
-    };
-    let data = read_source(path)
-        .map_err(|e| Error::general(format!("{name}: cannot read scene file: {e}")))?;
+    let name: Arc<str> = if path.as_os_str() == "-" { Arc::from("<stdin>") } else { Arc::from(path.to_string_lossy()) };
+    let data = read_source(path).map_err(|e| Error::general(format!("{name}: cannot read scene file: {e}")))?;
     target.file_read(&name);
     parse_stream(TokenStream::new(name, data)?, target, 0)
 }
@@ -76,11 +71,7 @@ pub fn parse_file(path: &Path, target: &mut dyn ParserTarget) -> Result<()> {
 /// resolve against its directory.
 pub fn parse_str(text: &str, name: &str, target: &mut dyn ParserTarget) -> Result<()> {
     target.file_read(name);
-    parse_stream(
-        TokenStream::new(Arc::from(name), text.as_bytes().to_vec())?,
-        target,
-        0,
-    )
+    parse_stream(TokenStream::new(Arc::from(name), text.as_bytes().to_vec())?, target, 0)
 }
 
 /// Reads scene bytes (which need not be UTF-8: errors say so) into `target`.
@@ -89,18 +80,11 @@ pub fn parse_bytes(data: &[u8], name: &str, target: &mut dyn ParserTarget) -> Re
     parse_stream(TokenStream::new(Arc::from(name), data.to_vec())?, target, 0)
 }
 
-fn parse_stream(
-    mut s: TokenStream,
-    target: &mut dyn ParserTarget,
-    import_depth: usize,
-) -> Result<()> {
+fn parse_stream(mut s: TokenStream, target: &mut dyn ParserTarget, import_depth: usize) -> Result<()> {
     while let Some(tok) = s.next()? {
         let loc = s.loc(&tok);
         if tok.kind != TokenKind::Word {
-            return Err(Error::new(
-                &loc,
-                format!("expected a directive, found {}", describe(&s, &tok)),
-            ));
+            return Err(Error::new(&loc, format!("expected a directive, found {}", describe(&s, &tok))));
         }
         let directive = match s.bytes(&tok) {
             b"Accelerator" => named(&mut s, Directive::Accelerator)?,
@@ -113,10 +97,7 @@ fn parse_stream(
                     _ => {
                         return Err(Error::new(
                             &s.loc(&t),
-                            format!(
-                                "ActiveTransform takes All, StartTime or EndTime, not {}",
-                                describe(&s, &t)
-                            ),
+                            format!("ActiveTransform takes All, StartTime or EndTime, not {}", describe(&s, &t)),
                         ));
                     }
                 })
@@ -128,12 +109,8 @@ fn parse_stream(
             b"Camera" => named(&mut s, Directive::Camera)?,
             b"ColorSpace" => Directive::ColorSpace(string(&mut s, "a color space name")?),
             b"ConcatTransform" => Directive::ConcatTransform(matrix(&mut s, "ConcatTransform")?),
-            b"CoordinateSystem" => {
-                Directive::CoordinateSystem(string(&mut s, "a coordinate system name")?)
-            }
-            b"CoordSysTransform" => {
-                Directive::CoordSysTransform(string(&mut s, "a coordinate system name")?)
-            }
+            b"CoordinateSystem" => Directive::CoordinateSystem(string(&mut s, "a coordinate system name")?),
+            b"CoordSysTransform" => Directive::CoordSysTransform(string(&mut s, "a coordinate system name")?),
             b"Film" => named(&mut s, Directive::Film)?,
             b"Identity" => Directive::Identity,
             b"Include" => {
@@ -141,10 +118,7 @@ fn parse_stream(
                 if target.follow_files() {
                     let path = loc.resolve(&file);
                     let data = read_source(&path).map_err(|e| {
-                        Error::new(
-                            &loc,
-                            format!("Include \"{file}\": cannot read {}: {e}", path.display()),
-                        )
+                        Error::new(&loc, format!("Include \"{file}\": cannot read {}: {e}", path.display()))
                     })?;
                     let name: Arc<str> = Arc::from(path.to_string_lossy());
                     target.file_read(&name);
@@ -157,17 +131,11 @@ fn parse_stream(
                 let file = string(&mut s, "a file name after Import")?;
                 if target.follow_files() {
                     if import_depth >= MAX_IMPORT_DEPTH {
-                        return Err(Error::new(
-                            &loc,
-                            "Import nested too deeply (does a file import itself?)",
-                        ));
+                        return Err(Error::new(&loc, "Import nested too deeply (does a file import itself?)"));
                     }
                     let path = loc.resolve(&file);
                     let data = read_source(&path).map_err(|e| {
-                        Error::new(
-                            &loc,
-                            format!("Import \"{file}\": cannot read {}: {e}", path.display()),
-                        )
+                        Error::new(&loc, format!("Import \"{file}\": cannot read {}: {e}", path.display()))
                     })?;
                     let name: Arc<str> = Arc::from(path.to_string_lossy());
                     target.file_read(&name);
@@ -226,12 +194,7 @@ fn parse_stream(
                 let value_type = string(&mut s, "the texture type (\"float\" or \"spectrum\")")?;
                 let class = string(&mut s, "the texture class")?;
                 let params = parameters(&mut s)?;
-                Directive::Texture {
-                    name,
-                    value_type,
-                    class,
-                    params,
-                }
+                Directive::Texture { name, value_type, class, params }
             }
             b"Transform" => Directive::Transform(matrix(&mut s, "Transform")?),
             b"TransformBegin" => Directive::TransformBegin,
@@ -249,10 +212,7 @@ fn parse_stream(
                 ));
             }
             _ => {
-                return Err(Error::new(
-                    &loc,
-                    format!("unknown directive {}", describe(&s, &tok)),
-                ));
+                return Err(Error::new(&loc, format!("unknown directive {}", describe(&s, &tok))));
             }
         };
         target.directive(directive, loc)?;
@@ -275,13 +235,7 @@ fn string(s: &mut TokenStream, what: &str) -> Result<String> {
     let t = s.expect(what)?;
     match t.kind {
         TokenKind::Str { .. } => s.text(&t),
-        _ => Err(Error::new(
-            &s.loc(&t),
-            format!(
-                "expected {what} as a quoted string, found {}",
-                describe(s, &t)
-            ),
-        )),
+        _ => Err(Error::new(&s.loc(&t), format!("expected {what} as a quoted string, found {}", describe(s, &t)))),
     }
 }
 
@@ -293,15 +247,9 @@ fn number(s: &mut TokenStream, what: &str) -> Result<f64> {
         if v.is_finite() {
             return Ok(v);
         }
-        return Err(Error::new(
-            &s.loc(&t),
-            format!("{}: number out of range", describe(s, &t)),
-        ));
+        return Err(Error::new(&s.loc(&t), format!("{}: number out of range", describe(s, &t))));
     }
-    Err(Error::new(
-        &s.loc(&t),
-        format!("expected a number for {what}, found {}", describe(s, &t)),
-    ))
+    Err(Error::new(&s.loc(&t), format!("expected a number for {what}, found {}", describe(s, &t))))
 }
 
 fn numbers<const N: usize>(s: &mut TokenStream, what: &str) -> Result<[f64; N]> {
@@ -317,10 +265,7 @@ fn matrix(s: &mut TokenStream, what: &str) -> Result<[f64; 16]> {
     if open.kind != TokenKind::Open {
         return Err(Error::new(
             &s.loc(&open),
-            format!(
-                "{what} expects '[' and 16 numbers, found {}",
-                describe(s, &open)
-            ),
+            format!("{what} expects '[' and 16 numbers, found {}", describe(s, &open)),
         ));
     }
     let m = numbers::<16>(s, what)?;
@@ -328,10 +273,7 @@ fn matrix(s: &mut TokenStream, what: &str) -> Result<[f64; 16]> {
     if close.kind != TokenKind::Close {
         return Err(Error::new(
             &s.loc(&close),
-            format!(
-                "{what} takes exactly 16 numbers; found {} where ']' should be",
-                describe(s, &close)
-            ),
+            format!("{what} takes exactly 16 numbers; found {} where ']' should be", describe(s, &close)),
         ));
     }
     Ok(m)
@@ -360,9 +302,7 @@ fn parameters(s: &mut TokenStream) -> Result<Vec<Param>> {
         let (Some(type_name), Some(name), None) = (words.next(), words.next(), words.next()) else {
             return Err(Error::new(
                 &loc,
-                format!(
-                    "\"{text}\": a parameter declaration is \"type name\" (e.g. \"float radius\")"
-                ),
+                format!("\"{text}\": a parameter declaration is \"type name\" (e.g. \"float radius\")"),
             ));
         };
         let ty = ParamType::from_name(type_name).ok_or_else(|| {
@@ -373,10 +313,7 @@ fn parameters(s: &mut TokenStream) -> Result<Vec<Param>> {
                 "normal3" => " (use \"normal\")",
                 _ => "",
             };
-            Error::new(
-                &loc,
-                format!("\"{type_name}\": unknown parameter type{hint}"),
-            )
+            Error::new(&loc, format!("\"{type_name}\": unknown parameter type{hint}"))
         })?;
         let values = parameter_values(s, ty, name, &loc)?;
         params.push(Param::new(ty, name, values, loc));
@@ -392,12 +329,7 @@ enum Acc {
     Bools(Vec<bool>),
 }
 
-fn parameter_values(
-    s: &mut TokenStream,
-    ty: ParamType,
-    name: &str,
-    loc: &FileLoc,
-) -> Result<ParamValues> {
+fn parameter_values(s: &mut TokenStream, ty: ParamType, name: &str, loc: &FileLoc) -> Result<ParamValues> {
     let first = s.expect_with(|| format!("a value for parameter \"{name}\""))?;
     let mut acc = Acc::Empty;
     if first.kind == TokenKind::Open {
@@ -428,18 +360,14 @@ fn parameter_values(
     if n % per != 0 {
         return Err(Error::new(
             loc,
-            format!(
-                "\"{ty} {name}\": {n} values given, but a {ty} takes {per}: the count must be a multiple of {per}"
-            ),
+            format!("\"{ty} {name}\": {n} values given, but a {ty} takes {per}: the count must be a multiple of {per}"),
         ));
     }
     if ty == ParamType::Spectrum && matches!(values, ParamValues::Floats(_)) {
         if n % 2 != 0 {
             return Err(Error::new(
                 loc,
-                format!(
-                    "\"spectrum {name}\": odd number of values; expected wavelength/value pairs"
-                ),
+                format!("\"spectrum {name}\": odd number of values; expected wavelength/value pairs"),
             ));
         }
         if let ParamValues::Floats(v) = &values {
@@ -463,17 +391,9 @@ fn parameter_values(
 #[inline]
 fn add_value(s: &TokenStream, t: &Token, ty: ParamType, name: &str, acc: &mut Acc) -> Result<()> {
     let is_str = matches!(t.kind, TokenKind::Str { .. });
-    let bad = |what: &str| {
-        Error::new(
-            &s.loc(t),
-            format!("{}: expected {what} for \"{ty} {name}\"", describe(s, t)),
-        )
-    };
+    let bad = |what: &str| Error::new(&s.loc(t), format!("{}: expected {what} for \"{ty} {name}\"", describe(s, t)));
     if !is_str && t.kind != TokenKind::Word {
-        return Err(Error::new(
-            &s.loc(t),
-            format!("unexpected \"[\" inside the values of \"{name}\""),
-        ));
+        return Err(Error::new(&s.loc(t), format!("unexpected \"[\" inside the values of \"{name}\"")));
     }
     match ty {
         ParamType::Integer => {
@@ -483,10 +403,7 @@ fn add_value(s: &TokenStream, t: &Token, ty: ParamType, name: &str, acc: &mut Ac
             let v = match parse_i32(s.bytes(t)) {
                 Ok(v) => v,
                 Err(IntError::Overflow) => {
-                    return Err(Error::new(
-                        &s.loc(t),
-                        format!("{}: too large for a 32-bit integer", describe(s, t)),
-                    ));
+                    return Err(Error::new(&s.loc(t), format!("{}: too large for a 32-bit integer", describe(s, t))));
                 }
                 Err(IntError::NotInteger) => return Err(bad("an integer")),
             };
@@ -518,9 +435,7 @@ fn add_value(s: &TokenStream, t: &Token, ty: ParamType, name: &str, acc: &mut Ac
         }
         ParamType::Spectrum if is_str || matches!(acc, Acc::Strings(_)) => {
             if !is_str {
-                return Err(bad(
-                    "a quoted spectrum name (values cannot mix names and numbers)",
-                ));
+                return Err(bad("a quoted spectrum name (values cannot mix names and numbers)"));
             }
             let v = s.text(t)?;
             match acc {
@@ -536,10 +451,7 @@ fn add_value(s: &TokenStream, t: &Token, ty: ParamType, name: &str, acc: &mut Ac
             let v = parse_f64(s.bytes(t)).ok_or_else(|| bad("a number"))?;
             let f = v as f32;
             if !f.is_finite() {
-                return Err(Error::new(
-                    &s.loc(t),
-                    format!("{}: out of range for a 32-bit float", describe(s, t)),
-                ));
+                return Err(Error::new(&s.loc(t), format!("{}: out of range for a 32-bit float", describe(s, t))));
             }
             match acc {
                 Acc::Floats(vs) => vs.push(f),
@@ -562,10 +474,9 @@ mod tests {
 
     #[test]
     fn parameter_lists() {
-        let d = parse(r#"Shape "sphere" "float radius" 2 "integer indices" [0 1 2] "bool b" true "string s" "x""#).unwrap();
-        let Directive::Shape(name, params) = &d[0] else {
-            panic!()
-        };
+        let d =
+            parse(r#"Shape "sphere" "float radius" 2 "integer indices" [0 1 2] "bool b" true "string s" "x""#).unwrap();
+        let Directive::Shape(name, params) = &d[0] else { panic!() };
         assert_eq!(name, "sphere");
         assert_eq!(params[0].values, ParamValues::Floats(vec![2.0]));
         assert_eq!(params[1].values, ParamValues::Ints(vec![0, 1, 2]));
@@ -576,20 +487,8 @@ mod tests {
     #[test]
     fn medium_interface_with_one_or_two_names() {
         let d = parse(r#"MediumInterface "a" MediumInterface "b" "c""#).unwrap();
-        assert_eq!(
-            d[0],
-            Directive::MediumInterface {
-                inside: "a".into(),
-                outside: "a".into()
-            }
-        );
-        assert_eq!(
-            d[1],
-            Directive::MediumInterface {
-                inside: "b".into(),
-                outside: "c".into()
-            }
-        );
+        assert_eq!(d[0], Directive::MediumInterface { inside: "a".into(), outside: "a".into() });
+        assert_eq!(d[1], Directive::MediumInterface { inside: "b".into(), outside: "c".into() });
     }
 
     #[test]
@@ -597,23 +496,13 @@ mod tests {
         let e = parse("WorldBegin\n  Shpe \"sphere\"").unwrap_err();
         assert_eq!(e.to_string(), "t.pbrt:2:3: unknown directive \"Shpe\"");
         let e = parse("Shape \"sphere\" \"float radius\" [ 1 x ]").unwrap_err();
-        assert_eq!(
-            e.to_string(),
-            "t.pbrt:1:35: \"x\": expected a number for \"float radius\""
-        );
+        assert_eq!(e.to_string(), "t.pbrt:1:35: \"x\": expected a number for \"float radius\"");
         let e = parse("Shape \"sphere\" \"integer n\" 1.5").unwrap_err();
-        assert!(
-            e.to_string()
-                .starts_with("t.pbrt:1:28: \"1.5\": expected an integer"),
-            "{e}"
-        );
+        assert!(e.to_string().starts_with("t.pbrt:1:28: \"1.5\": expected an integer"), "{e}");
         let e = parse("Shape \"trianglemesh\" \"point3 P\" [ 1 2 ]").unwrap_err();
         assert!(e.message.contains("multiple of 3"), "{e}");
         let e = parse("Shape \"sphere\" \"colour c\" [ 1 2 3 ]").unwrap_err();
-        assert_eq!(
-            e.to_string(),
-            "t.pbrt:1:16: \"colour\": unknown parameter type"
-        );
+        assert_eq!(e.to_string(), "t.pbrt:1:16: \"colour\": unknown parameter type");
         let e = parse("Translate 1 2").unwrap_err();
         assert!(e.message.contains("premature end of file"), "{e}");
         let e = parse("Shape \"sphere\" \"float radius\" [ 1 ").unwrap_err();

@@ -109,19 +109,8 @@ pub fn directive_to_string(d: &Directive) -> String {
             };
             let _ = write!(out, " {} {value}", quote(n));
         }
-        Directive::Texture {
-            name,
-            value_type,
-            class,
-            params: p,
-        } => {
-            let _ = write!(
-                out,
-                " {} {} {}",
-                quote(name),
-                quote(value_type),
-                quote(class)
-            );
+        Directive::Texture { name, value_type, class, params: p } => {
+            let _ = write!(out, " {} {} {}", quote(name), quote(value_type), quote(class));
             params(&mut out, p);
         }
         Directive::AttributeBegin

@@ -75,11 +75,7 @@ pub(crate) fn read_source(path: &Path) -> std::io::Result<Vec<u8>> {
 impl TokenStream {
     /// A stream over `data`, which came from the source called `name`.
     pub fn new(name: Arc<str>, data: Vec<u8>) -> Result<TokenStream> {
-        let mut stream = TokenStream {
-            sources: Vec::new(),
-            stack: Vec::new(),
-            pending: None,
-        };
+        let mut stream = TokenStream { sources: Vec::new(), stack: Vec::new(), pending: None };
         stream.push(name, data)?;
         Ok(stream)
     }
@@ -92,13 +88,8 @@ impl TokenStream {
             )));
         }
         let loc = FileLoc::new(name.clone(), 1, 1);
-        if data.len() >= 2
-            && ((data[0] == 0xfe && data[1] == 0xff) || (data[0] == 0xff && data[1] == 0xfe))
-        {
-            return Err(Error::new(
-                &loc,
-                "file is UTF-16 encoded; pbrt scene files must be UTF-8",
-            ));
+        if data.len() >= 2 && ((data[0] == 0xfe && data[1] == 0xff) || (data[0] == 0xff && data[1] == 0xfe)) {
+            return Err(Error::new(&loc, "file is UTF-16 encoded; pbrt scene files must be UTF-8"));
         }
         // A UTF-8 byte order mark carries no meaning: drop it, so that it counts in no
         // column.
@@ -106,15 +97,9 @@ impl TokenStream {
         if data.starts_with(&[0xef, 0xbb, 0xbf]) {
             data.drain(..3);
         }
-        let source = u32::try_from(self.sources.len())
-            .map_err(|_| Error::new(&loc, "too many source files"))?;
+        let source = u32::try_from(self.sources.len()).map_err(|_| Error::new(&loc, "too many source files"))?;
         self.sources.push(Source { name, data });
-        self.stack.push(Cursor {
-            source,
-            pos: 0,
-            line: 1,
-            line_start: 0,
-        });
+        self.stack.push(Cursor { source, pos: 0, line: 1, line_start: 0 });
         Ok(())
     }
 
@@ -125,11 +110,7 @@ impl TokenStream {
 
     /// The location of a token.
     pub fn loc(&self, t: &Token) -> FileLoc {
-        FileLoc::new(
-            self.sources[t.source as usize].name.clone(),
-            t.line,
-            t.column,
-        )
+        FileLoc::new(self.sources[t.source as usize].name.clone(), t.line, t.column)
     }
 
     /// The location where the stream stopped (for "premature end of file").
@@ -165,17 +146,11 @@ impl TokenStream {
                             Some(&c) => {
                                 return Err(Error::new(
                                     &self.loc(t),
-                                    format!(
-                                        "unexpected escaped character '\\{}' in string",
-                                        c.escape_ascii()
-                                    ),
+                                    format!("unexpected escaped character '\\{}' in string", c.escape_ascii()),
                                 ));
                             }
                             None => {
-                                return Err(Error::new(
-                                    &self.loc(t),
-                                    "string ends with a lone '\\'",
-                                ));
+                                return Err(Error::new(&self.loc(t), "string ends with a lone '\\'"));
                             }
                         });
                     } else {
@@ -210,10 +185,7 @@ impl TokenStream {
                     self.stack.pop();
                 }
                 Err((message, line, column)) => {
-                    return Err(Error::new(
-                        &FileLoc::new(source.name.clone(), line, column),
-                        message,
-                    ));
+                    return Err(Error::new(&FileLoc::new(source.name.clone(), line, column), message));
                 }
             }
         }
@@ -231,10 +203,7 @@ impl TokenStream {
     pub fn expect_with(&mut self, what: impl FnOnce() -> String) -> Result<Token> {
         match self.next()? {
             Some(t) => Ok(t),
-            None => Err(Error::new(
-                &self.end_loc(),
-                format!("premature end of file: expected {}", what()),
-            )),
+            None => Err(Error::new(&self.end_loc(), format!("premature end of file: expected {}", what()))),
         }
     }
 }
@@ -242,10 +211,7 @@ impl TokenStream {
 fn line_col_at(data: &[u8], pos: usize) -> (u32, u32) {
     let before = &data[..pos.min(data.len())];
     let line = before.iter().filter(|&&c| c == b'\n').count() + 1;
-    let line_start = before
-        .iter()
-        .rposition(|&c| c == b'\n')
-        .map_or(0, |p| p + 1);
+    let line_start = before.iter().rposition(|&c| c == b'\n').map_or(0, |p| p + 1);
     (line as u32, (pos - line_start + 1) as u32)
 }
 
@@ -278,14 +244,7 @@ fn scan(data: &[u8], c: &mut Cursor) -> std::result::Result<Option<Token>, ScanE
     }
     let line = c.line;
     let column = (pos - c.line_start + 1) as u32;
-    let make = |kind, start, end| Token {
-        kind,
-        source: c.source,
-        start,
-        end,
-        line,
-        column,
-    };
+    let make = |kind, start, end| Token { kind, source: c.source, start, end, line, column };
     let token = match data[pos] {
         b'[' => {
             pos += 1;
@@ -306,28 +265,16 @@ fn scan(data: &[u8], c: &mut Cursor) -> std::result::Result<Option<Token>, ScanE
                 match data[p] {
                     b'"' => break,
                     b'\n' => {
-                        return Err((
-                            "unterminated string: newline before the closing '\"'",
-                            line,
-                            column,
-                        ));
+                        return Err(("unterminated string: newline before the closing '\"'", line, column));
                     }
                     b'\\' => {
                         escaped = true;
                         p += 1;
                         if p >= len {
-                            return Err((
-                                "premature end of file inside a quoted string",
-                                line,
-                                column,
-                            ));
+                            return Err(("premature end of file inside a quoted string", line, column));
                         }
                         if data[p] == b'\n' {
-                            return Err((
-                                "unterminated string: newline before the closing '\"'",
-                                line,
-                                column,
-                            ));
+                            return Err(("unterminated string: newline before the closing '\"'", line, column));
                         }
                         p += 1;
                     }
@@ -339,9 +286,7 @@ fn scan(data: &[u8], c: &mut Cursor) -> std::result::Result<Option<Token>, ScanE
         }
         _ => {
             let start = pos;
-            while pos < len
-                && !matches!(data[pos], b' ' | b'\n' | b'\t' | b'\r' | b'"' | b'[' | b']')
-            {
+            while pos < len && !matches!(data[pos], b' ' | b'\n' | b'\t' | b'\r' | b'"' | b'[' | b']') {
                 pos += 1;
             }
             make(TokenKind::Word, start, pos)
@@ -378,10 +323,7 @@ mod tests {
         let t = tokens(r#""a\"b\\c\n\t""#).unwrap();
         assert_eq!(t[0].1, "a\"b\\c\n\t");
         let err = tokens(r#""a\qb""#).unwrap_err();
-        assert!(
-            err.to_string().contains("unexpected escaped character"),
-            "{err}"
-        );
+        assert!(err.to_string().contains("unexpected escaped character"), "{err}");
     }
 
     #[test]

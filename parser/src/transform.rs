@@ -60,12 +60,7 @@ pub fn look_at(eye: [f64; 3], look: [f64; 3], up: [f64; 3]) -> Option<DMat4> {
     }
     let right = right.normalize();
     let new_up = dir.cross(right);
-    let world_from_camera = DMat4::from_cols(
-        right.extend(0.0),
-        new_up.extend(0.0),
-        dir.extend(0.0),
-        pos.extend(1.0),
-    );
+    let world_from_camera = DMat4::from_cols(right.extend(0.0), new_up.extend(0.0), dir.extend(0.0), pos.extend(1.0));
     Some(world_from_camera.inverse())
 }
 
@@ -102,20 +97,11 @@ mod tests {
     #[test]
     fn look_at_maps_the_eye_to_the_origin_and_the_target_to_plus_z() {
         let m = look_at([0.0, 1.0, 3.4], [0.0, 1.0, 0.0], [0.0, 1.0, 0.0]).unwrap();
-        assert!(close(
-            m.transform_point3(DVec3::new(0.0, 1.0, 3.4)),
-            DVec3::ZERO
-        ));
-        assert!(close(
-            m.transform_point3(DVec3::new(0.0, 1.0, 0.0)),
-            DVec3::new(0.0, 0.0, 3.4)
-        ));
+        assert!(close(m.transform_point3(DVec3::new(0.0, 1.0, 3.4)), DVec3::ZERO));
+        assert!(close(m.transform_point3(DVec3::new(0.0, 1.0, 0.0)), DVec3::new(0.0, 0.0, 3.4)));
         // pbrt's camera space is left-handed: +x is to the left of the view seen from behind
         // when up is +y and the camera looks down -z in world space.
-        assert!(close(
-            m.transform_vector3(DVec3::new(-1.0, 0.0, 0.0)),
-            DVec3::new(1.0, 0.0, 0.0)
-        ));
+        assert!(close(m.transform_vector3(DVec3::new(-1.0, 0.0, 0.0)), DVec3::new(1.0, 0.0, 0.0)));
         assert!(look_at([0.0; 3], [0.0, 1.0, 0.0], [0.0, 1.0, 0.0]).is_none());
     }
 
@@ -128,9 +114,6 @@ mod tests {
         a[15] = 1.0;
         a[12] = 5.0; // translation x in pbrt's layout
         let m = from_pbrt_array(&a);
-        assert!(close(
-            m.transform_point3(DVec3::ZERO),
-            DVec3::new(5.0, 0.0, 0.0)
-        ));
+        assert!(close(m.transform_point3(DVec3::ZERO), DVec3::new(5.0, 0.0, 0.0)));
     }
 }

@@ -68,12 +68,7 @@ pub struct TempDir(tempfile::TempDir);
 
 impl TempDir {
     pub fn new() -> TempDir {
-        TempDir(
-            tempfile::Builder::new()
-                .prefix("nimbus-parser-test-")
-                .tempdir()
-                .expect("create a temporary directory"),
-        )
+        TempDir(tempfile::Builder::new().prefix("nimbus-parser-test-").tempdir().expect("create a temporary directory"))
     }
 
     pub fn path(&self) -> &Path {
@@ -111,10 +106,7 @@ pub fn assert_mat_close(actual: DMat4, expected: DMat4) {
     let a = actual.to_cols_array();
     let e = expected.to_cols_array();
     let ok = a.iter().zip(e.iter()).all(|(x, y)| (x - y).abs() < 1e-9);
-    assert!(
-        ok,
-        "matrices differ:\nactual   {actual:?}\nexpected {expected:?}"
-    );
+    assert!(ok, "matrices differ:\nactual   {actual:?}\nexpected {expected:?}");
 }
 
 /// A matrix given row by row, as matrices are written on paper.

@@ -6,25 +6,16 @@ use crate::common::{load, load_err, load_err_string, parse_err_string, scene};
 
 #[test]
 fn unknown_directive() {
-    assert_eq!(
-        load_err_string("WorldBegin\n  Shpe \"sphere\""),
-        "t.pbrt:2:3: unknown directive \"Shpe\""
-    );
+    assert_eq!(load_err_string("WorldBegin\n  Shpe \"sphere\""), "t.pbrt:2:3: unknown directive \"Shpe\"");
     // Directive names are case-sensitive.
-    assert_eq!(
-        parse_err_string("worldbegin"),
-        "t.pbrt:1:1: unknown directive \"worldbegin\""
-    );
+    assert_eq!(parse_err_string("worldbegin"), "t.pbrt:1:1: unknown directive \"worldbegin\"");
     assert_eq!(
         parse_err_string("WorldBegin\nWorldEnd\n"),
         "t.pbrt:2:1: unknown directive \"WorldEnd\" (a pbrt-v3 directive; pbrt-v4 scenes end without it)"
     );
     // Long words are shortened in the message.
     let long = "X".repeat(70);
-    assert_eq!(
-        parse_err_string(&long),
-        format!("t.pbrt:1:1: unknown directive \"{}...\"", "X".repeat(60))
-    );
+    assert_eq!(parse_err_string(&long), format!("t.pbrt:1:1: unknown directive \"{}...\"", "X".repeat(60)));
 }
 
 #[test]
@@ -53,10 +44,7 @@ fn world_directives_before_world_begin() {
         ("LightSource \"point\"", "LightSource"),
         ("AreaLightSource \"diffuse\"", "AreaLightSource"),
         ("Material \"diffuse\"", "Material"),
-        (
-            "MakeNamedMaterial \"m\" \"string type\" \"diffuse\"",
-            "MakeNamedMaterial",
-        ),
+        ("MakeNamedMaterial \"m\" \"string type\" \"diffuse\"", "MakeNamedMaterial"),
         ("NamedMaterial \"m\"", "NamedMaterial"),
         ("Texture \"t\" \"float\" \"constant\"", "Texture"),
         ("AttributeBegin", "AttributeBegin"),
@@ -95,15 +83,9 @@ fn missing_world_begin() {
     let e = load_err("Camera \"perspective\"\n");
     assert_eq!(
         e,
-        Error {
-            loc: None,
-            message: "end of scene before WorldBegin: a pbrt-v4 scene needs a WorldBegin".into()
-        }
+        Error { loc: None, message: "end of scene before WorldBegin: a pbrt-v4 scene needs a WorldBegin".into() }
     );
-    assert_eq!(
-        e.to_string(),
-        "end of scene before WorldBegin: a pbrt-v4 scene needs a WorldBegin"
-    );
+    assert_eq!(e.to_string(), "end of scene before WorldBegin: a pbrt-v4 scene needs a WorldBegin");
     assert_eq!(
         load_str("", "empty.pbrt").unwrap_err().to_string(),
         "end of scene before WorldBegin: a pbrt-v4 scene needs a WorldBegin"
@@ -133,10 +115,7 @@ fn wrong_parameter_value_count() {
 #[test]
 fn undefined_named_material() {
     assert_eq!(
-        load_err_string(&scene(
-            "",
-            "AttributeBegin\n  NamedMaterial \"gold\"\n  Shape \"sphere\"\nAttributeEnd"
-        )),
+        load_err_string(&scene("", "AttributeBegin\n  NamedMaterial \"gold\"\n  Shape \"sphere\"\nAttributeEnd")),
         "t.pbrt:4:3: named material \"gold\" is not defined"
     );
     // A name nothing uses is not checked; a name defined later is fine.
@@ -159,18 +138,12 @@ fn undefined_medium() {
     );
     // Used by the camera.
     assert_eq!(
-        load_err_string(&scene(
-            "MediumInterface \"fog\"\nCamera \"perspective\"",
-            ""
-        )),
+        load_err_string(&scene("MediumInterface \"fog\"\nCamera \"perspective\"", "")),
         "t.pbrt:1:1: medium \"fog\" is not defined"
     );
     // Used by a light.
     assert_eq!(
-        load_err_string(&scene(
-            "",
-            "MediumInterface \"\" \"air\"\nLightSource \"point\""
-        )),
+        load_err_string(&scene("", "MediumInterface \"\" \"air\"\nLightSource \"point\"")),
         "t.pbrt:3:1: medium \"air\" is not defined"
     );
     // Set but used by nothing: not checked.
@@ -180,10 +153,7 @@ fn undefined_medium() {
 #[test]
 fn undefined_texture() {
     assert_eq!(
-        load_err_string(&scene(
-            "",
-            "Material \"diffuse\"\n    \"texture reflectance\" \"checks\"\nShape \"sphere\""
-        )),
+        load_err_string(&scene("", "Material \"diffuse\"\n    \"texture reflectance\" \"checks\"\nShape \"sphere\"")),
         "t.pbrt:4:5: texture \"checks\" is not defined"
     );
     assert_eq!(
@@ -191,10 +161,7 @@ fn undefined_texture() {
         "t.pbrt:3:16: texture \"mask\" is not defined"
     );
     assert_eq!(
-        load_err_string(&scene(
-            "",
-            "Texture \"mix\" \"float\" \"mix\" \"texture tex1\" \"a\""
-        )),
+        load_err_string(&scene("", "Texture \"mix\" \"float\" \"mix\" \"texture tex1\" \"a\"")),
         "t.pbrt:3:29: texture \"a\" is not defined"
     );
     assert_eq!(
@@ -205,10 +172,7 @@ fn undefined_texture() {
         "t.pbrt:3:47: texture \"t\" is not defined"
     );
     assert_eq!(
-        load_err_string(&scene(
-            "",
-            "LightSource \"projection\" \"texture image\" \"slide\""
-        )),
+        load_err_string(&scene("", "LightSource \"projection\" \"texture image\" \"slide\"")),
         "t.pbrt:3:26: texture \"slide\" is not defined"
     );
     // Float and spectrum textures of those names are both fine.
@@ -238,22 +202,13 @@ fn unterminated_string() {
         parse_err_string("Shape \"sph\\\nere\""),
         "t.pbrt:1:7: unterminated string: newline before the closing '\"'"
     );
-    assert_eq!(
-        parse_err_string("Shape \"sphere"),
-        "t.pbrt:1:7: premature end of file inside a quoted string"
-    );
-    assert_eq!(
-        parse_err_string("Shape \"sphere\\"),
-        "t.pbrt:1:7: premature end of file inside a quoted string"
-    );
+    assert_eq!(parse_err_string("Shape \"sphere"), "t.pbrt:1:7: premature end of file inside a quoted string");
+    assert_eq!(parse_err_string("Shape \"sphere\\"), "t.pbrt:1:7: premature end of file inside a quoted string");
 }
 
 #[test]
 fn bad_escape_in_string() {
-    assert_eq!(
-        parse_err_string("Shape \"s\\qx\""),
-        "t.pbrt:1:7: unexpected escaped character '\\q' in string"
-    );
+    assert_eq!(parse_err_string("Shape \"s\\qx\""), "t.pbrt:1:7: unexpected escaped character '\\q' in string");
 }
 
 #[test]
@@ -264,81 +219,42 @@ fn premature_end_of_file() {
         ("Rotate 1 0 0\n", "2:1", "a number for Rotate"),
         ("Transform [ 1 2", "1:16", "a number for Transform"),
         ("Transform", "1:10", "'[' and 16 numbers"),
-        (
-            "Transform [ 1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1",
-            "1:44",
-            "']' after 16 numbers",
-        ),
+        ("Transform [ 1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1", "1:44", "']' after 16 numbers"),
         ("Shape", "1:6", "a type name"),
-        (
-            "Shape \"s\" \"float r\"",
-            "1:20",
-            "a value for parameter \"r\"",
-        ),
-        (
-            "Shape \"s\" \"float r\" [ 1 2 ",
-            "1:27",
-            "']' to close the values of \"r\"",
-        ),
+        ("Shape \"s\" \"float r\"", "1:20", "a value for parameter \"r\""),
+        ("Shape \"s\" \"float r\" [ 1 2 ", "1:27", "']' to close the values of \"r\""),
         ("Texture \"t\" \"float\"", "1:20", "the texture class"),
         ("Option \"seed\"", "1:14", "an option value"),
-        (
-            "ActiveTransform",
-            "1:16",
-            "All, StartTime or EndTime after ActiveTransform",
-        ),
+        ("ActiveTransform", "1:16", "All, StartTime or EndTime after ActiveTransform"),
         ("Include", "1:8", "a file name after Include"),
         ("Import", "1:7", "a file name after Import"),
-        (
-            "MediumInterface",
-            "1:16",
-            "a medium name after MediumInterface",
-        ),
+        ("MediumInterface", "1:16", "a medium name after MediumInterface"),
         ("ColorSpace", "1:11", "a color space name"),
     ];
     for (text, at, what) in cases {
-        assert_eq!(
-            parse_err_string(text),
-            format!("t.pbrt:{at}: premature end of file: expected {what}"),
-            "{text}"
-        );
+        assert_eq!(parse_err_string(text), format!("t.pbrt:{at}: premature end of file: expected {what}"), "{text}");
     }
 }
 
 #[test]
 fn unbalanced_attribute_blocks() {
+    assert_eq!(load_err_string(&scene("", "AttributeEnd")), "t.pbrt:3:1: AttributeEnd without matching AttributeBegin");
     assert_eq!(
-        load_err_string(&scene("", "AttributeEnd")),
-        "t.pbrt:3:1: AttributeEnd without matching AttributeBegin"
-    );
-    assert_eq!(
-        load_err_string(&scene(
-            "",
-            "AttributeBegin\n  AttributeBegin\n  AttributeEnd"
-        )),
+        load_err_string(&scene("", "AttributeBegin\n  AttributeBegin\n  AttributeEnd")),
         "t.pbrt:3:1: AttributeBegin has no matching AttributeEnd"
     );
     assert_eq!(
         load_err_string(&scene("", "TransformBegin")),
         "t.pbrt:3:1: AttributeBegin has no matching AttributeEnd"
     );
-    assert_eq!(
-        load_err_string(&scene("", "ObjectBegin \"o\"")),
-        "t.pbrt:3:1: ObjectBegin has no matching ObjectEnd"
-    );
-    assert_eq!(
-        load_err_string(&scene("", "ObjectEnd")),
-        "t.pbrt:3:1: ObjectEnd without ObjectBegin"
-    );
+    assert_eq!(load_err_string(&scene("", "ObjectBegin \"o\"")), "t.pbrt:3:1: ObjectBegin has no matching ObjectEnd");
+    assert_eq!(load_err_string(&scene("", "ObjectEnd")), "t.pbrt:3:1: ObjectEnd without ObjectBegin");
     assert_eq!(
         load_err_string(&scene("", "ObjectBegin \"o\"\nAttributeBegin\nObjectEnd")),
         "t.pbrt:5:1: mismatched nesting: ObjectEnd closes the AttributeBegin at t.pbrt:4:1"
     );
     assert_eq!(
-        load_err_string(&scene(
-            "",
-            "AttributeBegin\nObjectBegin \"o\"\nAttributeEnd"
-        )),
+        load_err_string(&scene("", "AttributeBegin\nObjectBegin \"o\"\nAttributeEnd")),
         "t.pbrt:5:1: mismatched nesting: AttributeEnd closes the ObjectBegin at t.pbrt:4:1"
     );
 }
@@ -354,10 +270,7 @@ fn object_definition_errors() {
         "t.pbrt:4:1: ObjectInstance inside an object definition"
     );
     assert_eq!(
-        load_err_string(&scene(
-            "",
-            "ObjectBegin \"a\"\nObjectEnd\nObjectBegin \"a\"\nObjectEnd"
-        )),
+        load_err_string(&scene("", "ObjectBegin \"a\"\nObjectEnd\nObjectBegin \"a\"\nObjectEnd")),
         "t.pbrt:5:1: object \"a\" redefined"
     );
 }
@@ -379,26 +292,17 @@ fn redefinitions() {
         "t.pbrt:3:1: named medium \"f\" redefined"
     );
     assert_eq!(
-        load_err_string(&scene(
-            "",
-            "Texture \"t\" \"float\" \"constant\"\nTexture \"t\" \"float\" \"constant\""
-        )),
+        load_err_string(&scene("", "Texture \"t\" \"float\" \"constant\"\nTexture \"t\" \"float\" \"constant\"")),
         "t.pbrt:4:1: texture \"t\" redefined"
     );
     // A float and a spectrum texture may share a name.
-    load(&scene(
-        "",
-        "Texture \"t\" \"float\" \"constant\"\nTexture \"t\" \"spectrum\" \"constant\"",
-    ));
+    load(&scene("", "Texture \"t\" \"float\" \"constant\"\nTexture \"t\" \"spectrum\" \"constant\""));
 }
 
 #[test]
 fn bad_directive_arguments() {
     let cases = [
-        (
-            "ColorSpace \"adobe\"",
-            "t.pbrt:3:1: unknown color space \"adobe\" (srgb, rec2020, aces2065-1 or dci-p3)",
-        ),
+        ("ColorSpace \"adobe\"", "t.pbrt:3:1: unknown color space \"adobe\" (srgb, rec2020, aces2065-1 or dci-p3)"),
         (
             "Attribute \"camera\" \"float fov\" 30",
             "t.pbrt:3:1: unknown Attribute target \"camera\": must be \"shape\", \"light\", \"material\", \"medium\" or \"texture\"",
@@ -407,26 +311,14 @@ fn bad_directive_arguments() {
             "MakeNamedMaterial \"m\" \"rgb reflectance\" [ 1 1 1 ]",
             "t.pbrt:3:1: MakeNamedMaterial \"m\": missing \"string type\" parameter",
         ),
-        (
-            "MakeNamedMedium \"m\" \"float g\" 0",
-            "t.pbrt:3:1: MakeNamedMedium \"m\": missing \"string type\" parameter",
-        ),
+        ("MakeNamedMedium \"m\" \"float g\" 0", "t.pbrt:3:1: MakeNamedMedium \"m\": missing \"string type\" parameter"),
         (
             "Texture \"t\" \"color\" \"constant\"",
             "t.pbrt:3:1: texture type \"color\" unknown: must be \"float\" or \"spectrum\"",
         ),
-        (
-            "Rotate 45 0 0 0",
-            "t.pbrt:3:1: Rotate: the rotation axis is zero",
-        ),
-        (
-            "LookAt 0 0 0  0 0 0  0 1 0",
-            "t.pbrt:3:1: LookAt: the view direction is zero or parallel to the up vector",
-        ),
-        (
-            "LookAt 0 0 0  0 2 0  0 1 0",
-            "t.pbrt:3:1: LookAt: the view direction is zero or parallel to the up vector",
-        ),
+        ("Rotate 45 0 0 0", "t.pbrt:3:1: Rotate: the rotation axis is zero"),
+        ("LookAt 0 0 0  0 0 0  0 1 0", "t.pbrt:3:1: LookAt: the view direction is zero or parallel to the up vector"),
+        ("LookAt 0 0 0  0 2 0  0 1 0", "t.pbrt:3:1: LookAt: the view direction is zero or parallel to the up vector"),
     ];
     for (world, expected) in cases {
         assert_eq!(load_err_string(&scene("", world)), expected, "{world}");
@@ -441,14 +333,8 @@ fn bad_directive_arguments() {
 fn option_errors() {
     let cases = [
         ("Option \"bogus\" 1", "Option \"bogus\": unknown option"),
-        (
-            "Option \"bool wavefront\" 1",
-            "Option \"bool wavefront\": expected true or false, found 1",
-        ),
-        (
-            "Option \"integer seed\" 1.5",
-            "Option \"integer seed\": expected an integer, found 1.5",
-        ),
+        ("Option \"bool wavefront\" 1", "Option \"bool wavefront\": expected true or false, found 1"),
+        ("Option \"integer seed\" 1.5", "Option \"integer seed\": expected an integer, found 1.5"),
         (
             "Option \"float displacementedgescale\" x",
             "Option \"float displacementedgescale\": expected a number, found x",
@@ -463,11 +349,7 @@ fn option_errors() {
         ),
     ];
     for (text, expected) in cases {
-        assert_eq!(
-            load_err_string(&format!("{text}\nWorldBegin")),
-            format!("t.pbrt:1:1: {expected}"),
-            "{text}"
-        );
+        assert_eq!(load_err_string(&format!("{text}\nWorldBegin")), format!("t.pbrt:1:1: {expected}"), "{text}");
     }
 }
 
@@ -475,23 +357,17 @@ fn option_errors() {
 fn encoding_errors() {
     let mut b = SceneBuilder::new();
     assert_eq!(
-        parse_bytes(&[0xff, 0xfe, b'W', 0], "utf16.pbrt", &mut b)
-            .unwrap_err()
-            .to_string(),
+        parse_bytes(&[0xff, 0xfe, b'W', 0], "utf16.pbrt", &mut b).unwrap_err().to_string(),
         "utf16.pbrt:1:1: file is UTF-16 encoded; pbrt scene files must be UTF-8"
     );
     let mut b = SceneBuilder::new();
     assert_eq!(
-        parse_bytes(b"WorldBegin\nShape \"sph\xffere\"", "bytes.pbrt", &mut b)
-            .unwrap_err()
-            .to_string(),
+        parse_bytes(b"WorldBegin\nShape \"sph\xffere\"", "bytes.pbrt", &mut b).unwrap_err().to_string(),
         "bytes.pbrt:2:7: text is not valid UTF-8"
     );
     let mut b = SceneBuilder::new();
     assert_eq!(
-        parse_bytes(b"Wor\xc3ldBegin", "bytes.pbrt", &mut b)
-            .unwrap_err()
-            .to_string(),
+        parse_bytes(b"Wor\xc3ldBegin", "bytes.pbrt", &mut b).unwrap_err().to_string(),
         "bytes.pbrt:1:1: unknown directive \"Wor\u{fffd}ldBegin\""
     );
 }

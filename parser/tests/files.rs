@@ -17,37 +17,21 @@ fn path_str(p: &std::path::Path) -> String {
 #[test]
 fn include_splices_the_file_in_place() {
     let dir = TempDir::new();
-    dir.write(
-        "materials.pbrt",
-        "MakeNamedMaterial \"gold\" \"string type\" \"conductor\"\nTranslate 0 0 5\n",
-    );
-    let main = dir.write(
-        "scene.pbrt",
-        "WorldBegin\nInclude \"materials.pbrt\"\nNamedMaterial \"gold\"\nShape \"sphere\"\n",
-    );
+    dir.write("materials.pbrt", "MakeNamedMaterial \"gold\" \"string type\" \"conductor\"\nTranslate 0 0 5\n");
+    let main =
+        dir.write("scene.pbrt", "WorldBegin\nInclude \"materials.pbrt\"\nNamedMaterial \"gold\"\nShape \"sphere\"\n");
     let scene = load_file(&main).unwrap();
     assert_eq!(scene.named_materials[0].name, "gold");
     assert_eq!(scene.shapes[0].material, MaterialRef::Named("gold".into()));
     // Unlike Import, an included file's graphics state carries on in the includer.
     assert_mat_close(
         scene.shapes[0].world_from_object.start,
-        rows([
-            [1.0, 0.0, 0.0, 0.0],
-            [0.0, 1.0, 0.0, 0.0],
-            [0.0, 0.0, 1.0, 5.0],
-            [0.0, 0.0, 0.0, 1.0],
-        ]),
+        rows([[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 5.0], [0.0, 0.0, 0.0, 1.0]]),
     );
     // Locations name the file each directive came from.
     let included = dir.path().join("materials.pbrt");
-    assert_eq!(
-        scene.named_materials[0].entity.loc.to_string(),
-        format!("{}:1:1", included.display())
-    );
-    assert_eq!(
-        scene.shapes[0].entity.loc.to_string(),
-        format!("{}:4:1", main.display())
-    );
+    assert_eq!(scene.named_materials[0].entity.loc.to_string(), format!("{}:1:1", included.display()));
+    assert_eq!(scene.shapes[0].entity.loc.to_string(), format!("{}:4:1", main.display()));
     assert_eq!(scene.files, [path_str(&main), path_str(&included)]);
 }
 
@@ -55,19 +39,13 @@ fn include_splices_the_file_in_place() {
 fn a_parameter_list_continues_after_the_included_file_ends() {
     let dir = TempDir::new();
     dir.write("shape.pbrt", "Shape \"sphere\" \"float radius\" 2");
-    let main = dir.write(
-        "scene.pbrt",
-        "WorldBegin\nInclude \"shape.pbrt\"\n  \"float zmax\" 0.5\nShape \"sphere\"",
-    );
+    let main = dir.write("scene.pbrt", "WorldBegin\nInclude \"shape.pbrt\"\n  \"float zmax\" 0.5\nShape \"sphere\"");
     let scene = load_file(&main).unwrap();
     assert_eq!(scene.shapes.len(), 2);
     let p = &scene.shapes[0].entity.params;
     assert_eq!(p.get_one_float("radius", 1.0), Ok(2.0));
     assert_eq!(p.get_one_float("zmax", 1.0), Ok(0.5));
-    assert_eq!(
-        p.loc("zmax").unwrap().to_string(),
-        format!("{}:3:3", main.display())
-    );
+    assert_eq!(p.loc("zmax").unwrap().to_string(), format!("{}:3:3", main.display()));
     assert!(scene.shapes[1].entity.params.is_empty());
 }
 
@@ -77,36 +55,21 @@ fn include_paths_resolve_relative_to_the_including_file() {
     // scene.pbrt includes sub/a.pbrt, which includes b.pbrt: that is sub/b.pbrt, not the
     // b.pbrt beside scene.pbrt (which would fail to parse).
     dir.write("b.pbrt", "this is not a scene");
-    dir.write(
-        "sub/a.pbrt",
-        "Include \"b.pbrt\"\nShape \"sphere\" \"float radius\" 1\n",
-    );
+    dir.write("sub/a.pbrt", "Include \"b.pbrt\"\nShape \"sphere\" \"float radius\" 1\n");
     dir.write("sub/b.pbrt", "Shape \"sphere\" \"float radius\" 2\n");
-    let main = dir.write(
-        "scene.pbrt",
-        "WorldBegin\nInclude \"sub/a.pbrt\"\nShape \"sphere\" \"float radius\" 3\n",
-    );
+    let main = dir.write("scene.pbrt", "WorldBegin\nInclude \"sub/a.pbrt\"\nShape \"sphere\" \"float radius\" 3\n");
     let scene = load_file(&main).unwrap();
     let radii: Vec<f32> = scene.shapes.iter().map(radius).collect();
     assert_eq!(radii, [2.0, 1.0, 3.0]);
     let b = dir.path().join("sub").join("b.pbrt");
-    assert_eq!(
-        scene.shapes[0].entity.loc.to_string(),
-        format!("{}:1:1", b.display())
-    );
+    assert_eq!(scene.shapes[0].entity.loc.to_string(), format!("{}:1:1", b.display()));
 }
 
 #[test]
 fn absolute_include_paths_are_used_as_they_are() {
     let dir = TempDir::new();
-    let inc = dir.write(
-        "elsewhere/inc.pbrt",
-        "Shape \"sphere\" \"float radius\" 4\n",
-    );
-    let main = dir.write(
-        "deep/er/scene.pbrt",
-        &format!("WorldBegin\nInclude \"{}\"\n", inc.display()),
-    );
+    let inc = dir.write("elsewhere/inc.pbrt", "Shape \"sphere\" \"float radius\" 4\n");
+    let main = dir.write("deep/er/scene.pbrt", &format!("WorldBegin\nInclude \"{}\"\n", inc.display()));
     let scene = load_file(&main).unwrap();
     assert_eq!(radius(&scene.shapes[0]), 4.0);
 }
@@ -123,23 +86,14 @@ fn scene_text_resolves_includes_against_its_name() {
 #[test]
 fn errors_in_an_included_file_name_that_file() {
     let dir = TempDir::new();
-    dir.write(
-        "bad.pbrt",
-        "# first line\n  Shape \"sphere\" \"float radius\" [ 1 x ]\n",
-    );
+    dir.write("bad.pbrt", "# first line\n  Shape \"sphere\" \"float radius\" [ 1 x ]\n");
     let main = dir.write("scene.pbrt", "WorldBegin\nInclude \"bad.pbrt\"\n");
     assert_eq!(
         load_file(&main).unwrap_err().to_string(),
-        format!(
-            "{}:2:37: \"x\": expected a number for \"float radius\"",
-            dir.path().join("bad.pbrt").display()
-        )
+        format!("{}:2:37: \"x\": expected a number for \"float radius\"", dir.path().join("bad.pbrt").display())
     );
     dir.write("unterminated.pbrt", "Shape \"sphere\n");
-    let main = dir.write(
-        "scene2.pbrt",
-        "WorldBegin\n\nInclude \"unterminated.pbrt\"\n",
-    );
+    let main = dir.write("scene2.pbrt", "WorldBegin\n\nInclude \"unterminated.pbrt\"\n");
     assert_eq!(
         load_file(&main).unwrap_err().to_string(),
         format!(
@@ -164,9 +118,7 @@ fn missing_include_file() {
     );
     // From a string, relative paths resolve against the current directory.
     assert_eq!(
-        load_str("Include \"no/such/file.pbrt\"", "t.pbrt")
-            .unwrap_err()
-            .to_string(),
+        load_str("Include \"no/such/file.pbrt\"", "t.pbrt").unwrap_err().to_string(),
         "t.pbrt:1:1: Include \"no/such/file.pbrt\": cannot read ./no/such/file.pbrt: No such file or directory (os error 2)"
     );
 }
@@ -193,10 +145,7 @@ fn missing_main_file() {
     assert_eq!(e.loc, None);
     assert_eq!(
         e.message,
-        format!(
-            "{}: cannot read scene file: No such file or directory (os error 2)",
-            path.display()
-        )
+        format!("{}: cannot read scene file: No such file or directory (os error 2)", path.display())
     );
 }
 
@@ -209,10 +158,7 @@ fn a_file_that_includes_itself_is_stopped() {
     assert_eq!(e.loc, None);
     assert_eq!(
         e.message,
-        format!(
-            "{}: Include nested more than 64 deep (does a file include itself?)",
-            looping.display()
-        )
+        format!("{}: Include nested more than 64 deep (does a file include itself?)", looping.display())
     );
 }
 
@@ -223,19 +169,13 @@ fn a_file_that_imports_itself_is_stopped() {
     // The first Import reads the file again, whose WorldBegin is an error in the world block.
     assert_eq!(
         load_file(&main).unwrap_err().to_string(),
-        format!(
-            "{}:1:1: WorldBegin is not allowed after WorldBegin (options block only)",
-            main.display()
-        )
+        format!("{}:1:1: WorldBegin is not allowed after WorldBegin (options block only)", main.display())
     );
     let world = dir.write("world.pbrt", "WorldBegin\nImport \"a.pbrt\"\n");
     dir.write("a.pbrt", "Import \"a.pbrt\"\n");
     assert_eq!(
         load_file(&world).unwrap_err().to_string(),
-        format!(
-            "{}:1:1: Import nested too deeply (does a file import itself?)",
-            dir.path().join("a.pbrt").display()
-        )
+        format!("{}:1:1: Import nested too deeply (does a file import itself?)", dir.path().join("a.pbrt").display())
     );
 }
 
@@ -251,10 +191,7 @@ fn gzip_compressed_scenes_includes_and_imports() {
     // Errors point into the compressed file by its line and column.
     assert_eq!(
         load_file(&main).unwrap_err().to_string(),
-        format!(
-            "{}:5:35: \"x\": expected a number for \"float radius\"",
-            main.display()
-        )
+        format!("{}:5:35: \"x\": expected a number for \"float radius\"", main.display())
     );
     let main = dir.write_gz(
         "scene.pbrt.gz",
@@ -266,11 +203,7 @@ fn gzip_compressed_scenes_includes_and_imports() {
     assert_eq!(radii, [2.0, 3.0]);
     assert_eq!(
         scene.files,
-        [
-            path_str(&main),
-            path_str(&dir.path().join("inc.pbrt.gz")),
-            path_str(&dir.path().join("imp.pbrt.gz")),
-        ]
+        [path_str(&main), path_str(&dir.path().join("inc.pbrt.gz")), path_str(&dir.path().join("imp.pbrt.gz")),]
     );
 }
 
@@ -280,29 +213,17 @@ fn a_corrupt_gzip_file_is_an_error() {
     let bad = dir.write("bad.pbrt.gz", "WorldBegin\n");
     let e = load_file(&bad).unwrap_err();
     assert_eq!(e.loc, None);
-    assert_eq!(
-        e.message,
-        format!(
-            "{}: cannot read scene file: invalid gzip header",
-            bad.display()
-        )
-    );
+    assert_eq!(e.message, format!("{}: cannot read scene file: invalid gzip header", bad.display()));
 }
 
 #[test]
 fn import_is_only_allowed_in_the_world_block() {
     let dir = TempDir::new();
     dir.write("geometry.pbrt", "Shape \"sphere\"\n");
-    let main = dir.write(
-        "scene.pbrt",
-        "Camera \"perspective\"\n  Import \"geometry.pbrt\"\nWorldBegin\n",
-    );
+    let main = dir.write("scene.pbrt", "Camera \"perspective\"\n  Import \"geometry.pbrt\"\nWorldBegin\n");
     assert_eq!(
         load_file(&main).unwrap_err().to_string(),
-        format!(
-            "{}:2:3: Import is not allowed before WorldBegin (world block only)",
-            main.display()
-        )
+        format!("{}:2:3: Import is not allowed before WorldBegin (world block only)", main.display())
     );
 }
 
@@ -330,30 +251,18 @@ fn imported_graphics_state_does_not_leak() {
     let [inside, after, last] = &scene.shapes[..] else {
         panic!("{:?}", scene.shapes);
     };
-    let translate = |x: f64, z: f64| {
-        rows([
-            [1.0, 0.0, 0.0, x],
-            [0.0, 1.0, 0.0, 0.0],
-            [0.0, 0.0, 1.0, z],
-            [0.0, 0.0, 0.0, 1.0],
-        ])
-    };
+    let translate =
+        |x: f64, z: f64| rows([[1.0, 0.0, 0.0, x], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, z], [0.0, 0.0, 0.0, 1.0]]);
     // Inside the imported file, the importer's state applies and the file's own changes too.
     assert_mat_close(inside.world_from_object.start, translate(1.0, 7.0));
     assert!(inside.reverse_orientation);
     assert_eq!(inside.material, MaterialRef::Index(1));
     assert_eq!(inside.area_light, Some(0));
-    assert_eq!(
-        inside.entity.color_space,
-        nimbus_parser::ColorSpace::Rec2020
-    );
+    assert_eq!(inside.entity.color_space, nimbus_parser::ColorSpace::Rec2020);
     assert_eq!(radius(inside), 9.0);
     assert_eq!(
         inside.medium_interface,
-        Some(nimbus_parser::MediumInterface {
-            inside: Some("fog".into()),
-            outside: None
-        })
+        Some(nimbus_parser::MediumInterface { inside: Some("fog".into()), outside: None })
     );
     // After the Import, none of it is left.
     assert_mat_close(after.world_from_object.start, translate(1.0, 0.0));
@@ -368,15 +277,8 @@ fn imported_graphics_state_does_not_leak() {
     // and leaves the transform alone.
     assert_mat_close(last.world_from_object.start, translate(1.0, 0.0));
     assert_eq!(
-        scene
-            .warnings
-            .iter()
-            .map(|w| w.to_string())
-            .collect::<Vec<_>>(),
-        [format!(
-            "{}:5:1: couldn't find named coordinate system \"inner\"",
-            main.display()
-        )]
+        scene.warnings.iter().map(|w| w.to_string()).collect::<Vec<_>>(),
+        [format!("{}:5:1: couldn't find named coordinate system \"inner\"", main.display())]
     );
     // But what it defined by name stays defined: the medium, the material and the texture.
     assert_eq!(last.material, MaterialRef::Named("m".into()));
@@ -399,16 +301,10 @@ fn import_must_balance_its_attribute_blocks() {
         )
     );
     // An imported file cannot close the importer's block.
-    let main = dir.write(
-        "b.pbrt",
-        "WorldBegin\nAttributeBegin\nImport \"close.pbrt\"\nAttributeEnd\n",
-    );
+    let main = dir.write("b.pbrt", "WorldBegin\nAttributeBegin\nImport \"close.pbrt\"\nAttributeEnd\n");
     assert_eq!(
         load_file(&main).unwrap_err().to_string(),
-        format!(
-            "{}:2:1: AttributeEnd without matching AttributeBegin",
-            dir.path().join("close.pbrt").display()
-        )
+        format!("{}:2:1: AttributeEnd without matching AttributeBegin", dir.path().join("close.pbrt").display())
     );
 }
 
@@ -418,16 +314,10 @@ fn an_imported_file_is_parsed_on_its_own() {
     // end of an imported file.
     let dir = TempDir::new();
     dir.write("shape.pbrt", "Shape \"sphere\"");
-    let main = dir.write(
-        "scene.pbrt",
-        "WorldBegin\nImport \"shape.pbrt\" \"float radius\" 2\n",
-    );
+    let main = dir.write("scene.pbrt", "WorldBegin\nImport \"shape.pbrt\" \"float radius\" 2\n");
     assert_eq!(
         load_file(&main).unwrap_err().to_string(),
-        format!(
-            "{}:2:21: expected a directive, found string \"float radius\"",
-            main.display()
-        )
+        format!("{}:2:21: expected a directive, found string \"float radius\"", main.display())
     );
 }
 
@@ -436,9 +326,6 @@ fn the_directive_recorder_does_not_follow_files() {
     // directives_of_str keeps Include and Import as directives and reads no file.
     assert_eq!(
         crate::common::directives("Include \"no/such.pbrt\"\nImport \"nor/this.pbrt\""),
-        [
-            Directive::Include("no/such.pbrt".into()),
-            Directive::Import("nor/this.pbrt".into()),
-        ]
+        [Directive::Include("no/such.pbrt".into()), Directive::Import("nor/this.pbrt".into()),]
     );
 }

@@ -1,9 +1,7 @@
 //! Parameter lists: every type, bracketed and bare values, repeated names, and the typed
 //! lookups of `ParameterDictionary`.
 
-use nimbus_parser::{
-    Directive, FloatOrTexture, Param, ParamType, ParamValues, SpectrumOrTexture, SpectrumValue,
-};
+use nimbus_parser::{Directive, FloatOrTexture, Param, ParamType, ParamValues, SpectrumOrTexture, SpectrumValue};
 
 use crate::common::{directive, load, load_err_string, parse_err_string, scene};
 
@@ -40,86 +38,34 @@ fn every_parameter_type_parses_with_its_values() {
             ParamType::Float,
             ParamValues::Floats(vec![1.0, -2.5, 0.5, 5.0, 1000.0, -0.01, 4.0]),
         ),
-        (
-            "\"point2 n\" [ 1 2 3 4 ]",
-            ParamType::Point2,
-            ParamValues::Floats(vec![1.0, 2.0, 3.0, 4.0]),
-        ),
-        (
-            "\"vector2 n\" [ 0.5 -0.5 ]",
-            ParamType::Vector2,
-            ParamValues::Floats(vec![0.5, -0.5]),
-        ),
-        (
-            "\"point3 n\" [ 1 2 3 4 5 6 ]",
-            ParamType::Point3,
-            ParamValues::Floats(vec![1.0, 2.0, 3.0, 4.0, 5.0, 6.0]),
-        ),
-        (
-            "\"vector3 n\" [ 0 0 1 ]",
-            ParamType::Vector3,
-            ParamValues::Floats(vec![0.0, 0.0, 1.0]),
-        ),
-        (
-            "\"normal n\" [ 0 1 0 ]",
-            ParamType::Normal,
-            ParamValues::Floats(vec![0.0, 1.0, 0.0]),
-        ),
-        (
-            "\"bool n\" [ true false true ]",
-            ParamType::Bool,
-            ParamValues::Bools(vec![true, false, true]),
-        ),
+        ("\"point2 n\" [ 1 2 3 4 ]", ParamType::Point2, ParamValues::Floats(vec![1.0, 2.0, 3.0, 4.0])),
+        ("\"vector2 n\" [ 0.5 -0.5 ]", ParamType::Vector2, ParamValues::Floats(vec![0.5, -0.5])),
+        ("\"point3 n\" [ 1 2 3 4 5 6 ]", ParamType::Point3, ParamValues::Floats(vec![1.0, 2.0, 3.0, 4.0, 5.0, 6.0])),
+        ("\"vector3 n\" [ 0 0 1 ]", ParamType::Vector3, ParamValues::Floats(vec![0.0, 0.0, 1.0])),
+        ("\"normal n\" [ 0 1 0 ]", ParamType::Normal, ParamValues::Floats(vec![0.0, 1.0, 0.0])),
+        ("\"bool n\" [ true false true ]", ParamType::Bool, ParamValues::Bools(vec![true, false, true])),
         (
             "\"string n\" [ \"a\" \"b c\" \"\" ]",
             ParamType::String,
             ParamValues::Strings(vec!["a".into(), "b c".into(), String::new()]),
         ),
-        (
-            "\"texture n\" \"checks\"",
-            ParamType::Texture,
-            ParamValues::Strings(vec!["checks".into()]),
-        ),
-        (
-            "\"rgb n\" [ 0.25 0.5 1 ]",
-            ParamType::Rgb,
-            ParamValues::Floats(vec![0.25, 0.5, 1.0]),
-        ),
+        ("\"texture n\" \"checks\"", ParamType::Texture, ParamValues::Strings(vec!["checks".into()])),
+        ("\"rgb n\" [ 0.25 0.5 1 ]", ParamType::Rgb, ParamValues::Floats(vec![0.25, 0.5, 1.0])),
         (
             "\"spectrum n\" [ 300 0.5 400 1 800.5 0 ]",
             ParamType::Spectrum,
             ParamValues::Floats(vec![300.0, 0.5, 400.0, 1.0, 800.5, 0.0]),
         ),
-        (
-            "\"spectrum n\" \"metal-Au-eta\"",
-            ParamType::Spectrum,
-            ParamValues::Strings(vec!["metal-Au-eta".into()]),
-        ),
-        (
-            "\"blackbody n\" 6500",
-            ParamType::Blackbody,
-            ParamValues::Floats(vec![6500.0]),
-        ),
+        ("\"spectrum n\" \"metal-Au-eta\"", ParamType::Spectrum, ParamValues::Strings(vec!["metal-Au-eta".into()])),
+        ("\"blackbody n\" 6500", ParamType::Blackbody, ParamValues::Floats(vec![6500.0])),
         // Declarations may carry extra spaces.
-        (
-            "\"  float   n \" 1",
-            ParamType::Float,
-            ParamValues::Floats(vec![1.0]),
-        ),
+        ("\"  float   n \" 1", ParamType::Float, ParamValues::Floats(vec![1.0])),
         // Numbers and brackets need no spaces around them.
-        (
-            "\"float n\"[1 2]",
-            ParamType::Float,
-            ParamValues::Floats(vec![1.0, 2.0]),
-        ),
+        ("\"float n\"[1 2]", ParamType::Float, ParamValues::Floats(vec![1.0, 2.0])),
     ];
     for (text, ty, values) in cases {
         let p = one_param(text);
-        assert_eq!(
-            (p.ty, p.name.as_str(), &p.values),
-            (ty, "n", &values),
-            "{text}"
-        );
+        assert_eq!((p.ty, p.name.as_str(), &p.values), (ty, "n", &values), "{text}");
     }
 }
 
@@ -161,28 +107,13 @@ fn booleans_may_be_quoted() {
 
 #[test]
 fn a_single_value_needs_no_brackets() {
-    assert_eq!(
-        one_param("\"float r\" 2").values,
-        ParamValues::Floats(vec![2.0])
-    );
-    assert_eq!(
-        one_param("\"integer r\" 7").values,
-        ParamValues::Ints(vec![7])
-    );
-    assert_eq!(
-        one_param("\"bool r\" false").values,
-        ParamValues::Bools(vec![false])
-    );
-    assert_eq!(
-        one_param("\"string r\" \"x\"").values,
-        ParamValues::Strings(vec!["x".into()])
-    );
+    assert_eq!(one_param("\"float r\" 2").values, ParamValues::Floats(vec![2.0]));
+    assert_eq!(one_param("\"integer r\" 7").values, ParamValues::Ints(vec![7]));
+    assert_eq!(one_param("\"bool r\" false").values, ParamValues::Bools(vec![false]));
+    assert_eq!(one_param("\"string r\" \"x\"").values, ParamValues::Strings(vec!["x".into()]));
     // Without brackets only the first value belongs to the parameter: a second number is
     // taken as the next directive, which is an error.
-    assert_eq!(
-        parse_err_string("Shape \"s\" \"float r\" 1 2"),
-        "t.pbrt:1:23: unknown directive \"2\""
-    );
+    assert_eq!(parse_err_string("Shape \"s\" \"float r\" 1 2"), "t.pbrt:1:23: unknown directive \"2\"");
 }
 
 #[test]
@@ -196,11 +127,7 @@ fn empty_brackets_give_empty_values_of_the_types_kind() {
         ("point3", ParamValues::Floats(vec![])),
         ("spectrum", ParamValues::Floats(vec![])),
     ] {
-        assert_eq!(
-            one_param(&format!("\"{decl} x\" [ ]")).values,
-            values,
-            "{decl}"
-        );
+        assert_eq!(one_param(&format!("\"{decl} x\" [ ]")).values, values, "{decl}");
     }
 }
 
@@ -216,10 +143,7 @@ fn parameters_keep_file_order_and_their_locations() {
 #[test]
 fn strings_decode_escapes() {
     let p = one_param(r#""string s" [ "q\"b\\n\nt\tr\rb\bf\f'\'" ]"#);
-    assert_eq!(
-        p.values,
-        ParamValues::Strings(vec!["q\"b\\n\nt\tr\rb\u{8}f\u{c}''".into()])
-    );
+    assert_eq!(p.values, ParamValues::Strings(vec!["q\"b\\n\nt\tr\rb\u{8}f\u{c}''".into()]));
 }
 
 #[test]
@@ -240,26 +164,16 @@ fn repeated_parameter_last_one_wins() {
     // The shadowed occurrences are not "unused".
     assert_eq!(shape.report_unused(), []);
     // The parsed directive keeps all three, in order.
-    let Directive::Shape(_, p) = directive("Shape \"s\" \"float r\" 1 \"float r\" 2") else {
-        panic!()
-    };
+    let Directive::Shape(_, p) = directive("Shape \"s\" \"float r\" 1 \"float r\" 2") else { panic!() };
     assert_eq!(p.len(), 2);
 }
 
 #[test]
 fn repeated_name_with_another_type_is_reported_on_lookup() {
     // The last occurrence wins even when its type is not the one asked for.
-    let s = load(&scene(
-        "",
-        "Shape \"sphere\" \"float radius\" 1\n  \"integer radius\" 2",
-    ));
+    let s = load(&scene("", "Shape \"sphere\" \"float radius\" 1\n  \"integer radius\" 2"));
     assert_eq!(
-        s.shapes[0]
-            .entity
-            .params
-            .get_one_float("radius", 1.0)
-            .unwrap_err()
-            .to_string(),
+        s.shapes[0].entity.params.get_one_float("radius", 1.0).unwrap_err().to_string(),
         "t.pbrt:4:3: parameter \"radius\" has type \"integer\" but must be \"float\""
     );
 }
@@ -290,23 +204,14 @@ Texture "t" "float" "constant" "float value" 1"#,
     ));
     let p = &s.shapes[0].entity.params;
     assert_eq!(p.get_ints("indices"), Ok(&[0, 1, 2][..]));
-    assert_eq!(
-        p.get_point3s("P"),
-        Ok(&[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]][..])
-    );
+    assert_eq!(p.get_point3s("P"), Ok(&[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]][..]));
     assert_eq!(p.get_normals("N").unwrap().len(), 3);
-    assert_eq!(
-        p.get_point2s("uv"),
-        Ok(&[[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]][..])
-    );
+    assert_eq!(p.get_point2s("uv"), Ok(&[[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]][..]));
     assert_eq!(p.get_vector3s("S").unwrap()[2], [1.0, 0.0, 0.0]);
     assert_eq!(p.get_one_vector2("v", [0.0; 2]), Ok([3.0, 4.0]));
     assert_eq!(p.get_one_bool("flag", false), Ok(true));
     assert_eq!(p.get_one_string("alphamode", "none"), Ok("cutout"));
-    assert_eq!(
-        p.get_strings("names"),
-        Ok(&["a".to_string(), "b".to_string()][..])
-    );
+    assert_eq!(p.get_strings("names"), Ok(&["a".to_string(), "b".to_string()][..]));
     assert_eq!(p.get_one_float("alpha", 1.0), Ok(0.5));
     assert_eq!(p.get_floats("arr"), Ok(&[1.0, 2.0, 3.0][..]));
     assert_eq!(p.get_texture("tex"), Ok(Some("t")));
@@ -337,19 +242,13 @@ Texture "t" "float" "constant" "float value" 1"#,
         }
         other => panic!("{other:?}"),
     }
-    assert!(matches!(
-        p.get_float_or_texture("alpha"),
-        Ok(Some(FloatOrTexture::Value(0.5)))
-    ));
+    assert!(matches!(p.get_float_or_texture("alpha"), Ok(Some(FloatOrTexture::Value(0.5)))));
     // Absent names give defaults / nothing.
     assert_eq!(p.get_one_float("missing", 7.0), Ok(7.0));
     assert_eq!(p.get_one_int("missing", 3), Ok(3));
     assert_eq!(p.get_opt_string("missing"), Ok(None));
     assert_eq!(p.get_floats("missing"), Ok(&[][..]));
-    assert_eq!(
-        p.get_one_spectrum("missing").unwrap().map(|s| s.value),
-        None
-    );
+    assert_eq!(p.get_one_spectrum("missing").unwrap().map(|s| s.value), None);
     // Every lookup above marked its parameter used; only "extra" was never asked for.
     let unused: Vec<String> = p.report_unused().iter().map(|w| w.to_string()).collect();
     assert_eq!(unused, ["t.pbrt:20:5: \"float extra\": unused parameter"]);
@@ -357,10 +256,7 @@ Texture "t" "float" "constant" "float value" 1"#,
 
 #[test]
 fn unused_parameters_are_reported_with_their_location() {
-    let s = load(&scene(
-        "",
-        "Shape \"sphere\" \"float radius\" 1\n    \"float radiuss\" 2",
-    ));
+    let s = load(&scene("", "Shape \"sphere\" \"float radius\" 1\n    \"float radiuss\" 2"));
     let p = &s.shapes[0].entity.params;
     assert_eq!(p.get_one_float("radius", 1.0), Ok(1.0));
     let unused: Vec<String> = p.report_unused().iter().map(|w| w.to_string()).collect();
@@ -399,22 +295,13 @@ Texture "b" "float" "constant""#,
         err(p.get_one_float("zmin", 0.0).map(drop)),
         "t.pbrt:5:5: more than one value provided for parameter \"zmin\" (expected one float)"
     );
-    assert_eq!(
-        err(p.get_one_float("zmax", 0.0).map(drop)),
-        "t.pbrt:6:5: no values provided for parameter \"zmax\""
-    );
-    assert_eq!(
-        err(p.get_floats("zmax").map(drop)),
-        "t.pbrt:6:5: no values provided for \"zmax\""
-    );
+    assert_eq!(err(p.get_one_float("zmax", 0.0).map(drop)), "t.pbrt:6:5: no values provided for parameter \"zmax\"");
+    assert_eq!(err(p.get_floats("zmax").map(drop)), "t.pbrt:6:5: no values provided for \"zmax\"");
     assert_eq!(
         err(p.get_one_point3("p", [0.0; 3]).map(drop)),
         "t.pbrt:7:5: more than one value provided for parameter \"p\" (expected one point3)"
     );
-    assert_eq!(
-        err(p.get_texture("t").map(drop)),
-        "t.pbrt:8:5: more than one texture name provided for \"t\""
-    );
+    assert_eq!(err(p.get_texture("t").map(drop)), "t.pbrt:8:5: more than one texture name provided for \"t\"");
     assert_eq!(
         err(p.get_one_spectrum("c").map(drop)),
         "t.pbrt:9:5: more than one value provided for parameter \"c\" (expected one rgb)"
@@ -424,50 +311,17 @@ Texture "b" "float" "constant""#,
 #[test]
 fn wrong_value_kind_is_a_parse_error_at_the_value() {
     let cases = [
-        (
-            "\"float r\" \"two\"",
-            "t.pbrt:1:21: string \"two\": expected a number for \"float r\"",
-        ),
-        (
-            "\"float r\" [ 1 x ]",
-            "t.pbrt:1:25: \"x\": expected a number for \"float r\"",
-        ),
-        (
-            "\"float r\" true",
-            "t.pbrt:1:21: \"true\": expected a number for \"float r\"",
-        ),
-        (
-            "\"integer n\" 1.5",
-            "t.pbrt:1:23: \"1.5\": expected an integer for \"integer n\"",
-        ),
-        (
-            "\"integer n\" \"1\"",
-            "t.pbrt:1:23: string \"1\": expected an integer for \"integer n\"",
-        ),
-        (
-            "\"integer n\" 2147483648",
-            "t.pbrt:1:23: \"2147483648\": too large for a 32-bit integer",
-        ),
-        (
-            "\"bool b\" 1",
-            "t.pbrt:1:20: \"1\": expected true or false for \"bool b\"",
-        ),
-        (
-            "\"bool b\" \"yes\"",
-            "t.pbrt:1:20: string \"yes\": expected true or false for \"bool b\"",
-        ),
-        (
-            "\"string s\" s",
-            "t.pbrt:1:22: \"s\": expected a quoted string for \"string s\"",
-        ),
-        (
-            "\"texture t\" [ 1 ]",
-            "t.pbrt:1:25: \"1\": expected a quoted string for \"texture t\"",
-        ),
-        (
-            "\"rgb c\" [ 1 \"x\" 2 ]",
-            "t.pbrt:1:23: string \"x\": expected a number for \"rgb c\"",
-        ),
+        ("\"float r\" \"two\"", "t.pbrt:1:21: string \"two\": expected a number for \"float r\""),
+        ("\"float r\" [ 1 x ]", "t.pbrt:1:25: \"x\": expected a number for \"float r\""),
+        ("\"float r\" true", "t.pbrt:1:21: \"true\": expected a number for \"float r\""),
+        ("\"integer n\" 1.5", "t.pbrt:1:23: \"1.5\": expected an integer for \"integer n\""),
+        ("\"integer n\" \"1\"", "t.pbrt:1:23: string \"1\": expected an integer for \"integer n\""),
+        ("\"integer n\" 2147483648", "t.pbrt:1:23: \"2147483648\": too large for a 32-bit integer"),
+        ("\"bool b\" 1", "t.pbrt:1:20: \"1\": expected true or false for \"bool b\""),
+        ("\"bool b\" \"yes\"", "t.pbrt:1:20: string \"yes\": expected true or false for \"bool b\""),
+        ("\"string s\" s", "t.pbrt:1:22: \"s\": expected a quoted string for \"string s\""),
+        ("\"texture t\" [ 1 ]", "t.pbrt:1:25: \"1\": expected a quoted string for \"texture t\""),
+        ("\"rgb c\" [ 1 \"x\" 2 ]", "t.pbrt:1:23: string \"x\": expected a number for \"rgb c\""),
         (
             "\"spectrum s\" [ \"a\" 400 ]",
             "t.pbrt:1:30: \"400\": expected a quoted spectrum name (values cannot mix names and numbers) for \"spectrum s\"",
@@ -476,21 +330,11 @@ fn wrong_value_kind_is_a_parse_error_at_the_value() {
             "\"spectrum s\" [ 400 \"a\" ]",
             "t.pbrt:1:30: string \"a\": expected a number (values cannot mix names and numbers) for \"spectrum s\"",
         ),
-        (
-            "\"float r\" 1e39",
-            "t.pbrt:1:21: \"1e39\": out of range for a 32-bit float",
-        ),
-        (
-            "\"float r\" [ 1 [ 2 ] ]",
-            "t.pbrt:1:25: unexpected \"[\" inside the values of \"r\"",
-        ),
+        ("\"float r\" 1e39", "t.pbrt:1:21: \"1e39\": out of range for a 32-bit float"),
+        ("\"float r\" [ 1 [ 2 ] ]", "t.pbrt:1:25: unexpected \"[\" inside the values of \"r\""),
     ];
     for (params, expected) in cases {
-        assert_eq!(
-            parse_err_string(&format!("Shape \"s\" {params}")),
-            expected,
-            "{params}"
-        );
+        assert_eq!(parse_err_string(&format!("Shape \"s\" {params}")), expected, "{params}");
     }
 }
 
@@ -505,10 +349,7 @@ fn wrong_value_count_is_a_parse_error_at_the_declaration() {
             "\"point2 uv\" [ 1 ]",
             "t.pbrt:1:11: \"point2 uv\": 1 values given, but a point2 takes 2: the count must be a multiple of 2",
         ),
-        (
-            "\"rgb c\" 1",
-            "t.pbrt:1:11: \"rgb c\": 1 values given, but a rgb takes 3: the count must be a multiple of 3",
-        ),
+        ("\"rgb c\" 1", "t.pbrt:1:11: \"rgb c\": 1 values given, but a rgb takes 3: the count must be a multiple of 3"),
         (
             "\"normal N\" [ 0 0 ]",
             "t.pbrt:1:11: \"normal N\": 2 values given, but a normal takes 3: the count must be a multiple of 3",
@@ -535,56 +376,30 @@ fn wrong_value_count_is_a_parse_error_at_the_declaration() {
         ),
     ];
     for (params, expected) in cases {
-        assert_eq!(
-            parse_err_string(&format!("Shape \"s\" {params}")),
-            expected,
-            "{params}"
-        );
+        assert_eq!(parse_err_string(&format!("Shape \"s\" {params}")), expected, "{params}");
     }
 }
 
 #[test]
 fn malformed_declarations_are_errors_at_the_declaration() {
     let cases = [
-        (
-            "\"colour c\" [ 1 2 3 ]",
-            "t.pbrt:1:11: \"colour\": unknown parameter type",
-        ),
-        (
-            "\"point P\" [ 1 2 3 ]",
-            "t.pbrt:1:11: \"point\": unknown parameter type (pbrt-v3 spelling: use \"point3\")",
-        ),
+        ("\"colour c\" [ 1 2 3 ]", "t.pbrt:1:11: \"colour\": unknown parameter type"),
+        ("\"point P\" [ 1 2 3 ]", "t.pbrt:1:11: \"point\": unknown parameter type (pbrt-v3 spelling: use \"point3\")"),
         (
             "\"vector v\" [ 1 2 3 ]",
             "t.pbrt:1:11: \"vector\": unknown parameter type (pbrt-v3 spelling: use \"vector3\")",
         ),
-        (
-            "\"color c\" [ 1 2 3 ]",
-            "t.pbrt:1:11: \"color\": unknown parameter type (pbrt-v3 spelling: use \"rgb\")",
-        ),
-        (
-            "\"normal3 n\" [ 1 2 3 ]",
-            "t.pbrt:1:11: \"normal3\": unknown parameter type (use \"normal\")",
-        ),
-        (
-            "\"radius\" 1",
-            "t.pbrt:1:11: \"radius\": a parameter declaration is \"type name\" (e.g. \"float radius\")",
-        ),
+        ("\"color c\" [ 1 2 3 ]", "t.pbrt:1:11: \"color\": unknown parameter type (pbrt-v3 spelling: use \"rgb\")"),
+        ("\"normal3 n\" [ 1 2 3 ]", "t.pbrt:1:11: \"normal3\": unknown parameter type (use \"normal\")"),
+        ("\"radius\" 1", "t.pbrt:1:11: \"radius\": a parameter declaration is \"type name\" (e.g. \"float radius\")"),
         (
             "\"float the radius\" 1",
             "t.pbrt:1:11: \"float the radius\": a parameter declaration is \"type name\" (e.g. \"float radius\")",
         ),
-        (
-            "\"\" 1",
-            "t.pbrt:1:11: \"\": a parameter declaration is \"type name\" (e.g. \"float radius\")",
-        ),
+        ("\"\" 1", "t.pbrt:1:11: \"\": a parameter declaration is \"type name\" (e.g. \"float radius\")"),
     ];
     for (params, expected) in cases {
-        assert_eq!(
-            parse_err_string(&format!("Shape \"s\" {params}")),
-            expected,
-            "{params}"
-        );
+        assert_eq!(parse_err_string(&format!("Shape \"s\" {params}")), expected, "{params}");
     }
 }
 

@@ -15,50 +15,24 @@ fn scenes_dir() -> PathBuf {
 fn scene_files() -> Vec<PathBuf> {
     let dir = scenes_dir();
     let entries = std::fs::read_dir(&dir).unwrap_or_else(|e| {
-        panic!(
-            "the reference scenes should be at {} (shared/ beside the repository): {e}",
-            dir.display()
-        )
+        panic!("the reference scenes should be at {} (shared/ beside the repository): {e}", dir.display())
     });
-    let mut files: Vec<PathBuf> = entries
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|e| e == "pbrt"))
-        .collect();
+    let mut files: Vec<PathBuf> =
+        entries.map(|e| e.unwrap().path()).filter(|p| p.extension().is_some_and(|e| e == "pbrt")).collect();
     files.sort();
     files
 }
 
 /// What each known scene holds: shapes, lights, area lights, (medium, type), camera medium.
-type Expected = (
-    &'static str,
-    usize,
-    usize,
-    usize,
-    &'static [(&'static str, &'static str)],
-    Option<&'static str>,
-);
+type Expected = (&'static str, usize, usize, usize, &'static [(&'static str, &'static str)], Option<&'static str>);
 
 const EXPECTED: [Expected; 9] = [
     ("cornell-surfaces", 6, 0, 1, &[], None),
     ("emissive-grid", 2, 1, 0, &[("fire", "uniformgrid")], None),
-    (
-        "fog-spotlight",
-        3,
-        1,
-        0,
-        &[("fog", "homogeneous")],
-        Some("fog"),
-    ),
+    ("fog-spotlight", 3, 1, 0, &[("fog", "homogeneous")], Some("fog")),
     ("graph-cloud", 1, 1, 0, &[("cloud", "uniformgrid")], None),
     ("grid-cloud", 2, 2, 0, &[("cloud", "uniformgrid")], None),
-    (
-        "homogeneous-sphere",
-        2,
-        2,
-        0,
-        &[("cloud", "homogeneous")],
-        None,
-    ),
+    ("homogeneous-sphere", 2, 2, 0, &[("cloud", "homogeneous")], None),
     ("rgbgrid-smoke", 1, 2, 0, &[("smoke", "rgbgrid")], None),
     ("vdb-cloud", 2, 2, 0, &[("cloud", "nanovdb")], None),
     ("wax-dielectric", 3, 0, 1, &[("wax", "homogeneous")], None),
@@ -70,10 +44,7 @@ fn summary(s: &SceneDescription) -> (usize, usize, usize, Vec<(String, String)>,
         s.shapes.len(),
         s.lights.len(),
         s.area_lights.len(),
-        s.media
-            .iter()
-            .map(|m| (m.name.clone(), m.entity.name.clone()))
-            .collect(),
+        s.media.iter().map(|m| (m.name.clone(), m.entity.name.clone())).collect(),
         s.camera.medium.clone(),
     )
 }
@@ -89,12 +60,7 @@ fn every_reference_scene_loads() {
     );
     for path in &files {
         let scene = load_file(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-        assert!(
-            scene.warnings.is_empty(),
-            "{}: {:?}",
-            path.display(),
-            scene.warnings
-        );
+        assert!(scene.warnings.is_empty(), "{}: {:?}", path.display(), scene.warnings);
         assert!(!scene.shapes.is_empty(), "{}", path.display());
     }
 }
@@ -104,21 +70,8 @@ fn reference_scenes_hold_what_they_say() {
     for (name, shapes, lights, area_lights, media, camera_medium) in EXPECTED {
         let path = scenes_dir().join(format!("{name}.pbrt"));
         let scene = load_file(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-        let media: Vec<(String, String)> = media
-            .iter()
-            .map(|(n, t)| (n.to_string(), t.to_string()))
-            .collect();
-        assert_eq!(
-            summary(&scene),
-            (
-                shapes,
-                lights,
-                area_lights,
-                media,
-                camera_medium.map(str::to_string)
-            ),
-            "{name}"
-        );
+        let media: Vec<(String, String)> = media.iter().map(|(n, t)| (n.to_string(), t.to_string())).collect();
+        assert_eq!(summary(&scene), (shapes, lights, area_lights, media, camera_medium.map(str::to_string)), "{name}");
         assert_eq!(scene.camera.entity.name, "perspective", "{name}");
         assert_eq!(scene.film.params.get_one_int("xresolution", 0), Ok(128));
         assert_eq!(scene.sampler.params.get_one_int("pixelsamples", 0), Ok(64));
@@ -139,11 +92,8 @@ fn grid_media_hold_every_voxel() {
         let p = &scene.medium(values).unwrap().entity.params;
         let n = |axis: &str| p.get_one_int(axis, 0).unwrap() as usize;
         let voxels = n("nx") * n("ny") * n("nz");
-        let count = if per_voxel == 3 {
-            p.get_rgbs(param).unwrap().len() * 3
-        } else {
-            p.get_floats(param).unwrap().len()
-        };
+        let count =
+            if per_voxel == 3 { p.get_rgbs(param).unwrap().len() * 3 } else { p.get_floats(param).unwrap().len() };
         assert_eq!(count, voxels * per_voxel, "{name} {param}");
     }
 }
@@ -154,27 +104,17 @@ fn fog_spotlight_media_and_interfaces() {
     assert_eq!(scene.camera.medium.as_deref(), Some("fog"));
     assert_eq!(scene.lights[0].medium.as_deref(), Some("fog"));
     let bounding = &scene.shapes[0];
-    assert_eq!(
-        bounding.entity.params.get_one_float("radius", 1.0),
-        Ok(30.0)
-    );
+    assert_eq!(bounding.entity.params.get_one_float("radius", 1.0), Ok(30.0));
     assert_eq!(
         bounding.medium_interface,
-        Some(nimbus_parser::MediumInterface {
-            inside: Some("fog".into()),
-            outside: None
-        })
+        Some(nimbus_parser::MediumInterface { inside: Some("fog".into()), outside: None })
     );
 }
 
 #[test]
 fn cornell_surfaces_named_spectra() {
     let scene = load_file(&scenes_dir().join("cornell-surfaces.pbrt")).unwrap();
-    let gold = scene
-        .materials
-        .iter()
-        .find(|m| m.name == "conductor")
-        .unwrap();
+    let gold = scene.materials.iter().find(|m| m.name == "conductor").unwrap();
     match gold.params.get_one_spectrum("eta").unwrap().unwrap().value {
         nimbus_parser::SpectrumValue::Named(n) => assert_eq!(n, "metal-Au-eta"),
         other => panic!("{other:?}"),
@@ -189,11 +129,7 @@ fn reference_scenes_print_and_parse_back() {
         let name = path.to_string_lossy();
         let directives = directives_of_str(&text, &name).unwrap();
         let printed = to_pbrt(&directives);
-        assert_eq!(
-            directives_of_str(&printed, "printed.pbrt").unwrap(),
-            directives,
-            "{name}"
-        );
+        assert_eq!(directives_of_str(&printed, "printed.pbrt").unwrap(), directives, "{name}");
         let original = load_file(&path).unwrap();
         let reloaded = load_str(&printed, &name).unwrap();
         assert_eq!(summary(&reloaded), summary(&original), "{name}");
@@ -213,11 +149,7 @@ fn reference_scenes_read_the_same_gzip_compressed() {
         // Same parameters, everywhere.
         for (a, b) in original.shapes.iter().zip(&compressed.shapes) {
             let values = |s: &nimbus_parser::ShapeEntity| {
-                s.entity
-                    .params
-                    .iter()
-                    .map(|p| (p.ty, p.name.clone(), p.values.clone()))
-                    .collect::<Vec<_>>()
+                s.entity.params.iter().map(|p| (p.ty, p.name.clone(), p.values.clone())).collect::<Vec<_>>()
             };
             assert_eq!(values(a), values(b), "{file}");
         }

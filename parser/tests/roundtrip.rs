@@ -4,8 +4,8 @@
 use std::sync::Arc;
 
 use nimbus_parser::{
-    ActiveTransform, Directive, FileLoc, Param, ParamType, ParamValues, SceneBuilder,
-    directive_to_string, directives_of_str, load_str, parse_bytes, to_pbrt,
+    ActiveTransform, Directive, FileLoc, Param, ParamType, ParamValues, SceneBuilder, directive_to_string,
+    directives_of_str, load_str, parse_bytes, to_pbrt,
 };
 use proptest::collection::vec;
 use proptest::prelude::*;
@@ -56,21 +56,15 @@ fn any_f64() -> impl Strategy<Value = f64> {
 }
 
 fn floats(per_item: usize) -> impl Strategy<Value = ParamValues> {
-    (0usize..5)
-        .prop_flat_map(move |n| vec(any_f32(), n * per_item))
-        .prop_map(ParamValues::Floats)
+    (0usize..5).prop_flat_map(move |n| vec(any_f32(), n * per_item)).prop_map(ParamValues::Floats)
 }
 
 /// Values valid for a parameter of type `ty`.
 fn values_for(ty: ParamType) -> BoxedStrategy<ParamValues> {
     match ty {
         ParamType::Integer => vec(any::<i32>(), 0..6).prop_map(ParamValues::Ints).boxed(),
-        ParamType::Bool => vec(any::<bool>(), 0..4)
-            .prop_map(ParamValues::Bools)
-            .boxed(),
-        ParamType::String | ParamType::Texture => vec(any_string(), 0..4)
-            .prop_map(ParamValues::Strings)
-            .boxed(),
+        ParamType::Bool => vec(any::<bool>(), 0..4).prop_map(ParamValues::Bools).boxed(),
+        ParamType::String | ParamType::Texture => vec(any_string(), 0..4).prop_map(ParamValues::Strings).boxed(),
         ParamType::Spectrum => prop_oneof![
             // Wavelength/value pairs with strictly increasing wavelengths.
             (vec(any_f32(), 0..6), vec(any_f32(), 6)).prop_map(|(mut lambdas, values)| {
@@ -88,13 +82,8 @@ fn values_for(ty: ParamType) -> BoxedStrategy<ParamValues> {
 }
 
 fn param() -> impl Strategy<Value = Param> {
-    (
-        proptest::sample::select(ParamType::ALL.to_vec()),
-        param_name(),
-    )
-        .prop_flat_map(|(ty, name)| {
-            values_for(ty).prop_map(move |values| Param::new(ty, name.clone(), values, loc()))
-        })
+    (proptest::sample::select(ParamType::ALL.to_vec()), param_name())
+        .prop_flat_map(|(ty, name)| values_for(ty).prop_map(move |values| Param::new(ty, name.clone(), values, loc())))
 }
 
 fn params() -> impl Strategy<Value = Vec<Param>> {
@@ -103,10 +92,7 @@ fn params() -> impl Strategy<Value = Vec<Param>> {
 
 /// `Option` values: a bare word or a quoted string (kept with its quotes).
 fn option_value() -> impl Strategy<Value = String> {
-    prop_oneof![
-        "[A-Za-z0-9_.+-][A-Za-z0-9_.+#-]{0,8}",
-        any_string().prop_map(|s| format!("\"{s}\"")),
-    ]
+    prop_oneof!["[A-Za-z0-9_.+-][A-Za-z0-9_.+#-]{0,8}", any_string().prop_map(|s| format!("\"{s}\"")),]
 }
 
 fn f64s<const N: usize>() -> impl Strategy<Value = [f64; N]> {
@@ -143,8 +129,7 @@ fn any_directive() -> impl Strategy<Value = Directive> {
         Directive::ObjectInstance,
     ];
     prop_oneof![
-        (proptest::sample::select(named), any_string(), params())
-            .prop_map(|(make, name, params)| make(name, params)),
+        (proptest::sample::select(named), any_string(), params()).prop_map(|(make, name, params)| make(name, params)),
         (proptest::sample::select(one_string), any_string()).prop_map(|(make, s)| make(s)),
         proptest::sample::select(vec![
             Directive::AttributeBegin,
@@ -166,17 +151,10 @@ fn any_directive() -> impl Strategy<Value = Directive> {
         f64s::<3>().prop_map(Directive::Scale),
         f64s::<3>().prop_map(Directive::Translate),
         (any_f64(), any_f64()).prop_map(|(a, b)| Directive::TransformTimes(a, b)),
-        (any_string(), any_string())
-            .prop_map(|(inside, outside)| Directive::MediumInterface { inside, outside }),
+        (any_string(), any_string()).prop_map(|(inside, outside)| Directive::MediumInterface { inside, outside }),
         (any_string(), option_value()).prop_map(|(n, v)| Directive::Option(n, v)),
-        (any_string(), any_string(), any_string(), params()).prop_map(
-            |(name, value_type, class, params)| Directive::Texture {
-                name,
-                value_type,
-                class,
-                params
-            }
-        ),
+        (any_string(), any_string(), any_string(), params())
+            .prop_map(|(name, value_type, class, params)| Directive::Texture { name, value_type, class, params }),
     ]
 }
 
@@ -317,13 +295,7 @@ fn option_string_values_with_quotes_and_backslashes_round_trip() {
     // Regression: the printer wrote the decoded value between quotes without escaping it, so
     // `Option "x" "a\"b"` printed as `Option "x" "a"b"`, which does not parse back.
     let d = directives(r#"Option "string msereferenceimage" "a\"b\\c""#);
-    assert_eq!(
-        d,
-        [Directive::Option(
-            "string msereferenceimage".into(),
-            "\"a\"b\\c\"".into()
-        )]
-    );
+    assert_eq!(d, [Directive::Option("string msereferenceimage".into(), "\"a\"b\\c\"".into())]);
     let printed = directive_to_string(&d[0]);
     assert_eq!(printed, r#"Option "string msereferenceimage" "a\"b\\c""#);
     assert_eq!(directives(&printed), d);

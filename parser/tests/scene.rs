@@ -46,9 +46,7 @@ fn options_block_entities_keep_name_parameters_and_location() {
 
 #[test]
 fn the_last_of_each_options_directive_wins() {
-    let s = load(
-        "Film \"rgb\"\nFilm \"spectral\"\nCamera \"perspective\"\nCamera \"realistic\"\nWorldBegin",
-    );
+    let s = load("Film \"rgb\"\nFilm \"spectral\"\nCamera \"perspective\"\nCamera \"realistic\"\nWorldBegin");
     assert_eq!(s.film.name, "spectral");
     assert_eq!(s.camera.entity.name, "realistic");
 }
@@ -84,16 +82,10 @@ fn shapes_get_a_medium_interface_only_where_the_media_differ() {
          AttributeEnd\n\
          Shape \"sphere\"",
     ));
-    let got: Vec<(Option<MediumInterface>, Option<&str>)> = s
-        .shapes
-        .iter()
-        .map(|sh| (sh.medium_interface.clone(), sh.outside_medium.as_deref()))
-        .collect();
+    let got: Vec<(Option<MediumInterface>, Option<&str>)> =
+        s.shapes.iter().map(|sh| (sh.medium_interface.clone(), sh.outside_medium.as_deref())).collect();
     let mi = |inside: Option<&str>, outside: Option<&str>| {
-        Some(MediumInterface {
-            inside: inside.map(str::to_string),
-            outside: outside.map(str::to_string),
-        })
+        Some(MediumInterface { inside: inside.map(str::to_string), outside: outside.map(str::to_string) })
     };
     assert_eq!(
         got,
@@ -122,12 +114,7 @@ fn media_keep_type_parameters_and_transform() {
     assert_eq!(m.entity.params.get_one_int("nx", 1), Ok(2));
     assert_eq!(m.entity.params.get_one_float("g", 0.0), Ok(0.5));
     assert_eq!(m.entity.loc.to_string(), "t.pbrt:5:1");
-    assert_eq!(
-        m.world_from_medium
-            .start
-            .transform_point3(glam::DVec3::ZERO),
-        glam::DVec3::new(0.0, 2.0, 0.0)
-    );
+    assert_eq!(m.world_from_medium.start.transform_point3(glam::DVec3::ZERO), glam::DVec3::new(0.0, 2.0, 0.0));
     assert!(s.medium("other").is_none());
 }
 
@@ -185,79 +172,47 @@ fn object_instancing() {
     let def = &s.instance_definitions[0];
     assert_eq!(def.name, "tree");
     assert_eq!(def.loc.to_string(), "t.pbrt:4:1");
-    let names: Vec<&str> = def
-        .shapes
-        .iter()
-        .map(|sh| sh.entity.name.as_str())
-        .collect();
+    let names: Vec<&str> = def.shapes.iter().map(|sh| sh.entity.name.as_str()).collect();
     assert_eq!(names, ["sphere", "cylinder"]);
     let origin = glam::DVec3::ZERO;
     for sh in &def.shapes {
-        assert_eq!(
-            sh.world_from_object.start.transform_point3(origin),
-            glam::DVec3::new(1.0, 0.0, 1.0)
-        );
+        assert_eq!(sh.world_from_object.start.transform_point3(origin), glam::DVec3::new(1.0, 0.0, 1.0));
         assert_eq!(sh.material, MaterialRef::Index(1));
     }
     // ObjectEnd restores the graphics state: the disk has the default material and the
     // transform from before ObjectBegin.
     assert_eq!(s.shapes[0].material, MaterialRef::Index(0));
-    assert_eq!(
-        s.shapes[0].world_from_object.start.transform_point3(origin),
-        glam::DVec3::new(0.0, 0.0, 1.0)
-    );
+    assert_eq!(s.shapes[0].world_from_object.start.transform_point3(origin), glam::DVec3::new(0.0, 0.0, 1.0));
     let uses: Vec<(&str, glam::DVec3, String)> = s
         .instances
         .iter()
-        .map(|u| {
-            (
-                u.name.as_str(),
-                u.world_from_instance.start.transform_point3(origin),
-                u.loc.to_string(),
-            )
-        })
+        .map(|u| (u.name.as_str(), u.world_from_instance.start.transform_point3(origin), u.loc.to_string()))
         .collect();
     assert_eq!(
         uses,
         [
-            (
-                "tree",
-                glam::DVec3::new(0.0, 5.0, 1.0),
-                "t.pbrt:12:1".to_string()
-            ),
-            (
-                "tree",
-                glam::DVec3::new(0.0, 10.0, 1.0),
-                "t.pbrt:14:1".to_string()
-            ),
+            ("tree", glam::DVec3::new(0.0, 5.0, 1.0), "t.pbrt:12:1".to_string()),
+            ("tree", glam::DVec3::new(0.0, 10.0, 1.0), "t.pbrt:14:1".to_string()),
         ]
     );
 }
 
 #[test]
 fn an_instance_may_be_used_before_its_definition() {
-    let s = load(&scene(
-        "",
-        "ObjectInstance \"later\"\nObjectBegin \"later\"\nShape \"sphere\"\nObjectEnd",
-    ));
+    let s = load(&scene("", "ObjectInstance \"later\"\nObjectBegin \"later\"\nShape \"sphere\"\nObjectEnd"));
     assert_eq!(s.instances.len(), 1);
     assert_eq!(s.instance_definitions[0].shapes.len(), 1);
 }
 
 #[test]
 fn area_lights_inside_object_definitions_are_dropped_with_a_warning() {
-    let s = load(&scene(
-        "",
-        "ObjectBegin \"lamp\"\nAreaLightSource \"diffuse\"\n  Shape \"sphere\"\nObjectEnd",
-    ));
+    let s = load(&scene("", "ObjectBegin \"lamp\"\nAreaLightSource \"diffuse\"\n  Shape \"sphere\"\nObjectEnd"));
     assert_eq!(s.instance_definitions[0].shapes[0].area_light, None);
     assert!(s.area_lights.is_empty());
     let warnings: Vec<String> = s.warnings.iter().map(|w| w.to_string()).collect();
     assert_eq!(
         warnings,
-        [
-            "t.pbrt:5:3: area lights are not supported with object instancing; this shape will not emit"
-        ]
+        ["t.pbrt:5:3: area lights are not supported with object instancing; this shape will not emit"]
     );
 }
 
@@ -275,24 +230,11 @@ fn color_space_is_graphics_state() {
     assert_eq!(s.camera.entity.color_space, ColorSpace::Aces2065_1);
     let spaces: Vec<ColorSpace> = s.shapes.iter().map(|sh| sh.entity.color_space).collect();
     // WorldBegin keeps the color space; AttributeEnd restores it.
-    assert_eq!(
-        spaces,
-        [
-            ColorSpace::Aces2065_1,
-            ColorSpace::DciP3,
-            ColorSpace::Aces2065_1,
-            ColorSpace::Srgb
-        ]
-    );
+    assert_eq!(spaces, [ColorSpace::Aces2065_1, ColorSpace::DciP3, ColorSpace::Aces2065_1, ColorSpace::Srgb]);
     assert_eq!(s.lights[0].entity.color_space, ColorSpace::Rec2020);
     assert_eq!(s.materials[1].color_space, ColorSpace::Rec2020);
     assert_eq!(s.textures[0].entity.color_space, ColorSpace::Rec2020);
-    for cs in [
-        ColorSpace::Srgb,
-        ColorSpace::Rec2020,
-        ColorSpace::Aces2065_1,
-        ColorSpace::DciP3,
-    ] {
+    for cs in [ColorSpace::Srgb, ColorSpace::Rec2020, ColorSpace::Aces2065_1, ColorSpace::DciP3] {
         assert_eq!(ColorSpace::from_name(cs.name()), Some(cs));
     }
 }
@@ -345,18 +287,9 @@ fn materials_named_and_anonymous() {
     let refs: Vec<&MaterialRef> = s.shapes.iter().map(|sh| &sh.material).collect();
     assert_eq!(
         refs,
-        [
-            &MaterialRef::Index(0),
-            &MaterialRef::Index(1),
-            &MaterialRef::Named("glass".into()),
-            &MaterialRef::Index(2),
-        ]
+        [&MaterialRef::Index(0), &MaterialRef::Index(1), &MaterialRef::Named("glass".into()), &MaterialRef::Index(2),]
     );
-    let types: Vec<&str> = s
-        .shapes
-        .iter()
-        .map(|sh| s.material_of(&sh.material).unwrap().name.as_str())
-        .collect();
+    let types: Vec<&str> = s.shapes.iter().map(|sh| s.material_of(&sh.material).unwrap().name.as_str()).collect();
     assert_eq!(types, ["diffuse", "conductor", "dielectric", "diffuse"]);
     let glass = s.named_material("glass").unwrap();
     assert_eq!(glass.entity.params.get_one_float("eta", 1.0), Ok(1.5));
@@ -375,12 +308,7 @@ fn textures_keep_value_type_class_and_transform() {
     let t = s.texture("checks", TextureValue::Spectrum).unwrap();
     assert_eq!(t.entity.name, "checkerboard");
     assert_eq!(t.entity.params.get_one_float("uscale", 1.0), Ok(8.0));
-    assert_eq!(
-        t.world_from_texture
-            .start
-            .transform_point3(glam::DVec3::ONE),
-        glam::DVec3::splat(2.0)
-    );
+    assert_eq!(t.world_from_texture.start.transform_point3(glam::DVec3::ONE), glam::DVec3::splat(2.0));
     assert!(s.texture("checks", TextureValue::Float).is_none());
     let b = s.texture("bump", TextureValue::Float).unwrap();
     assert_eq!(b.entity.name, "imagemap");
@@ -420,78 +348,32 @@ fn attribute_defaults_apply_to_their_kind_within_their_block() {
          AttributeEnd\n\
          Shape \"sphere\"\nMaterial \"diffuse\"",
     ));
-    let radius = |i: usize| {
-        s.shapes[i]
-            .entity
-            .params
-            .get_one_float("radius", 1.0)
-            .unwrap()
-    };
+    let radius = |i: usize| s.shapes[i].entity.params.get_one_float("radius", 1.0).unwrap();
     // Defaults apply; the shape's own parameter wins; later Attributes win over earlier ones;
     // AttributeEnd drops them.
-    assert_eq!(
-        [radius(0), radius(1), radius(2), radius(3)],
-        [0.5, 2.0, 0.75, 1.0]
-    );
-    assert_eq!(
-        s.shapes[0].entity.params.get_one_float("zmax", 1.0),
-        Ok(0.25)
-    );
-    assert_eq!(
-        s.lights[0].entity.params.get_rgbs("L"),
-        Ok(&[[1.0, 2.0, 3.0]][..])
-    );
-    assert_eq!(
-        s.materials[1].params.get_one_float("roughness", 0.0),
-        Ok(0.3)
-    );
-    assert_eq!(
-        s.named_material("m")
-            .unwrap()
-            .entity
-            .params
-            .get_one_float("roughness", 0.0),
-        Ok(0.3)
-    );
-    assert_eq!(
-        s.textures[0].entity.params.get_one_float("scale", 1.0),
-        Ok(4.0)
-    );
-    assert_eq!(
-        s.medium("f").unwrap().entity.params.get_one_float("g", 0.0),
-        Ok(0.7)
-    );
+    assert_eq!([radius(0), radius(1), radius(2), radius(3)], [0.5, 2.0, 0.75, 1.0]);
+    assert_eq!(s.shapes[0].entity.params.get_one_float("zmax", 1.0), Ok(0.25));
+    assert_eq!(s.lights[0].entity.params.get_rgbs("L"), Ok(&[[1.0, 2.0, 3.0]][..]));
+    assert_eq!(s.materials[1].params.get_one_float("roughness", 0.0), Ok(0.3));
+    assert_eq!(s.named_material("m").unwrap().entity.params.get_one_float("roughness", 0.0), Ok(0.3));
+    assert_eq!(s.textures[0].entity.params.get_one_float("scale", 1.0), Ok(4.0));
+    assert_eq!(s.medium("f").unwrap().entity.params.get_one_float("g", 0.0), Ok(0.7));
     // Defaults go only to their own kind...
     assert_eq!(s.lights[0].entity.params.peek("radius"), None);
     assert_eq!(s.materials[1].params.peek("L"), None);
     assert_eq!(s.materials[2].params.peek("roughness"), None);
     // ...and an entity need not use them: only its own parameters are reported unused.
     assert_eq!(s.shapes[1].entity.params.report_unused(), []);
-    let light_unused: Vec<String> = s.lights[0]
-        .entity
-        .params
-        .report_unused()
-        .iter()
-        .map(|w| w.to_string())
-        .collect();
-    assert_eq!(
-        light_unused,
-        ["t.pbrt:11:21: \"float power\": unused parameter"]
-    );
+    let light_unused: Vec<String> = s.lights[0].entity.params.report_unused().iter().map(|w| w.to_string()).collect();
+    assert_eq!(light_unused, ["t.pbrt:11:21: \"float power\": unused parameter"]);
 }
 
 #[test]
 fn an_attribute_default_of_another_type_does_not_hide_the_real_parameter() {
-    let s = load(&scene(
-        "",
-        "Attribute \"shape\" \"integer radius\" 3\nShape \"sphere\"",
-    ));
+    let s = load(&scene("", "Attribute \"shape\" \"integer radius\" 3\nShape \"sphere\""));
     // The default has the wrong type for this lookup, but being a default it is skipped
     // rather than reported.
-    assert_eq!(
-        s.shapes[0].entity.params.get_one_float("radius", 1.0),
-        Ok(1.0)
-    );
+    assert_eq!(s.shapes[0].entity.params.get_one_float("radius", 1.0), Ok(1.0));
 }
 
 #[test]
@@ -502,19 +384,10 @@ fn transform_begin_is_a_deprecated_attribute_begin() {
          TransformBegin\nTransformEnd",
     ));
     assert_eq!(s.shapes[0].material, MaterialRef::Index(0));
-    assert_eq!(
-        s.shapes[0]
-            .world_from_object
-            .start
-            .transform_point3(glam::DVec3::ZERO),
-        glam::DVec3::ZERO
-    );
+    assert_eq!(s.shapes[0].world_from_object.start.transform_point3(glam::DVec3::ZERO), glam::DVec3::ZERO);
     // Warned once.
     let warnings: Vec<String> = s.warnings.iter().map(|w| w.to_string()).collect();
-    assert_eq!(
-        warnings,
-        ["t.pbrt:3:1: TransformBegin/TransformEnd are deprecated: use AttributeBegin/AttributeEnd"]
-    );
+    assert_eq!(warnings, ["t.pbrt:3:1: TransformBegin/TransformEnd are deprecated: use AttributeBegin/AttributeEnd"]);
 }
 
 /// A statement of a generated world block.
@@ -538,9 +411,7 @@ fn items() -> impl proptest::strategy::Strategy<Value = Vec<Item>> {
         Just(Item::Shape),
         Just(Item::Shape),
     ];
-    let item = leaf.prop_recursive(4, 48, 6, |inner| {
-        proptest::collection::vec(inner, 0..6).prop_map(Item::Block)
-    });
+    let item = leaf.prop_recursive(4, 48, 6, |inner| proptest::collection::vec(inner, 0..6).prop_map(Item::Block));
     proptest::collection::vec(item, 0..10)
 }
 
@@ -608,14 +479,7 @@ fn model(
             Item::Block(inner) => {
                 text.push_str("AttributeBegin\n");
                 let mut inner_state = state.clone();
-                model(
-                    inner,
-                    &mut inner_state,
-                    text,
-                    materials,
-                    area_lights,
-                    shapes,
-                );
+                model(inner, &mut inner_state, text, materials, area_lights, shapes);
                 text.push_str("AttributeEnd\n");
             }
         }

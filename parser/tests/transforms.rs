@@ -15,32 +15,19 @@ fn object_transform(world: &str) -> DMat4 {
 }
 
 fn translation(x: f64, y: f64, z: f64) -> DMat4 {
-    rows([
-        [1.0, 0.0, 0.0, x],
-        [0.0, 1.0, 0.0, y],
-        [0.0, 0.0, 1.0, z],
-        [0.0, 0.0, 0.0, 1.0],
-    ])
+    rows([[1.0, 0.0, 0.0, x], [0.0, 1.0, 0.0, y], [0.0, 0.0, 1.0, z], [0.0, 0.0, 0.0, 1.0]])
 }
 
 #[test]
 fn translate() {
-    assert_mat_close(
-        object_transform("Translate 1 -2 3.5"),
-        translation(1.0, -2.0, 3.5),
-    );
+    assert_mat_close(object_transform("Translate 1 -2 3.5"), translation(1.0, -2.0, 3.5));
 }
 
 #[test]
 fn scale() {
     assert_mat_close(
         object_transform("Scale 2 3 -4"),
-        rows([
-            [2.0, 0.0, 0.0, 0.0],
-            [0.0, 3.0, 0.0, 0.0],
-            [0.0, 0.0, -4.0, 0.0],
-            [0.0, 0.0, 0.0, 1.0],
-        ]),
+        rows([[2.0, 0.0, 0.0, 0.0], [0.0, 3.0, 0.0, 0.0], [0.0, 0.0, -4.0, 0.0], [0.0, 0.0, 0.0, 1.0]]),
     );
 }
 
@@ -49,42 +36,22 @@ fn rotate_is_counterclockwise_in_degrees_about_any_axis() {
     // 90 degrees about z takes x to y.
     assert_mat_close(
         object_transform("Rotate 90 0 0 1"),
-        rows([
-            [0.0, -1.0, 0.0, 0.0],
-            [1.0, 0.0, 0.0, 0.0],
-            [0.0, 0.0, 1.0, 0.0],
-            [0.0, 0.0, 0.0, 1.0],
-        ]),
+        rows([[0.0, -1.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]]),
     );
     // 90 degrees about x takes y to z; the axis need not be normalised.
     assert_mat_close(
         object_transform("Rotate 90 3 0 0"),
-        rows([
-            [1.0, 0.0, 0.0, 0.0],
-            [0.0, 0.0, -1.0, 0.0],
-            [0.0, 1.0, 0.0, 0.0],
-            [0.0, 0.0, 0.0, 1.0],
-        ]),
+        rows([[1.0, 0.0, 0.0, 0.0], [0.0, 0.0, -1.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0]]),
     );
     // 120 degrees about (1,1,1) cycles the axes: x to y, y to z, z to x.
     assert_mat_close(
         object_transform("Rotate 120 1 1 1"),
-        rows([
-            [0.0, 0.0, 1.0, 0.0],
-            [1.0, 0.0, 0.0, 0.0],
-            [0.0, 1.0, 0.0, 0.0],
-            [0.0, 0.0, 0.0, 1.0],
-        ]),
+        rows([[0.0, 0.0, 1.0, 0.0], [1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0]]),
     );
     // -90 about y takes x to z.
     assert_mat_close(
         object_transform("Rotate -90 0 1 0"),
-        rows([
-            [0.0, 0.0, -1.0, 0.0],
-            [0.0, 1.0, 0.0, 0.0],
-            [1.0, 0.0, 0.0, 0.0],
-            [0.0, 0.0, 0.0, 1.0],
-        ]),
+        rows([[0.0, 0.0, -1.0, 0.0], [0.0, 1.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0]]),
     );
 }
 
@@ -93,87 +60,47 @@ fn transforms_compose_right_to_left_on_points() {
     // Each directive multiplies on the right: the last one acts on the object first.
     assert_mat_close(
         object_transform("Translate 1 0 0\nScale 2 2 2"),
-        rows([
-            [2.0, 0.0, 0.0, 1.0],
-            [0.0, 2.0, 0.0, 0.0],
-            [0.0, 0.0, 2.0, 0.0],
-            [0.0, 0.0, 0.0, 1.0],
-        ]),
+        rows([[2.0, 0.0, 0.0, 1.0], [0.0, 2.0, 0.0, 0.0], [0.0, 0.0, 2.0, 0.0], [0.0, 0.0, 0.0, 1.0]]),
     );
     assert_mat_close(
         object_transform("Rotate 90 0 0 1\nTranslate 1 0 0"),
-        rows([
-            [0.0, -1.0, 0.0, 0.0],
-            [1.0, 0.0, 0.0, 1.0],
-            [0.0, 0.0, 1.0, 0.0],
-            [0.0, 0.0, 0.0, 1.0],
-        ]),
+        rows([[0.0, -1.0, 0.0, 0.0], [1.0, 0.0, 0.0, 1.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]]),
     );
 }
 
 #[test]
 fn transform_replaces_the_matrix_given_column_by_column() {
     assert_mat_close(
-        object_transform(
-            "Translate 9 9 9\nTransform [ 1 2 3 4  5 6 7 8  9 10 11 12  13 14 15 16 ]",
-        ),
-        rows([
-            [1.0, 5.0, 9.0, 13.0],
-            [2.0, 6.0, 10.0, 14.0],
-            [3.0, 7.0, 11.0, 15.0],
-            [4.0, 8.0, 12.0, 16.0],
-        ]),
+        object_transform("Translate 9 9 9\nTransform [ 1 2 3 4  5 6 7 8  9 10 11 12  13 14 15 16 ]"),
+        rows([[1.0, 5.0, 9.0, 13.0], [2.0, 6.0, 10.0, 14.0], [3.0, 7.0, 11.0, 15.0], [4.0, 8.0, 12.0, 16.0]]),
     );
-    assert_mat_close(
-        object_transform("Transform [ 1 0 0 0  0 1 0 0  0 0 1 0  5 6 7 1 ]"),
-        translation(5.0, 6.0, 7.0),
-    );
+    assert_mat_close(object_transform("Transform [ 1 0 0 0  0 1 0 0  0 0 1 0  5 6 7 1 ]"), translation(5.0, 6.0, 7.0));
 }
 
 #[test]
 fn concat_transform_multiplies_on_the_right() {
     assert_mat_close(
-        object_transform(
-            "Translate 1 0 0\nConcatTransform [ 1 2 3 4  5 6 7 8  9 10 11 12  13 14 15 16 ]",
-        ),
-        rows([
-            [5.0, 13.0, 21.0, 29.0],
-            [2.0, 6.0, 10.0, 14.0],
-            [3.0, 7.0, 11.0, 15.0],
-            [4.0, 8.0, 12.0, 16.0],
-        ]),
+        object_transform("Translate 1 0 0\nConcatTransform [ 1 2 3 4  5 6 7 8  9 10 11 12  13 14 15 16 ]"),
+        rows([[5.0, 13.0, 21.0, 29.0], [2.0, 6.0, 10.0, 14.0], [3.0, 7.0, 11.0, 15.0], [4.0, 8.0, 12.0, 16.0]]),
     );
 }
 
 #[test]
 fn look_at_in_the_world_block() {
     // Eye (1,2,3) looking down +z with +y up: camera-from-world is a translation by -eye.
-    assert_mat_close(
-        object_transform("LookAt 1 2 3  1 2 10  0 1 0"),
-        translation(-1.0, -2.0, -3.0),
-    );
+    assert_mat_close(object_transform("LookAt 1 2 3  1 2 10  0 1 0"), translation(-1.0, -2.0, -3.0));
     // Eye at the origin looking down +x with +z up: camera x is world y, camera y is world
     // z, camera z is world x.
     assert_mat_close(
         object_transform("LookAt 0 0 0  1 0 0  0 0 1"),
-        rows([
-            [0.0, 1.0, 0.0, 0.0],
-            [0.0, 0.0, 1.0, 0.0],
-            [1.0, 0.0, 0.0, 0.0],
-            [0.0, 0.0, 0.0, 1.0],
-        ]),
+        rows([[0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [1.0, 0.0, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0]]),
     );
 }
 
 /// The world-from-camera of `LookAt 0 0 5  0 0 0  0 1 0`: pbrt's camera space is left-handed,
 /// so looking down -z with +y up puts camera +x at world -x.
 fn look_at_z5() -> DMat4 {
-    rows([
-        [-1.0, 0.0, 0.0, 0.0],
-        [0.0, 1.0, 0.0, 0.0],
-        [0.0, 0.0, -1.0, 5.0],
-        [0.0, 0.0, 0.0, 1.0],
-    ])
+    rows([[-1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, -1.0, 5.0], [0.0, 0.0, 0.0, 1.0]])
 }
 
 #[test]
@@ -184,31 +111,21 @@ fn camera_transform_is_the_inverse_of_the_options_block_ctm() {
     let s = load("Scale -1 1 1\nTranslate 0 0 -4\nCamera \"perspective\"\nWorldBegin");
     assert_mat_close(
         s.camera.world_from_camera.start,
-        rows([
-            [-1.0, 0.0, 0.0, 0.0],
-            [0.0, 1.0, 0.0, 0.0],
-            [0.0, 0.0, 1.0, 4.0],
-            [0.0, 0.0, 0.0, 1.0],
-        ]),
+        rows([[-1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 4.0], [0.0, 0.0, 0.0, 1.0]]),
     );
 }
 
 #[test]
 fn world_begin_resets_the_transform() {
     assert_mat_close(
-        load("Translate 1 2 3\nWorldBegin\nShape \"sphere\"").shapes[0]
-            .world_from_object
-            .start,
+        load("Translate 1 2 3\nWorldBegin\nShape \"sphere\"").shapes[0].world_from_object.start,
         DMat4::IDENTITY,
     );
 }
 
 #[test]
 fn identity_resets_the_transform() {
-    assert_mat_close(
-        object_transform("Translate 1 2 3\nRotate 30 1 0 0\nIdentity"),
-        DMat4::IDENTITY,
-    );
+    assert_mat_close(object_transform("Translate 1 2 3\nRotate 30 1 0 0\nIdentity"), DMat4::IDENTITY);
 }
 
 #[test]
@@ -217,23 +134,14 @@ fn attribute_blocks_restore_the_transform() {
         "",
         "Translate 1 0 0\nAttributeBegin\nTranslate 0 1 0\nShape \"sphere\"\nAttributeEnd\nShape \"sphere\"",
     ));
-    assert_mat_close(
-        s.shapes[0].world_from_object.start,
-        translation(1.0, 1.0, 0.0),
-    );
-    assert_mat_close(
-        s.shapes[1].world_from_object.start,
-        translation(1.0, 0.0, 0.0),
-    );
+    assert_mat_close(s.shapes[0].world_from_object.start, translation(1.0, 1.0, 0.0));
+    assert_mat_close(s.shapes[1].world_from_object.start, translation(1.0, 0.0, 0.0));
 }
 
 #[test]
 fn lights_take_the_current_transform() {
     let s = load(&scene("", "Translate 0 4 0\nLightSource \"point\""));
-    assert_mat_close(
-        s.lights[0].world_from_light.start,
-        translation(0.0, 4.0, 0.0),
-    );
+    assert_mat_close(s.lights[0].world_from_light.start, translation(0.0, 4.0, 0.0));
 }
 
 #[test]
@@ -246,11 +154,7 @@ fn named_coordinate_systems() {
          Translate 7 7 7\nCoordSysTransform \"world\"\nShape \"sphere\"\n\
          CoordSysTransform \"nowhere\"\nShape \"sphere\"",
     ));
-    let t: Vec<DMat4> = s
-        .shapes
-        .iter()
-        .map(|sh| sh.world_from_object.start)
-        .collect();
+    let t: Vec<DMat4> = s.shapes.iter().map(|sh| sh.world_from_object.start).collect();
     assert_mat_close(t[0], DMat4::IDENTITY);
     assert_mat_close(t[1], translation(0.0, 3.0, 0.0));
     // "camera" places objects in camera space.
@@ -259,10 +163,7 @@ fn named_coordinate_systems() {
     // An unknown name leaves the transform alone, with a warning.
     assert_mat_close(t[4], DMat4::IDENTITY);
     let warnings: Vec<String> = s.warnings.iter().map(|w| w.to_string()).collect();
-    assert_eq!(
-        warnings,
-        ["t.pbrt:15:1: couldn't find named coordinate system \"nowhere\""]
-    );
+    assert_eq!(warnings, ["t.pbrt:15:1: couldn't find named coordinate system \"nowhere\""]);
 }
 
 #[test]
@@ -271,10 +172,7 @@ fn named_coordinate_systems_from_the_options_block_carry_into_the_world() {
         "Translate 2 0 0\nCoordinateSystem \"opt\"\nCamera \"perspective\"",
         "CoordSysTransform \"opt\"\nShape \"sphere\"",
     ));
-    assert_mat_close(
-        s.shapes[0].world_from_object.start,
-        translation(2.0, 0.0, 0.0),
-    );
+    assert_mat_close(s.shapes[0].world_from_object.start, translation(2.0, 0.0, 0.0));
 }
 
 /// A scene with the camera and a shape animated through ActiveTransform.
@@ -310,12 +208,7 @@ fn active_transform_and_transform_times_keep_start_and_end() {
     // camera-from-world: start = T(0,0,-1) S(2), end = T(0,0,-1) T(0,0,-2).
     assert_mat_close(
         cam.start,
-        rows([
-            [0.5, 0.0, 0.0, 0.0],
-            [0.0, 0.5, 0.0, 0.0],
-            [0.0, 0.0, 0.5, 0.5],
-            [0.0, 0.0, 0.0, 1.0],
-        ]),
+        rows([[0.5, 0.0, 0.0, 0.0], [0.0, 0.5, 0.0, 0.0], [0.0, 0.0, 0.5, 0.5], [0.0, 0.0, 0.0, 1.0]]),
     );
     assert_mat_close(cam.end, translation(0.0, 0.0, 3.0));
 

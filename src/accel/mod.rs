@@ -94,12 +94,7 @@ struct Candidate {
 /// traversal octant from the sign bits and its slab test misses with -0.0 components.
 #[inline]
 fn bvh_ray(ray: &Ray, t_max: f32) -> BvhRay {
-    BvhRay::new(
-        Vec3A::from(ray.o),
-        Vec3A::from(ray.d) + Vec3A::ZERO,
-        0.0,
-        t_max,
-    )
+    BvhRay::new(Vec3A::from(ray.o), Vec3A::from(ray.d) + Vec3A::ZERO, 0.0, t_max)
 }
 
 /// A deterministic fair coin per ray (for coplanar ties).
@@ -142,21 +137,9 @@ impl Accel {
                 Bound(Aabb::new(Vec3A::from(b.min), Vec3A::from(b.max)))
             })
             .collect();
-        let bvh = build_cwbvh(
-            &aabbs,
-            BvhBuildParams::medium_build(),
-            &mut Duration::default(),
-        );
-        let prims = bvh
-            .primitive_indices
-            .iter()
-            .map(|&i| prims[i as usize])
-            .collect();
-        Some(Accel {
-            bvh,
-            prims,
-            bounds: total,
-        })
+        let bvh = build_cwbvh(&aabbs, BvhBuildParams::medium_build(), &mut Duration::default());
+        let prims = bvh.primitive_indices.iter().map(|&i| prims[i as usize]).collect();
+        Some(Accel { bvh, prims, bounds: total })
     }
 
     /// World bounds of everything in the BVH.
@@ -164,14 +147,7 @@ impl Accel {
         self.bounds
     }
 
-    fn closest(
-        &self,
-        scene: &Surfaces,
-        ray: &Ray,
-        t_max: f32,
-        instance: u32,
-        best: &mut Option<Candidate>,
-    ) {
+    fn closest(&self, scene: &Surfaces, ray: &Ray, t_max: f32, instance: u32, best: &mut Option<Candidate>) {
         let bvh_ray = bvh_ray(ray, t_max);
         let mut hit = RayHit::none();
         self.bvh.ray_traverse(bvh_ray, &mut hit, |r, id| {
@@ -180,15 +156,15 @@ impl Accel {
                 Geometry::Triangle { mesh, tri } => scene.shapes.meshes[mesh as usize]
                     .intersect(tri, ray, r.tmax)
                     .map(|(t, b1, b2)| (t, Detail::Barycentric(b1, b2))),
-                Geometry::Sphere(i) => scene.shapes.spheres[i as usize]
-                    .intersect(ray, r.tmax)
-                    .map(|(t, p)| (t, Detail::ObjectPoint(p))),
-                Geometry::Disk(i) => scene.shapes.disks[i as usize]
-                    .intersect(ray, r.tmax)
-                    .map(|(t, p)| (t, Detail::ObjectPoint(p))),
-                Geometry::Cylinder(i) => scene.shapes.cylinders[i as usize]
-                    .intersect(ray, r.tmax)
-                    .map(|(t, p)| (t, Detail::ObjectPoint(p))),
+                Geometry::Sphere(i) => {
+                    scene.shapes.spheres[i as usize].intersect(ray, r.tmax).map(|(t, p)| (t, Detail::ObjectPoint(p)))
+                }
+                Geometry::Disk(i) => {
+                    scene.shapes.disks[i as usize].intersect(ray, r.tmax).map(|(t, p)| (t, Detail::ObjectPoint(p)))
+                }
+                Geometry::Cylinder(i) => {
+                    scene.shapes.cylinders[i as usize].intersect(ray, r.tmax).map(|(t, p)| (t, Detail::ObjectPoint(p)))
+                }
                 Geometry::Instance(k) => {
                     let inst = &scene.instances[k as usize];
                     let local = Ray::new(
@@ -217,26 +193,15 @@ impl Accel {
             };
             match *best {
                 Some(b) if tie(t, b.t) => {
-                    let (new_pass, old_pass) =
-                        (scene.is_pass_through(prim), scene.is_pass_through(b.prim));
+                    let (new_pass, old_pass) = (scene.is_pass_through(prim), scene.is_pass_through(b.prim));
                     if new_pass != old_pass && ray_coin(ray) == new_pass {
-                        *best = Some(Candidate {
-                            t: b.t,
-                            prim,
-                            instance,
-                            detail,
-                        });
+                        *best = Some(Candidate { t: b.t, prim, instance, detail });
                     }
                     slack(b.t)
                 }
                 Some(b) if t >= b.t => f32::INFINITY,
                 _ => {
-                    *best = Some(Candidate {
-                        t,
-                        prim,
-                        instance,
-                        detail,
-                    });
+                    *best = Some(Candidate { t, prim, instance, detail });
                     slack(t)
                 }
             }
@@ -248,18 +213,12 @@ impl Accel {
         !self.bvh.ray_traverse_miss(bvh_ray, |r, id| {
             let prim = self.prims[id];
             let hit = match prim.geometry {
-                Geometry::Triangle { mesh, tri } => scene.shapes.meshes[mesh as usize]
-                    .intersect(tri, ray, r.tmax)
-                    .is_some(),
-                Geometry::Sphere(i) => scene.shapes.spheres[i as usize]
-                    .intersect(ray, r.tmax)
-                    .is_some(),
-                Geometry::Disk(i) => scene.shapes.disks[i as usize]
-                    .intersect(ray, r.tmax)
-                    .is_some(),
-                Geometry::Cylinder(i) => scene.shapes.cylinders[i as usize]
-                    .intersect(ray, r.tmax)
-                    .is_some(),
+                Geometry::Triangle { mesh, tri } => {
+                    scene.shapes.meshes[mesh as usize].intersect(tri, ray, r.tmax).is_some()
+                }
+                Geometry::Sphere(i) => scene.shapes.spheres[i as usize].intersect(ray, r.tmax).is_some(),
+                Geometry::Disk(i) => scene.shapes.disks[i as usize].intersect(ray, r.tmax).is_some(),
+                Geometry::Cylinder(i) => scene.shapes.cylinders[i as usize].intersect(ray, r.tmax).is_some(),
                 Geometry::Instance(k) => {
                     let inst = &scene.instances[k as usize];
                     let local = Ray::new(
@@ -311,10 +270,7 @@ pub struct Surfaces {
 impl Surfaces {
     #[inline]
     fn is_pass_through(&self, prim: Primitive) -> bool {
-        self.pass_through
-            .get(prim.material as usize)
-            .copied()
-            .unwrap_or(false)
+        self.pass_through.get(prim.material as usize).copied().unwrap_or(false)
     }
 
     /// The closest surface the ray hits before `t_max`.
@@ -351,17 +307,12 @@ impl Surfaces {
                 dpdu: w.transform_vector3(local.dpdu),
             }
         };
-        Some(Hit {
-            surface,
-            prim: c.prim,
-        })
+        Some(Hit { surface, prim: c.prim })
     }
 
     /// True when anything blocks the ray before `t_max`.
     pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
-        self.top
-            .as_ref()
-            .is_some_and(|top| top.any(self, ray, t_max))
+        self.top.as_ref().is_some_and(|top| top.any(self, ray, t_max))
     }
 
     /// Bounds of all surfaces (empty without surfaces).
@@ -379,12 +330,7 @@ mod tests {
         s.shapes.meshes.push(Mesh::new(
             &Affine3A::IDENTITY,
             false,
-            &[
-                [-1.0, -1.0, 0.0],
-                [1.0, -1.0, 0.0],
-                [1.0, 1.0, 0.0],
-                [-1.0, 1.0, 0.0],
-            ],
+            &[[-1.0, -1.0, 0.0], [1.0, -1.0, 0.0], [1.0, 1.0, 0.0], [-1.0, 1.0, 0.0]],
             &[],
             &[],
             vec![0, 1, 2, 0, 2, 3],
@@ -410,12 +356,7 @@ mod tests {
                 area_light: NONE,
                 interface: NONE,
             },
-            Primitive {
-                geometry: Geometry::Sphere(0),
-                material: 1,
-                area_light: NONE,
-                interface: NONE,
-            },
+            Primitive { geometry: Geometry::Sphere(0), material: 1, area_light: NONE, interface: NONE },
         ];
         let bounds: Vec<Bounds3> = prims.iter().map(|p| s.shapes.bounds(p.geometry)).collect();
         s.top = Accel::build(prims, &bounds);
@@ -435,20 +376,14 @@ mod tests {
         assert!((h.surface.t - 5.0).abs() < 1e-4);
         assert!(s.occluded(&side, 10.0));
         assert!(!s.occluded(&side, 4.0));
-        assert!(
-            s.intersect(&Ray::new(Vec3::new(3.0, 0.0, 5.0), -Vec3::Z), f32::INFINITY)
-                .is_none()
-        );
+        assert!(s.intersect(&Ray::new(Vec3::new(3.0, 0.0, 5.0), -Vec3::Z), f32::INFINITY).is_none());
     }
 
     #[test]
     fn no_surfaces_means_no_bvh() {
         let s = Surfaces::default();
         assert!(s.top.is_none());
-        assert!(
-            s.intersect(&Ray::new(Vec3::ZERO, Vec3::Z), f32::INFINITY)
-                .is_none()
-        );
+        assert!(s.intersect(&Ray::new(Vec3::ZERO, Vec3::Z), f32::INFINITY).is_none());
         assert!(!s.occluded(&Ray::new(Vec3::ZERO, Vec3::Z), 1.0));
     }
 }

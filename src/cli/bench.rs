@@ -57,10 +57,7 @@ fn baseline_seconds() -> f64 {
 
 fn default_scenes() -> Vec<PathBuf> {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/pbrt-v4-references/scenes");
-    let mut v: Vec<PathBuf> = PBRT_V4_SECONDS
-        .iter()
-        .map(|(n, _)| dir.join(format!("{n}.pbrt")))
-        .collect();
+    let mut v: Vec<PathBuf> = PBRT_V4_SECONDS.iter().map(|(n, _)| dir.join(format!("{n}.pbrt"))).collect();
     v.push(Path::new(env!("CARGO_MANIFEST_DIR")).join("pbrt-scenes/default.pbrt"));
     v
 }
@@ -68,23 +65,14 @@ fn default_scenes() -> Vec<PathBuf> {
 /// Times each scene (parse + build + render, as pbrt-v4's wall time includes) and prints a
 /// table.
 pub fn run(args: &BenchArgs) -> Result<ExitCode> {
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(args.nthreads.max(1))
-        .build()?;
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(args.nthreads.max(1)).build()?;
     let base = baseline_seconds();
     println!("baseline (fixed CPU workload): {:.3} s", base);
     println!("| scene | spp | nimbus s | Msamples/s | pbrt-v4 s | speed-up vs pbrt-v4 |");
     println!("|---|---|---|---|---|---|");
-    let scenes = if args.scenes.is_empty() {
-        default_scenes()
-    } else {
-        args.scenes.clone()
-    };
+    let scenes = if args.scenes.is_empty() { default_scenes() } else { args.scenes.clone() };
     for path in scenes {
-        let name = path
-            .file_stem()
-            .map(|s| s.to_string_lossy().into_owned())
-            .unwrap_or_default();
+        let name = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
         let mut times = Vec::new();
         let mut samples = 0u64;
         let mut failed = None;
@@ -92,22 +80,13 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode> {
             let t = Instant::now();
             let result = pool.install(|| -> Result<u64, String> {
                 let desc = nimbus::parser::load_file(&path).map_err(|e| e.to_string())?;
-                let scene = build_scene(
-                    &desc,
-                    &BuildOptions {
-                        spp: Some(args.spp),
-                        ..Default::default()
-                    },
-                )
-                .map_err(|e| e.to_string())?;
+                let scene = build_scene(&desc, &BuildOptions { spp: Some(args.spp), ..Default::default() })
+                    .map_err(|e| e.to_string())?;
                 let integrator = scene.integrator.create();
                 let r = nimbus::render::render(
                     &scene,
                     integrator.as_ref(),
-                    &nimbus::render::RenderOptions {
-                        time_budget: None,
-                        quiet: true,
-                    },
+                    &nimbus::render::RenderOptions { time_budget: None, quiet: true },
                 );
                 Ok(r.rays.camera)
             });
@@ -128,10 +107,7 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode> {
         }
         times.sort_by(f64::total_cmp);
         let median = times[times.len() / 2];
-        let pbrt = PBRT_V4_SECONDS
-            .iter()
-            .find(|(n, _)| *n == name)
-            .map(|(_, s)| *s);
+        let pbrt = PBRT_V4_SECONDS.iter().find(|(n, _)| *n == name).map(|(_, s)| *s);
         println!(
             "| {name} | {} | {median:.2} | {:.3} | {} | {} |",
             args.spp,

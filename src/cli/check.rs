@@ -53,32 +53,17 @@ pub fn run(args: &CheckArgs) -> Result<ExitCode> {
         if report.files.len() == 1 { "" } else { "s" }
     );
     println!("camera      {}", report.camera);
-    println!(
-        "film        {}x{} -> {}",
-        report.resolution[0], report.resolution[1], report.filename
-    );
+    println!("film        {}x{} -> {}", report.resolution[0], report.resolution[1], report.filename);
     println!("sampler     {}, {} spp", report.sampler, report.spp);
-    println!(
-        "integrator  {} {}",
-        report.integrator,
-        report.integrator_params.join(", ")
-    );
-    println!(
-        "shapes      {}, {} triangles, {} instances",
-        counts(&report.shapes),
-        report.triangles,
-        report.instances
-    );
+    println!("integrator  {} {}", report.integrator, report.integrator_params.join(", "));
+    println!("shapes      {}, {} triangles, {} instances", counts(&report.shapes), report.triangles, report.instances);
     println!("lights      {}", counts(&report.lights));
     println!("media       {}", counts(&report.media));
     println!("materials   {}", counts(&report.materials));
     println!("textures    {}", counts(&report.textures));
     println!("warnings    {}", report.warnings.len());
     if args.strict && !report.warnings.is_empty() {
-        eprintln!(
-            "error: {} warning(s) and --strict was given",
-            report.warnings.len()
-        );
+        eprintln!("error: {} warning(s) and --strict was given", report.warnings.len());
         return Ok(ExitCode::FAILURE);
     }
     Ok(ExitCode::SUCCESS)

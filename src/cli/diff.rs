@@ -18,6 +18,9 @@ pub struct DiffArgs {
     /// Difference shown at full intensity in the error image (default: 4 × RMSE).
     #[arg(long)]
     scale: Option<f32>,
+    /// Restrict the metrics to pixels x0..x1, y0..y1 (exclusive ends).
+    #[arg(long, num_args = 4, value_names = ["X0", "X1", "Y0", "Y1"])]
+    region: Option<Vec<usize>>,
     /// Print both images' values at these pixels (x,y).
     #[arg(long, value_parser = parse_pixel)]
     probe: Vec<(usize, usize)>,
@@ -25,16 +28,28 @@ pub struct DiffArgs {
 
 fn parse_pixel(s: &str) -> Result<(usize, usize), String> {
     let (x, y) = s.split_once(',').ok_or("expected x,y")?;
-    Ok((
-        x.trim().parse().map_err(|_| "bad x")?,
-        y.trim().parse().map_err(|_| "bad y")?,
-    ))
+    Ok((x.trim().parse().map_err(|_| "bad x")?, y.trim().parse().map_err(|_| "bad y")?))
 }
 
 /// Prints the metrics; writes the error image if asked.
 pub fn run(args: &DiffArgs) -> Result<ExitCode> {
     let read = |p: &PathBuf| nimbus::imageio::read_image(p).map_err(anyhow::Error::msg);
-    let (t, r) = (read(&args.test)?, read(&args.reference)?);
+    let (mut t, mut r) = (read(&args.test)?, read(&args.reference)?);
+    if let Some(reg) = &args.region {
+        let crop = |img: &nimbus::imageio::Image| -> Result<nimbus::imageio::Image> {
+            let (x0, x1, y0, y1) = (reg[0], reg[1].min(img.width), reg[2], reg[3].min(img.height));
+            anyhow::ensure!(x0 < x1 && y0 < y1, "--region selects no pixels");
+            let mut out = nimbus::imageio::Image::new(x1 - x0, y1 - y0);
+            for y in y0..y1 {
+                for x in x0..x1 {
+                    out.pixels[(y - y0) * (x1 - x0) + (x - x0)] = img.get(x, y);
+                }
+            }
+            Ok(out)
+        };
+        t = crop(&t)?;
+        r = crop(&r)?;
+    }
     let m = nimbus::metrics::error_metrics(&t, &r).map_err(anyhow::Error::msg)?;
     println!("MSE      {:.6e}", m.mse);
     println!("RMSE     {:.6e}", m.rmse);

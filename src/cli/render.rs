@@ -64,10 +64,7 @@ fn scene_error(e: &nimbus::parser::Error) {
 pub fn run(args: &RenderArgs) -> Result<ExitCode> {
     let t_start = Instant::now();
     if let Some(n) = args.nthreads {
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(n.max(1))
-            .build_global()
-            .context("setting the thread count")?;
+        rayon::ThreadPoolBuilder::new().num_threads(n.max(1)).build_global().context("setting the thread count")?;
     }
     if let Some(t) = args.time
         && (!t.is_finite() || t <= 0.0)
@@ -106,10 +103,7 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
         }
     }
     if args.strict && !warnings.is_empty() {
-        eprintln!(
-            "error: {} warning(s) and --strict was given",
-            warnings.len()
-        );
+        eprintln!("error: {} warning(s) and --strict was given", warnings.len());
         return Ok(ExitCode::FAILURE);
     }
     let t_built = Instant::now();
@@ -117,32 +111,16 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
     let result = nimbus::render::render(
         &scene,
         integrator.as_ref(),
-        &nimbus::render::RenderOptions {
-            time_budget: args.time,
-            quiet: args.quiet,
-        },
+        &nimbus::render::RenderOptions { time_budget: args.time, quiet: args.quiet },
     );
     let t_rendered = Instant::now();
     let mut image = result.image;
-    image
-        .metadata
-        .insert("nimbus:spp".into(), result.spp.to_string());
-    image
-        .metadata
-        .insert("nimbus:time".into(), format!("{:.3}", result.seconds));
-    image
-        .metadata
-        .insert("nimbus:integrator".into(), integrator.name().to_string());
-    image
-        .metadata
-        .insert("nimbus:seed".into(), scene.sampler.seed.to_string());
-    image
-        .metadata
-        .insert("nimbus:scene".into(), args.scene.display().to_string());
-    let out = args
-        .outfile
-        .clone()
-        .unwrap_or_else(|| PathBuf::from(&scene.film.filename));
+    image.metadata.insert("nimbus:spp".into(), result.spp.to_string());
+    image.metadata.insert("nimbus:time".into(), format!("{:.3}", result.seconds));
+    image.metadata.insert("nimbus:integrator".into(), integrator.name().to_string());
+    image.metadata.insert("nimbus:seed".into(), scene.sampler.seed.to_string());
+    image.metadata.insert("nimbus:scene".into(), args.scene.display().to_string());
+    let out = args.outfile.clone().unwrap_or_else(|| PathBuf::from(&scene.film.filename));
     nimbus::imageio::write_image(&out, &image).map_err(anyhow::Error::msg)?;
     let t_written = Instant::now();
     if !args.quiet {
@@ -174,20 +152,13 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
             result.rays.shadow,
             result.rays.total() as f64 / secs / 1e6
         );
-        println!(
-            "paths       {:.3} M paths/s",
-            result.rays.camera as f64 / secs / 1e6
-        );
+        println!("paths       {:.3} M paths/s", result.rays.camera as f64 / secs / 1e6);
         println!(
             "geometry    {} primitives, {} triangles, {:.1} MiB of mesh data, {}",
             scene.stats.primitives,
             scene.stats.triangles,
             scene.stats.mesh_bytes as f64 / (1 << 20) as f64,
-            if scene.surfaces.top.is_some() {
-                "BVH built"
-            } else {
-                "no surfaces, no BVH"
-            }
+            if scene.surfaces.top.is_some() { "BVH built" } else { "no surfaces, no BVH" }
         );
         println!("lights      {}", scene.lights.len());
     }

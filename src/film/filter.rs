@@ -58,15 +58,9 @@ fn gaussian(x: f32, sigma: f32) -> f32 {
 fn mitchell_1d(x: f32, b: f32, c: f32) -> f32 {
     let x = x.abs();
     if x <= 1.0 {
-        ((12.0 - 9.0 * b - 6.0 * c) * x * x * x
-            + (-18.0 + 12.0 * b + 6.0 * c) * x * x
-            + (6.0 - 2.0 * b))
-            * (1.0 / 6.0)
+        ((12.0 - 9.0 * b - 6.0 * c) * x * x * x + (-18.0 + 12.0 * b + 6.0 * c) * x * x + (6.0 - 2.0 * b)) * (1.0 / 6.0)
     } else if x <= 2.0 {
-        ((-b - 6.0 * c) * x * x * x
-            + (6.0 * b + 30.0 * c) * x * x
-            + (-12.0 * b - 48.0 * c) * x
-            + (8.0 * b + 24.0 * c))
+        ((-b - 6.0 * c) * x * x * x + (6.0 * b + 30.0 * c) * x * x + (-12.0 * b - 48.0 * c) * x + (8.0 * b + 24.0 * c))
             * (1.0 / 6.0)
     } else {
         0.0
@@ -76,20 +70,12 @@ fn mitchell_1d(x: f32, b: f32, c: f32) -> f32 {
 /// sin(πx)/(πx), with pbrt-v4's guard near 0.
 fn sinc(x: f32) -> f32 {
     let px = std::f32::consts::PI * x;
-    if 1.0 + px * px == 1.0 {
-        1.0
-    } else {
-        px.sin() / px
-    }
+    if 1.0 + px * px == 1.0 { 1.0 } else { px.sin() / px }
 }
 
 /// Sinc windowed by a wider sinc (Lanczos), zero past `radius`.
 fn windowed_sinc(x: f32, radius: f32, tau: f32) -> f32 {
-    if x.abs() > radius {
-        0.0
-    } else {
-        sinc(x) * sinc(x / tau)
-    }
+    if x.abs() > radius { 0.0 } else { sinc(x) * sinc(x / tau) }
 }
 
 /// pbrt-v4's `SampleLinear`: x in [0, 1) with density proportional to lerp(x, a, b).
@@ -116,9 +102,7 @@ fn sample_tent(u: f32, radius: f32) -> f32 {
 /// Composite Simpson's rule in f64 over `n` (even) intervals.
 fn simpson(f: impl Fn(f64) -> f64, a: f64, b: f64, n: usize) -> f64 {
     let h = (b - a) / n as f64;
-    let inner: f64 = (1..n)
-        .map(|i| f(a + i as f64 * h) * if i % 2 == 1 { 4.0 } else { 2.0 })
-        .sum();
+    let inner: f64 = (1..n).map(|i| f(a + i as f64 * h) * if i % 2 == 1 { 4.0 } else { 2.0 }).sum();
     (f(a) + f(b) + inner) * h / 3.0
 }
 
@@ -145,9 +129,7 @@ impl Kernel {
             Kernel::Gaussian { sigma, exp, .. } => {
                 (gaussian(p.x, sigma) - exp.x).max(0.0) * (gaussian(p.y, sigma) - exp.y).max(0.0)
             }
-            Kernel::Triangle { radius } => {
-                (radius.x - p.x.abs()).max(0.0) * (radius.y - p.y.abs()).max(0.0)
-            }
+            Kernel::Triangle { radius } => (radius.x - p.x.abs()).max(0.0) * (radius.y - p.y.abs()).max(0.0),
             Kernel::Mitchell { radius, b, c } => {
                 mitchell_1d(2.0 * p.x / radius.x, b, c) * mitchell_1d(2.0 * p.y / radius.y, b, c)
             }
@@ -168,12 +150,7 @@ impl Kernel {
             // products of smooth 1D factors, so Simpson's rule is exact to f32 precision.
             Kernel::Gaussian { radius, sigma, exp } => {
                 let axis = |r: f32, e: f32| {
-                    simpson(
-                        |x| gaussian(x as f32, sigma) as f64,
-                        -r as f64,
-                        r as f64,
-                        4096,
-                    ) - 2.0 * r as f64 * e as f64
+                    simpson(|x| gaussian(x as f32, sigma) as f64, -r as f64, r as f64, 4096) - 2.0 * r as f64 * e as f64
                 };
                 (axis(radius.x, exp.x) * axis(radius.y, exp.y)) as f32
             }
@@ -212,28 +189,18 @@ impl TabulatedSampler {
         let ny = ((32.0 * r.y) as usize).max(1);
         let f: Vec<f32> = (0..nx * ny)
             .map(|i| {
-                let t = Vec2::new(
-                    ((i % nx) as f32 + 0.5) / nx as f32,
-                    ((i / nx) as f32 + 0.5) / ny as f32,
-                );
+                let t = Vec2::new(((i % nx) as f32 + 0.5) / nx as f32, ((i / nx) as f32 + 0.5) / ny as f32);
                 kernel.evaluate(-r + 2.0 * r * t)
             })
             .collect();
         let distribution = PiecewiseConstant2D::new(&f, nx, ny, -r, r);
-        TabulatedSampler {
-            f,
-            nx,
-            distribution,
-        }
+        TabulatedSampler { f, nx, distribution }
     }
 
     fn sample(&self, u: Vec2) -> FilterSample {
         let s = self.distribution.sample(u);
         let f = self.f[s.cell.y as usize * self.nx + s.cell.x as usize];
-        FilterSample {
-            offset: s.point,
-            weight: if s.pdf > 0.0 { f / s.pdf } else { 0.0 },
-        }
+        FilterSample { offset: s.point, weight: if s.pdf > 0.0 { f / s.pdf } else { 0.0 } }
     }
 }
 
@@ -259,15 +226,8 @@ impl Filter {
                 exp: Vec2::new(gaussian(radius[0], sigma), gaussian(radius[1], sigma)),
             },
             FilterSettings::Triangle { radius } => Kernel::Triangle { radius: v(radius) },
-            FilterSettings::Mitchell { radius, b, c } => Kernel::Mitchell {
-                radius: v(radius),
-                b,
-                c,
-            },
-            FilterSettings::LanczosSinc { radius, tau } => Kernel::LanczosSinc {
-                radius: v(radius),
-                tau,
-            },
+            FilterSettings::Mitchell { radius, b, c } => Kernel::Mitchell { radius: v(radius), b, c },
+            FilterSettings::LanczosSinc { radius, tau } => Kernel::LanczosSinc { radius: v(radius), tau },
         };
         let table = match kernel {
             Kernel::Box { .. } | Kernel::Triangle { .. } => None,
@@ -302,16 +262,12 @@ impl Filter {
     pub fn sample(&self, u: Vec2) -> FilterSample {
         match (&self.kernel, &self.table) {
             (_, Some(table)) => table.sample(u),
-            (Kernel::Triangle { radius }, None) => FilterSample {
-                offset: Vec2::new(sample_tent(u.x, radius.x), sample_tent(u.y, radius.y)),
-                weight: 1.0,
-            },
+            (Kernel::Triangle { radius }, None) => {
+                FilterSample { offset: Vec2::new(sample_tent(u.x, radius.x), sample_tent(u.y, radius.y)), weight: 1.0 }
+            }
             (kernel, None) => {
                 let r = kernel.radius();
-                FilterSample {
-                    offset: -r + 2.0 * r * u,
-                    weight: 1.0,
-                }
+                FilterSample { offset: -r + 2.0 * r * u, weight: 1.0 }
             }
         }
     }
@@ -323,8 +279,7 @@ mod tests {
     use crate::sampling::chi_square::TestRng;
 
     fn filter(directive: &str) -> Filter {
-        let scene = nimbus_parser::load_str(&format!("{directive}\nWorldBegin\n"), "t.pbrt")
-            .expect("scene parses");
+        let scene = nimbus_parser::load_str(&format!("{directive}\nWorldBegin\n"), "t.pbrt").expect("scene parses");
         Filter::new(&FilterSettings::from_entity(&scene.filter).expect("filter reads"))
     }
 
@@ -334,17 +289,8 @@ mod tests {
 
     #[test]
     fn default_radii_match_pbrt() {
-        for (name, r) in [
-            ("box", 0.5),
-            ("gaussian", 1.5),
-            ("triangle", 2.0),
-            ("mitchell", 2.0),
-            ("sinc", 4.0),
-        ] {
-            assert_eq!(
-                filter(&format!("PixelFilter \"{name}\"")).radius(),
-                Vec2::splat(r)
-            );
+        for (name, r) in [("box", 0.5), ("gaussian", 1.5), ("triangle", 2.0), ("mitchell", 2.0), ("sinc", 4.0)] {
+            assert_eq!(filter(&format!("PixelFilter \"{name}\"")).radius(), Vec2::splat(r));
         }
         // The scene default is pbrt's Gaussian.
         assert_eq!(filter("").radius(), Vec2::splat(1.5));
@@ -362,10 +308,7 @@ mod tests {
         let g = |x: f64| (-2.0 * x * x).exp() * (2.0 / PI).sqrt();
         let f = filter("PixelFilter \"gaussian\"");
         assert!(close(f.evaluate(Vec2::ZERO), (g(0.0) - g(1.5)).powi(2)));
-        assert!(close(
-            f.evaluate(Vec2::new(1.0, 0.0)),
-            (g(1.0) - g(1.5)) * (g(0.0) - g(1.5))
-        ));
+        assert!(close(f.evaluate(Vec2::new(1.0, 0.0)), (g(1.0) - g(1.5)) * (g(0.0) - g(1.5))));
         assert_eq!(f.evaluate(Vec2::new(1.6, 0.0)), 0.0);
 
         let t = filter("PixelFilter \"triangle\"");
@@ -376,24 +319,15 @@ mod tests {
         let m = filter("PixelFilter \"mitchell\"");
         assert!(close(m.evaluate(Vec2::ZERO), 64.0 / 81.0));
         assert!(close(m.evaluate(Vec2::new(1.0, 0.0)), 8.0 / 9.0 / 18.0));
-        assert!(close(
-            m.evaluate(Vec2::new(0.0, 1.5)),
-            -8.0 / 9.0 * 5.0 / 144.0
-        ));
+        assert!(close(m.evaluate(Vec2::new(0.0, 1.5)), -8.0 / 9.0 * 5.0 / 144.0));
         assert_eq!(m.evaluate(Vec2::new(0.0, 2.1)), 0.0);
 
         // Lanczos: sinc(x) sinc(x / 3) on radius 4.
         let s = filter("PixelFilter \"sinc\"");
         let sinc = |x: f64| (PI * x).sin() / (PI * x);
         assert!(close(s.evaluate(Vec2::ZERO), 1.0));
-        assert!(close(
-            s.evaluate(Vec2::new(0.5, 0.0)),
-            sinc(0.5) * sinc(0.5 / 3.0)
-        ));
-        assert!(close(
-            s.evaluate(Vec2::new(1.5, 2.5)),
-            sinc(1.5) * sinc(0.5) * sinc(2.5) * sinc(2.5 / 3.0)
-        ));
+        assert!(close(s.evaluate(Vec2::new(0.5, 0.0)), sinc(0.5) * sinc(0.5 / 3.0)));
+        assert!(close(s.evaluate(Vec2::new(1.5, 2.5)), sinc(1.5) * sinc(0.5) * sinc(2.5) * sinc(2.5 / 3.0)));
         assert_eq!(s.evaluate(Vec2::new(4.5, 0.0)), 0.0);
     }
 
@@ -431,17 +365,12 @@ mod tests {
             let exact = f.table.is_none();
             // The integral pbrt reports agrees with quadrature.
             let integral = quadrature(&f, |_| 1.0);
-            assert!(
-                (f.integral() as f64 - integral).abs() < 1e-3 * integral,
-                "{scene}"
-            );
+            assert!((f.integral() as f64 - integral).abs() < 1e-3 * integral, "{scene}");
             // A test function to check where samples go, not only their total weight.
             let g = |p: Vec2| 1.0 + (p.x * p.x) as f64 + 0.3 * p.y as f64;
             let fg = quadrature(&f, g);
-            let abs_integral = quadrature(
-                &Filter::new(&FilterSettings::Box { radius: r.into() }),
-                |p| f.evaluate(p).abs() as f64,
-            );
+            let abs_integral =
+                quadrature(&Filter::new(&FilterSettings::Box { radius: r.into() }), |p| f.evaluate(p).abs() as f64);
             let mut rng = TestRng::new(k as u64 + 10);
             let (mut sum_w, mut sum_w2, mut sum_wg, mut sum_wg2) = (0.0, 0.0, 0.0, 0.0);
             for _ in 0..n {

@@ -19,17 +19,11 @@ impl Default for Bounds3 {
 
 impl Bounds3 {
     /// The empty box (union identity).
-    pub const EMPTY: Bounds3 = Bounds3 {
-        min: Vec3::splat(f32::INFINITY),
-        max: Vec3::splat(f32::NEG_INFINITY),
-    };
+    pub const EMPTY: Bounds3 = Bounds3 { min: Vec3::splat(f32::INFINITY), max: Vec3::splat(f32::NEG_INFINITY) };
 
     /// The box spanned by two corners.
     pub fn new(a: Vec3, b: Vec3) -> Bounds3 {
-        Bounds3 {
-            min: a.min(b),
-            max: a.max(b),
-        }
+        Bounds3 { min: a.min(b), max: a.max(b) }
     }
 
     /// True when the box contains nothing.
@@ -45,10 +39,7 @@ impl Bounds3 {
 
     /// The smallest box containing both.
     pub fn union(&self, o: &Bounds3) -> Bounds3 {
-        Bounds3 {
-            min: self.min.min(o.min),
-            max: self.max.max(o.max),
-        }
+        Bounds3 { min: self.min.min(o.min), max: self.max.max(o.max) }
     }
 
     /// Center point.

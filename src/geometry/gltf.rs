@@ -24,40 +24,24 @@ pub fn read_gltf(path: &Path) -> Result<Vec<MeshData>, String> {
             let nm = Mat3::from_mat4(m).inverse().transpose();
             for prim in mesh.primitives() {
                 if prim.mode() != gltf::mesh::Mode::Triangles {
-                    return Err(format!(
-                        "gltfmesh: {}: only triangle primitives are supported",
-                        path.display()
-                    ));
+                    return Err(format!("gltfmesh: {}: only triangle primitives are supported", path.display()));
                 }
                 let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d[..]));
                 let positions: Vec<[f32; 3]> = reader
                     .read_positions()
-                    .ok_or_else(|| {
-                        format!("gltfmesh: {}: primitive without positions", path.display())
-                    })?
+                    .ok_or_else(|| format!("gltfmesh: {}: primitive without positions", path.display()))?
                     .map(|p| m.transform_point3(Vec3::from(p)).into())
                     .collect();
                 let normals: Vec<[f32; 3]> = reader
                     .read_normals()
-                    .map(|it| {
-                        it.map(|n| (nm * Vec3::from(n)).normalize_or_zero().into())
-                            .collect()
-                    })
+                    .map(|it| it.map(|n| (nm * Vec3::from(n)).normalize_or_zero().into()).collect())
                     .unwrap_or_default();
-                let uvs: Vec<[f32; 2]> = reader
-                    .read_tex_coords(0)
-                    .map(|t| t.into_f32().collect())
-                    .unwrap_or_default();
+                let uvs: Vec<[f32; 2]> = reader.read_tex_coords(0).map(|t| t.into_f32().collect()).unwrap_or_default();
                 let indices: Vec<u32> = match reader.read_indices() {
                     Some(i) => i.into_u32().collect(),
                     None => (0..positions.len() as u32).collect(),
                 };
-                let data = MeshData {
-                    positions,
-                    normals,
-                    uvs,
-                    indices,
-                };
+                let data = MeshData { positions, normals, uvs, indices };
                 data.validate(&format!("gltfmesh: {}", path.display()))?;
                 out.push(data);
             }
@@ -65,10 +49,7 @@ pub fn read_gltf(path: &Path) -> Result<Vec<MeshData>, String> {
         stack.extend(node.children().map(|c| (c, m)));
     }
     if out.is_empty() {
-        return Err(format!(
-            "gltfmesh: {}: no meshes in the scene",
-            path.display()
-        ));
+        return Err(format!("gltfmesh: {}: no meshes in the scene", path.display()));
     }
     Ok(out)
 }
@@ -81,30 +62,23 @@ fn load_buffers(gltf: &gltf::Gltf, path: &Path) -> Result<Vec<Vec<u8>>, String> 
         .buffers()
         .map(|b| {
             let data = match b.source() {
-                gltf::buffer::Source::Bin => gltf
-                    .blob
-                    .clone()
-                    .ok_or_else(|| format!("gltfmesh: {}: missing binary chunk", path.display()))?,
+                gltf::buffer::Source::Bin => {
+                    gltf.blob.clone().ok_or_else(|| format!("gltfmesh: {}: missing binary chunk", path.display()))?
+                }
                 gltf::buffer::Source::Uri(uri) if uri.starts_with("data:") => {
-                    let (_, payload) = uri.split_once(";base64,").ok_or_else(|| {
-                        format!("gltfmesh: {}: unsupported data URI", path.display())
-                    })?;
-                    base64_decode(payload).ok_or_else(|| {
-                        format!("gltfmesh: {}: invalid base64 buffer", path.display())
-                    })?
+                    let (_, payload) = uri
+                        .split_once(";base64,")
+                        .ok_or_else(|| format!("gltfmesh: {}: unsupported data URI", path.display()))?;
+                    base64_decode(payload)
+                        .ok_or_else(|| format!("gltfmesh: {}: invalid base64 buffer", path.display()))?
                 }
                 gltf::buffer::Source::Uri(uri) => {
                     let file = dir.join(uri.replace("%20", " "));
-                    std::fs::read(&file)
-                        .map_err(|e| format!("gltfmesh: {}: {e}", file.display()))?
+                    std::fs::read(&file).map_err(|e| format!("gltfmesh: {}: {e}", file.display()))?
                 }
             };
             if data.len() < b.length() {
-                return Err(format!(
-                    "gltfmesh: {}: buffer {} is shorter than declared",
-                    path.display(),
-                    b.index()
-                ));
+                return Err(format!("gltfmesh: {}: buffer {} is shorter than declared", path.display(), b.index()));
             }
             Ok(data)
         })
@@ -122,10 +96,7 @@ fn base64_decode(s: &str) -> Option<Vec<u8>> {
             _ => return None,
         })
     };
-    let bytes: Vec<u8> = s
-        .bytes()
-        .filter(|c| !c.is_ascii_whitespace() && *c != b'=')
-        .collect();
+    let bytes: Vec<u8> = s.bytes().filter(|c| !c.is_ascii_whitespace() && *c != b'=').collect();
     let mut out = Vec::with_capacity(bytes.len() * 3 / 4);
     for chunk in bytes.chunks(4) {
         let mut acc = 0u32;
@@ -168,15 +139,9 @@ mod tests {
         const T: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
         let mut b64 = String::new();
         for c in bin.chunks(3) {
-            let n = (c[0] as u32) << 16
-                | (*c.get(1).unwrap_or(&0) as u32) << 8
-                | *c.get(2).unwrap_or(&0) as u32;
+            let n = (c[0] as u32) << 16 | (*c.get(1).unwrap_or(&0) as u32) << 8 | *c.get(2).unwrap_or(&0) as u32;
             for i in 0..4 {
-                if i <= c.len() {
-                    b64.push(T[(n >> (18 - 6 * i) & 63) as usize] as char)
-                } else {
-                    b64.push('=')
-                }
+                if i <= c.len() { b64.push(T[(n >> (18 - 6 * i) & 63) as usize] as char) } else { b64.push('=') }
             }
         }
         let json = format!(

@@ -27,30 +27,19 @@ impl MeshData {
     pub fn validate(&self, what: &str) -> Result<(), String> {
         let n = self.positions.len();
         if let Some(&bad) = self.indices.iter().find(|&&i| i as usize >= n) {
-            return Err(format!(
-                "{what}: vertex index {bad} out of range ({n} vertices)"
-            ));
+            return Err(format!("{what}: vertex index {bad} out of range ({n} vertices)"));
         }
         if !self.indices.len().is_multiple_of(3) {
-            return Err(format!(
-                "{what}: {} indices is not a multiple of 3",
-                self.indices.len()
-            ));
+            return Err(format!("{what}: {} indices is not a multiple of 3", self.indices.len()));
         }
         if self.positions.iter().flatten().any(|c| !c.is_finite()) {
             return Err(format!("{what}: non-finite vertex position"));
         }
         if !self.normals.is_empty() && self.normals.len() != n {
-            return Err(format!(
-                "{what}: {} normals for {n} vertices",
-                self.normals.len()
-            ));
+            return Err(format!("{what}: {} normals for {n} vertices", self.normals.len()));
         }
         if !self.uvs.is_empty() && self.uvs.len() != n {
-            return Err(format!(
-                "{what}: {} texture coordinates for {n} vertices",
-                self.uvs.len()
-            ));
+            return Err(format!("{what}: {} texture coordinates for {n} vertices", self.uvs.len()));
         }
         Ok(())
     }

@@ -81,14 +81,12 @@ impl Body<'_> {
             while self.pos < self.data.len() && !self.data[self.pos].is_ascii_whitespace() {
                 self.pos += 1;
             }
-            let tok = std::str::from_utf8(&self.data[start..self.pos])
-                .map_err(|_| "invalid text in body".to_string())?;
+            let tok =
+                std::str::from_utf8(&self.data[start..self.pos]).map_err(|_| "invalid text in body".to_string())?;
             if tok.is_empty() {
                 return Err("file ends before all elements are read".into());
             }
-            return tok
-                .parse::<f64>()
-                .map_err(|_| format!("\"{tok}\" is not a number"));
+            return tok.parse::<f64>().map_err(|_| format!("\"{tok}\" is not a number"));
         }
         let n = t.size();
         if self.pos + n > self.data.len() {
@@ -100,11 +98,7 @@ impl Body<'_> {
         macro_rules! get {
             ($ty:ty) => {{
                 let arr: [u8; std::mem::size_of::<$ty>()] = b.try_into().expect("sized");
-                (if big {
-                    <$ty>::from_be_bytes(arr)
-                } else {
-                    <$ty>::from_le_bytes(arr)
-                }) as f64
+                (if big { <$ty>::from_be_bytes(arr) } else { <$ty>::from_le_bytes(arr) }) as f64
             }};
         }
         Ok(match t {
@@ -137,8 +131,7 @@ pub fn read_ply(path: &Path) -> Result<MeshData, String> {
 /// Parses PLY bytes.
 pub fn parse_ply(data: &[u8]) -> Result<MeshData, String> {
     let header_end = find_header_end(data).ok_or("not a PLY file (no end_header)")?;
-    let header =
-        std::str::from_utf8(&data[..header_end.0]).map_err(|_| "PLY header is not text")?;
+    let header = std::str::from_utf8(&data[..header_end.0]).map_err(|_| "PLY header is not text")?;
     let mut lines = header.lines();
     if lines.next().map(str::trim) != Some("ply") {
         return Err("not a PLY file (missing \"ply\" magic)".into());
@@ -158,9 +151,7 @@ pub fn parse_ply(data: &[u8]) -> Result<MeshData, String> {
             }
             ["element", name, count] => elements.push(Element {
                 name: name.to_string(),
-                count: count
-                    .parse()
-                    .map_err(|_| format!("bad element count \"{count}\""))?,
+                count: count.parse().map_err(|_| format!("bad element count \"{count}\""))?,
                 properties: Vec::new(),
             }),
             ["property", "list", ct, it, name] => {
@@ -180,11 +171,7 @@ pub fn parse_ply(data: &[u8]) -> Result<MeshData, String> {
         }
     }
     let format = format.ok_or("PLY header has no format line")?;
-    let mut body = Body {
-        data,
-        pos: header_end.1,
-        format,
-    };
+    let mut body = Body { data, pos: header_end.1, format };
     let mut mesh = MeshData::default();
     for el in &elements {
         match el.name.as_str() {
@@ -216,9 +203,7 @@ fn find_header_end(data: &[u8]) -> Option<(usize, usize)> {
 
 fn read_vertices(body: &mut Body<'_>, el: &Element, mesh: &mut MeshData) -> Result<(), String> {
     let index = |names: &[&str]| {
-        el.properties
-            .iter()
-            .position(|p| matches!(p, Property::Scalar(n, _) if names.contains(&n.as_str())))
+        el.properties.iter().position(|p| matches!(p, Property::Scalar(n, _) if names.contains(&n.as_str())))
     };
     let (x, y, z) = (index(&["x"]), index(&["y"]), index(&["z"]));
     let (Some(x), Some(y), Some(z)) = (x, y, z) else {
@@ -246,22 +231,14 @@ fn read_vertices(body: &mut Body<'_>, el: &Element, mesh: &mut MeshData) -> Resu
         }
         let pos = [vals[x] as f32, vals[y] as f32, vals[z] as f32];
         if pos.iter().any(|c| !c.is_finite()) {
-            return Err(format!(
-                "vertex {} has a non-finite position",
-                mesh.positions.len()
-            ));
+            return Err(format!("vertex {} has a non-finite position", mesh.positions.len()));
         }
         mesh.positions.push(pos);
         if has_n {
-            mesh.normals.push([
-                vals[nx.unwrap()] as f32,
-                vals[ny.unwrap()] as f32,
-                vals[nz.unwrap()] as f32,
-            ]);
+            mesh.normals.push([vals[nx.unwrap()] as f32, vals[ny.unwrap()] as f32, vals[nz.unwrap()] as f32]);
         }
         if has_uv {
-            mesh.uvs
-                .push([vals[u.unwrap()] as f32, vals[v.unwrap()] as f32]);
+            mesh.uvs.push([vals[u.unwrap()] as f32, vals[v.unwrap()] as f32]);
         }
     }
     Ok(())
@@ -274,9 +251,7 @@ fn read_faces(body: &mut Body<'_>, el: &Element, mesh: &mut MeshData) -> Result<
         face.clear();
         for p in &el.properties {
             match p {
-                Property::List(name, ct, it)
-                    if name == "vertex_indices" || name == "vertex_index" =>
-                {
+                Property::List(name, ct, it) if name == "vertex_indices" || name == "vertex_index" => {
                     let n = body.value(*ct)? as usize;
                     for _ in 0..n {
                         let i = body.value(*it)?;
@@ -299,13 +274,9 @@ fn read_faces(body: &mut Body<'_>, el: &Element, mesh: &mut MeshData) -> Result<
         }
         match face.len() {
             3 => mesh.indices.extend_from_slice(&face),
-            4 => mesh
-                .indices
-                .extend_from_slice(&[face[0], face[1], face[2], face[0], face[2], face[3]]),
+            4 => mesh.indices.extend_from_slice(&[face[0], face[1], face[2], face[0], face[2], face[3]]),
             n => {
-                return Err(format!(
-                    "face {f} has {n} vertices; plymesh supports triangles and quads"
-                ));
+                return Err(format!("face {f} has {n} vertices; plymesh supports triangles and quads"));
             }
         }
     }
@@ -368,18 +339,10 @@ property float nx\nproperty float ny\nproperty float nz\nelement face 1\npropert
     #[test]
     fn truncated_and_out_of_range_files_are_errors() {
         let text = "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\nend_header\n0 0 0\n";
-        assert!(
-            parse_ply(text.as_bytes())
-                .unwrap_err()
-                .contains("ends before")
-        );
+        assert!(parse_ply(text.as_bytes()).unwrap_err().contains("ends before"));
         let text = "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\n\
                     element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n3 0 1 2\n";
-        assert!(
-            parse_ply(text.as_bytes())
-                .unwrap_err()
-                .contains("out of range")
-        );
+        assert!(parse_ply(text.as_bytes()).unwrap_err().contains("out of range"));
         assert!(parse_ply(b"hello").is_err());
     }
 }

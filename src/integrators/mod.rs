@@ -25,20 +25,12 @@ pub const INTEGRATOR_NAMES: &[&str] = &["volpath"];
 impl IntegratorSettings {
     /// Reads the integrator entity; `name_override` replaces the scene's choice (the
     /// parameters that method shares with the scene's, such as `maxdepth`, are kept).
-    pub fn from_entity(
-        e: &Entity,
-        name_override: Option<&str>,
-    ) -> Result<IntegratorSettings, Error> {
+    pub fn from_entity(e: &Entity, name_override: Option<&str>) -> Result<IntegratorSettings, Error> {
         match name_override.unwrap_or(&e.name) {
-            "volpath" => Ok(IntegratorSettings::VolPath(
-                volpath::VolPathSettings::from_entity(e)?,
-            )),
+            "volpath" => Ok(IntegratorSettings::VolPath(volpath::VolPathSettings::from_entity(e)?)),
             other => Err(Error::new(
                 &e.loc,
-                format!(
-                    "integrator \"{other}\" is not available in nimbus (it has: {})",
-                    INTEGRATOR_NAMES.join(", ")
-                ),
+                format!("integrator \"{other}\" is not available in nimbus (it has: {})", INTEGRATOR_NAMES.join(", ")),
             )),
         }
     }

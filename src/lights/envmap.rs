@@ -62,11 +62,7 @@ pub fn equal_area_sphere_to_square(d: Vec3) -> Vec2 {
 
 impl EnvironmentMap {
     /// An environment map from a square image, scaled by `scale`.
-    pub fn new(
-        image: &Image,
-        world_from_light: Affine3A,
-        scale: f32,
-    ) -> Result<EnvironmentMap, String> {
+    pub fn new(image: &Image, world_from_light: Affine3A, scale: f32) -> Result<EnvironmentMap, String> {
         if image.width != image.height || image.width == 0 {
             return Err(format!(
                 "environment image is {}x{}; pbrt-v4 environment maps are square equal-area octahedral images",
@@ -74,11 +70,7 @@ impl EnvironmentMap {
             ));
         }
         let size = image.width;
-        let pixels: Vec<Rgb> = image
-            .pixels
-            .iter()
-            .map(|p| p.max(Rgb::ZERO) * scale)
-            .collect();
+        let pixels: Vec<Rgb> = image.pixels.iter().map(|p| p.max(Rgb::ZERO) * scale).collect();
         let lum: Vec<f32> = pixels.iter().map(|p| luminance(*p).max(0.0)).collect();
         let average = lum.iter().map(|&l| l as f64).sum::<f64>() as f32 / lum.len() as f32;
         let distribution = PiecewiseConstant2D::new(&lum, size, size, Vec2::ZERO, Vec2::ONE);
@@ -93,11 +85,7 @@ impl EnvironmentMap {
     }
 
     /// Reads an environment map image (EXR or PNG).
-    pub fn load(
-        path: &Path,
-        world_from_light: Affine3A,
-        scale: f32,
-    ) -> Result<EnvironmentMap, String> {
+    pub fn load(path: &Path, world_from_light: Affine3A, scale: f32) -> Result<EnvironmentMap, String> {
         let image = crate::imageio::read_image(path)?;
         EnvironmentMap::new(&image, world_from_light, scale)
     }
@@ -109,10 +97,7 @@ impl EnvironmentMap {
 
     /// Radiance arriving from world direction `w` (nearest pixel, as pbrt-v4 looks it up).
     pub fn lookup(&self, w: Vec3) -> Rgb {
-        let wl = self
-            .light_from_world
-            .transform_vector3(w)
-            .normalize_or_zero();
+        let wl = self.light_from_world.transform_vector3(w).normalize_or_zero();
         self.pixel(equal_area_sphere_to_square(wl))
     }
 
@@ -138,10 +123,7 @@ impl EnvironmentMap {
 
     /// Density of [`EnvironmentMap::sample`] for world direction `w`.
     pub fn pdf(&self, w: Vec3) -> f32 {
-        let wl = self
-            .light_from_world
-            .transform_vector3(w)
-            .normalize_or_zero();
+        let wl = self.light_from_world.transform_vector3(w).normalize_or_zero();
         self.distribution.pdf(equal_area_sphere_to_square(wl)) / (4.0 * PI)
     }
 
@@ -187,25 +169,14 @@ mod tests {
             *p = Rgb::splat(1.0 + (k % 5) as f32);
         }
         let map = EnvironmentMap::new(&img, Affine3A::IDENTITY, 1.0).unwrap();
-        for u in [
-            Vec2::new(0.1, 0.2),
-            Vec2::new(0.7, 0.4),
-            Vec2::new(0.95, 0.9),
-        ] {
+        for u in [Vec2::new(0.1, 0.2), Vec2::new(0.7, 0.4), Vec2::new(0.95, 0.9)] {
             let (w, pdf, l) = map.sample(u).unwrap();
-            assert!(
-                (map.pdf(w) - pdf).abs() < 1e-3 * pdf,
-                "{} vs {pdf}",
-                map.pdf(w)
-            );
+            assert!((map.pdf(w) - pdf).abs() < 1e-3 * pdf, "{} vs {pdf}", map.pdf(w));
             assert_eq!(map.lookup(w), l);
         }
         // A constant map of 1 gives illuminance π.
         let flat = EnvironmentMap::new(
-            &Image {
-                pixels: vec![Rgb::ONE; 64 * 64],
-                ..Image::new(64, 64)
-            },
+            &Image { pixels: vec![Rgb::ONE; 64 * 64], ..Image::new(64, 64) },
             Affine3A::IDENTITY,
             1.0,
         )

@@ -114,18 +114,12 @@ pub struct SceneSphere {
 impl Light {
     /// True for lights with a delta distribution (never hit by rays).
     pub fn is_delta(&self) -> bool {
-        matches!(
-            self.kind,
-            LightKind::Point { .. } | LightKind::Spot { .. } | LightKind::Distant { .. }
-        )
+        matches!(self.kind, LightKind::Point { .. } | LightKind::Spot { .. } | LightKind::Distant { .. })
     }
 
     /// True for lights at infinity that escaped rays see.
     pub fn is_infinite(&self) -> bool {
-        matches!(
-            self.kind,
-            LightKind::UniformInfinite { .. } | LightKind::ImageInfinite(_)
-        )
+        matches!(self.kind, LightKind::UniformInfinite { .. } | LightKind::ImageInfinite(_))
     }
 
     /// Whether next-event estimation samples this light. A uniform environment is left to
@@ -138,26 +132,13 @@ impl Light {
     pub fn power(&self, scene: &SceneSphere) -> f32 {
         let p = match &self.kind {
             LightKind::Point { i, .. } => 4.0 * PI * average(*i),
-            LightKind::Spot {
-                i,
-                cos_falloff_start,
-                cos_falloff_end,
-                ..
-            } => {
-                2.0 * PI
-                    * average(*i)
-                    * ((1.0 - cos_falloff_start) + (cos_falloff_start - cos_falloff_end) / 2.0)
+            LightKind::Spot { i, cos_falloff_start, cos_falloff_end, .. } => {
+                2.0 * PI * average(*i) * ((1.0 - cos_falloff_start) + (cos_falloff_start - cos_falloff_end) / 2.0)
             }
             LightKind::Distant { l, .. } => PI * scene.radius * scene.radius * average(*l),
-            LightKind::UniformInfinite { l } => {
-                4.0 * PI * PI * scene.radius * scene.radius * average(*l)
-            }
-            LightKind::ImageInfinite(map) => {
-                4.0 * PI * PI * scene.radius * scene.radius * map.average_radiance()
-            }
-            LightKind::Area {
-                l, two_sided, area, ..
-            } => PI * if *two_sided { 2.0 } else { 1.0 } * area * average(*l),
+            LightKind::UniformInfinite { l } => 4.0 * PI * PI * scene.radius * scene.radius * average(*l),
+            LightKind::ImageInfinite(map) => 4.0 * PI * PI * scene.radius * scene.radius * map.average_radiance(),
+            LightKind::Area { l, two_sided, area, .. } => PI * if *two_sided { 2.0 } else { 1.0 } * area * average(*l),
         };
         if p.is_finite() { p.max(0.0) } else { 0.0 }
     }
@@ -177,23 +158,9 @@ impl Light {
                     return None;
                 }
                 let wi = (*p - ctx.p) / d2.sqrt();
-                Some(LightSample {
-                    l: *i / d2,
-                    wi,
-                    pdf: 1.0,
-                    p: *p,
-                    n: Vec3::ZERO,
-                    delta: true,
-                    infinite: false,
-                })
+                Some(LightSample { l: *i / d2, wi, pdf: 1.0, p: *p, n: Vec3::ZERO, delta: true, infinite: false })
             }
-            LightKind::Spot {
-                p,
-                frame,
-                i,
-                cos_falloff_start,
-                cos_falloff_end,
-            } => {
+            LightKind::Spot { p, frame, i, cos_falloff_start, cos_falloff_end } => {
                 let d2 = p.distance_squared(ctx.p);
                 if d2 == 0.0 {
                     return None;
@@ -247,16 +214,9 @@ impl Light {
                     infinite: true,
                 })
             }
-            LightKind::Area {
-                geometry,
-                l,
-                two_sided,
-                ..
-            } => {
+            LightKind::Area { geometry, l, two_sided, .. } => {
                 let s = match *geometry {
-                    Geometry::Triangle { mesh, tri } => {
-                        triangle_sample(&shapes.meshes[mesh as usize], tri, u)
-                    }
+                    Geometry::Triangle { mesh, tri } => triangle_sample(&shapes.meshes[mesh as usize], tri, u),
                     Geometry::Sphere(i) => shapes.spheres[i as usize].sample(ctx.p, u)?,
                     Geometry::Disk(i) => shapes.disks[i as usize].sample_area(u)?,
                     Geometry::Cylinder(i) => shapes.cylinders[i as usize].sample_area(u)?,
@@ -280,36 +240,18 @@ impl Light {
                 if !pdf.is_finite() || pdf <= 0.0 {
                     return None;
                 }
-                let le = if *two_sided || cos_light > 0.0 {
-                    *l
-                } else {
-                    Rgb::ZERO
-                };
+                let le = if *two_sided || cos_light > 0.0 { *l } else { Rgb::ZERO };
                 if le == Rgb::ZERO {
                     return None;
                 }
-                Some(LightSample {
-                    l: le,
-                    wi,
-                    pdf,
-                    p: s.p,
-                    n: s.n,
-                    delta: false,
-                    infinite: false,
-                })
+                Some(LightSample { l: le, wi, pdf, p: s.p, n: s.n, delta: false, infinite: false })
             }
         }
     }
 
     /// Density (per solid angle) with which [`Light::sample_li`] would pick direction `wi`
     /// from `ctx`; for area lights `hit` is where that direction meets the light.
-    pub fn pdf_li(
-        &self,
-        ctx: &LightContext,
-        wi: Vec3,
-        hit: Option<&SurfaceHit>,
-        shapes: &ShapeStore,
-    ) -> f32 {
+    pub fn pdf_li(&self, ctx: &LightContext, wi: Vec3, hit: Option<&SurfaceHit>, shapes: &ShapeStore) -> f32 {
         match &self.kind {
             LightKind::Point { .. } | LightKind::Spot { .. } | LightKind::Distant { .. } => 0.0,
             LightKind::UniformInfinite { .. } => warp::UNIFORM_SPHERE_PDF,
@@ -320,11 +262,7 @@ impl Light {
                     Geometry::Sphere(i) => shapes.spheres[i as usize].pdf(ctx.p, wi, hit),
                     _ => {
                         let cos = hit.n.dot(wi).abs();
-                        if cos == 0.0 {
-                            0.0
-                        } else {
-                            ctx.p.distance_squared(hit.p) / (cos * area)
-                        }
+                        if cos == 0.0 { 0.0 } else { ctx.p.distance_squared(hit.p) / (cos * area) }
                     }
                 }
             }

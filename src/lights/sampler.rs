@@ -29,17 +29,11 @@ impl LightSampler {
         // All-zero power with lights present (e.g. black lights): fall back to uniform over
         // the sampleable ones, so an all-black scene still samples consistently.
         let weights = if !any && by_power {
-            lights
-                .iter()
-                .map(|l| if l.samples_directly() { 1.0 } else { 0.0 })
-                .collect()
+            lights.iter().map(|l| if l.samples_directly() { 1.0 } else { 0.0 }).collect()
         } else {
             weights
         };
-        let table = weights
-            .iter()
-            .any(|w| *w > 0.0)
-            .then(|| AliasTable::new(&weights));
+        let table = weights.iter().any(|w| *w > 0.0).then(|| AliasTable::new(&weights));
         LightSampler { table }
     }
 

@@ -2,8 +2,7 @@
 //! surface hit.
 
 use super::bxdf::{
-    Bxdf, CoatedDiffuseBxdf, ConductorBxdf, DielectricBxdf, DiffuseBxdf, ThinDielectricBxdf,
-    TrowbridgeReitz,
+    Bxdf, CoatedDiffuseBxdf, ConductorBxdf, DielectricBxdf, DiffuseBxdf, ThinDielectricBxdf, TrowbridgeReitz,
 };
 use crate::color::Rgb;
 use crate::textures::{Tex, TexContext, Textures};
@@ -21,11 +20,7 @@ pub struct RoughnessTex {
 
 impl RoughnessTex {
     fn distribution(&self, textures: &Textures, ctx: &TexContext) -> TrowbridgeReitz {
-        TrowbridgeReitz::from_roughness(
-            textures.eval_float(self.u, ctx),
-            textures.eval_float(self.v, ctx),
-            self.remap,
-        )
+        TrowbridgeReitz::from_roughness(textures.eval_float(self.u, ctx), textures.eval_float(self.v, ctx), self.remap)
     }
 }
 
@@ -105,9 +100,9 @@ impl Material {
     /// The BxDF at a hit (`None` for interfaces).
     pub fn bxdf(&self, textures: &Textures, ctx: &TexContext) -> Option<Bxdf> {
         Some(match self {
-            Material::Diffuse { reflectance } => Bxdf::Diffuse(DiffuseBxdf::new(
-                textures.eval(*reflectance, ctx).clamp(Rgb::ZERO, Rgb::ONE),
-            )),
+            Material::Diffuse { reflectance } => {
+                Bxdf::Diffuse(DiffuseBxdf::new(textures.eval(*reflectance, ctx).clamp(Rgb::ZERO, Rgb::ONE)))
+            }
             Material::Conductor { input, roughness } => {
                 let d = roughness.distribution(textures, ctx);
                 match input {
@@ -120,24 +115,13 @@ impl Material {
                     }
                 }
             }
-            Material::Dielectric { eta, roughness } => Bxdf::Dielectric(DielectricBxdf::new(
-                *eta,
-                roughness.distribution(textures, ctx),
-            )),
+            Material::Dielectric { eta, roughness } => {
+                Bxdf::Dielectric(DielectricBxdf::new(*eta, roughness.distribution(textures, ctx)))
+            }
             Material::ThinDielectric { eta } => Bxdf::ThinDielectric(ThinDielectricBxdf::new(*eta)),
-            Material::CoatedDiffuse {
-                reflectance,
-                roughness,
-                thickness,
-                eta,
-                albedo,
-                g,
-                max_depth,
-                n_samples,
-            } => {
+            Material::CoatedDiffuse { reflectance, roughness, thickness, eta, albedo, g, max_depth, n_samples } => {
                 let top = DielectricBxdf::new(*eta, roughness.distribution(textures, ctx));
-                let bottom =
-                    DiffuseBxdf::new(textures.eval(*reflectance, ctx).clamp(Rgb::ZERO, Rgb::ONE));
+                let bottom = DiffuseBxdf::new(textures.eval(*reflectance, ctx).clamp(Rgb::ZERO, Rgb::ONE));
                 Bxdf::CoatedDiffuse(CoatedDiffuseBxdf::new(
                     top,
                     bottom,

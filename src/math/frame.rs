@@ -36,11 +36,7 @@ impl Frame {
             return Frame::from_z(n);
         }
         let x = x / len2.sqrt();
-        Frame {
-            x,
-            y: n.cross(x),
-            z: n,
-        }
+        Frame { x, y: n.cross(x), z: n }
     }
 
     /// World to local coordinates.
@@ -62,18 +58,10 @@ mod tests {
 
     #[test]
     fn frames_are_orthonormal_and_round_trip() {
-        for n in [
-            Vec3::Z,
-            -Vec3::Z,
-            Vec3::X,
-            Vec3::new(0.3, -0.5, 0.81).normalize(),
-            Vec3::new(0.0, 0.0, -1.0),
-        ] {
+        for n in [Vec3::Z, -Vec3::Z, Vec3::X, Vec3::new(0.3, -0.5, 0.81).normalize(), Vec3::new(0.0, 0.0, -1.0)] {
             let f = Frame::from_z(n);
             assert!((f.x.length() - 1.0).abs() < 1e-5 && (f.y.length() - 1.0).abs() < 1e-5);
-            assert!(
-                f.x.dot(f.y).abs() < 1e-5 && f.x.dot(f.z).abs() < 1e-5 && f.y.dot(f.z).abs() < 1e-5
-            );
+            assert!(f.x.dot(f.y).abs() < 1e-5 && f.x.dot(f.z).abs() < 1e-5 && f.y.dot(f.z).abs() < 1e-5);
             assert!(f.x.cross(f.y).dot(f.z) > 0.99, "right-handed");
             let v = Vec3::new(0.2, 0.7, -0.4);
             assert!((f.to_world(f.to_local(v)) - v).length() < 1e-5);

@@ -12,9 +12,7 @@ pub struct DenseGrid<T> {
 }
 
 /// Values a grid can hold: floats or RGB triples.
-pub trait GridValue:
-    Copy + Default + std::ops::Add<Output = Self> + std::ops::Mul<f32, Output = Self>
-{
+pub trait GridValue: Copy + Default + std::ops::Add<Output = Self> + std::ops::Mul<f32, Output = Self> {
     /// The largest component (for majorants).
     fn max_component(self) -> f32;
 }
@@ -50,13 +48,7 @@ impl<T: GridValue> DenseGrid<T> {
 
     #[inline]
     fn at(&self, x: i32, y: i32, z: i32) -> T {
-        if x < 0
-            || y < 0
-            || z < 0
-            || x >= self.n.x as i32
-            || y >= self.n.y as i32
-            || z >= self.n.z as i32
-        {
+        if x < 0 || y < 0 || z < 0 || x >= self.n.x as i32 || y >= self.n.y as i32 || z >= self.n.z as i32 {
             return T::default();
         }
         self.values[(z as usize * self.n.y as usize + y as usize) * self.n.x as usize + x as usize]

@@ -32,11 +32,7 @@ impl MajorantGrid {
                 }
             }
         }
-        MajorantGrid {
-            bounds,
-            res,
-            values,
-        }
+        MajorantGrid { bounds, res, values }
     }
 
     #[inline]
@@ -78,14 +74,7 @@ pub struct DdaIterator<'a> {
 impl<'a> DdaIterator<'a> {
     /// Starts at `t_min` on the medium-space ray (o, d), ending at `t_max`; σmaj of a cell is
     /// `sigma_t` × the cell's value.
-    pub fn new(
-        grid: &'a MajorantGrid,
-        o: Vec3,
-        d: Vec3,
-        t_min: f32,
-        t_max: f32,
-        sigma_t: Rgb,
-    ) -> DdaIterator<'a> {
+    pub fn new(grid: &'a MajorantGrid, o: Vec3, d: Vec3, t_min: f32, t_max: f32, sigma_t: Rgb) -> DdaIterator<'a> {
         let diag = grid.bounds.max - grid.bounds.min;
         let o_grid = (o - grid.bounds.min) / diag;
         let d_grid = d / diag;
@@ -109,11 +98,7 @@ impl<'a> DdaIterator<'a> {
             it.delta_t[axis] = 1.0 / (dir.abs() * r as f32);
             if dir >= 0.0 {
                 let next = (it.voxel[axis] + 1) as f32 / r as f32;
-                it.next_crossing[axis] = if dir == 0.0 {
-                    f32::INFINITY
-                } else {
-                    t_min + (next - start[axis]) / dir
-                };
+                it.next_crossing[axis] = if dir == 0.0 { f32::INFINITY } else { t_min + (next - start[axis]) / dir };
                 it.step[axis] = 1;
                 it.voxel_limit[axis] = r;
             } else {
@@ -145,11 +130,7 @@ impl Iterator for DdaIterator<'_> {
             2
         };
         let t_exit = self.t_max.min(nc[axis]);
-        let seg = Segment {
-            t_min: self.t_min,
-            t_max: t_exit,
-            sigma_maj: self.sigma_t * self.grid.at(self.voxel),
-        };
+        let seg = Segment { t_min: self.t_min, t_max: t_exit, sigma_maj: self.sigma_t * self.grid.at(self.voxel) };
         self.t_min = t_exit;
         if nc[axis] > self.t_max {
             self.t_min = self.t_max;
@@ -170,18 +151,9 @@ mod tests {
     #[test]
     fn dda_covers_the_ray_and_reports_cell_values() {
         let bounds = Bounds3::new(Vec3::ZERO, Vec3::ONE);
-        let grid = MajorantGrid::new(bounds, UVec3::new(4, 1, 1), |lo, _| {
-            (lo.x * 4.0).round() + 1.0
-        });
-        let segs: Vec<Segment> = DdaIterator::new(
-            &grid,
-            Vec3::new(-1.0, 0.5, 0.5),
-            Vec3::X,
-            1.0,
-            2.0,
-            Rgb::ONE,
-        )
-        .collect();
+        let grid = MajorantGrid::new(bounds, UVec3::new(4, 1, 1), |lo, _| (lo.x * 4.0).round() + 1.0);
+        let segs: Vec<Segment> =
+            DdaIterator::new(&grid, Vec3::new(-1.0, 0.5, 0.5), Vec3::X, 1.0, 2.0, Rgb::ONE).collect();
         assert_eq!(segs.len(), 4);
         for (i, s) in segs.iter().enumerate() {
             assert!((s.t_min - (1.0 + i as f32 * 0.25)).abs() < 1e-6);
@@ -189,15 +161,8 @@ mod tests {
             assert_eq!(s.sigma_maj.x, i as f32 + 1.0);
         }
         // Backwards along a diagonal: contiguous segments that end at t_max.
-        let segs: Vec<Segment> = DdaIterator::new(
-            &grid,
-            Vec3::new(2.0, 0.9, 0.2),
-            Vec3::new(-1.0, -0.2, 0.1),
-            1.0,
-            2.0,
-            Rgb::ONE,
-        )
-        .collect();
+        let segs: Vec<Segment> =
+            DdaIterator::new(&grid, Vec3::new(2.0, 0.9, 0.2), Vec3::new(-1.0, -0.2, 0.1), 1.0, 2.0, Rgb::ONE).collect();
         assert!((segs[0].t_min - 1.0).abs() < 1e-6);
         for w in segs.windows(2) {
             assert!((w[0].t_max - w[1].t_min).abs() < 1e-6);

@@ -6,6 +6,7 @@ use glam::{Affine3A, UVec3, Vec3};
 
 use super::cloud::Cloud;
 use super::dense::DenseGrid;
+use super::grid::SparseGrid;
 use super::majorant::{DdaIterator, MajorantGrid, Segment};
 use crate::color::{Rgb, is_gray};
 use crate::geometry::{Bounds3, Ray};
@@ -22,27 +23,54 @@ pub struct MediumPoint {
     pub le: Rgb,
 }
 
+/// Voxel data of a medium: dense over its box, or sparse with its own index transform.
+#[derive(Clone, Debug)]
+pub enum Field {
+    /// `uniformgrid`: a dense grid over the medium's box (looked up in [0, 1]³).
+    Dense(DenseGrid<f32>),
+    /// `nanovdb`/`vdb`: a sparse grid, looked up through its index-from-medium transform.
+    Sparse(SparseGrid),
+}
+
+impl Field {
+    /// The value at medium-space point `pm`, whose position in the box is `pu` ∈ [0, 1]³.
+    #[inline]
+    pub fn at(&self, pm: Vec3, pu: Vec3) -> f32 {
+        match self {
+            Field::Dense(g) => g.lookup(pu),
+            Field::Sparse(g) => g.sample(g.index_from_world().transform_point3(pm)),
+        }
+    }
+
+    fn memory_bytes(&self) -> usize {
+        match self {
+            Field::Dense(g) => g.memory_bytes(),
+            Field::Sparse(g) => g.memory_bytes(),
+        }
+    }
+}
+
 /// Where a heterogeneous medium's density comes from.
 #[derive(Clone, Debug)]
 pub enum Density {
-    /// `uniformgrid`: a dense grid over the medium's box.
-    Grid(DenseGrid<f32>),
+    /// Voxel data.
+    Field(Field),
     /// `cloud`: pbrt-v4's procedural cloud.
     Cloud(Cloud),
 }
 
 impl Density {
     #[inline]
-    fn at(&self, p_unit: Vec3) -> f32 {
+    fn at(&self, pm: Vec3, pu: Vec3) -> f32 {
         match self {
-            Density::Grid(g) => g.lookup(p_unit),
-            Density::Cloud(c) => c.density_at(p_unit),
+            Density::Field(f) => f.at(pm, pu),
+            Density::Cloud(c) => c.density_at(pu),
         }
     }
 
     fn memory_bytes(&self) -> usize {
         match self {
-            Density::Grid(g) => g.memory_bytes(),
+            Density::Field(f) => f.memory_bytes(),
             Density::Cloud(_) => 0,
         }
     }
@@ -57,21 +85,24 @@ pub enum Emission {
     Radiance {
         /// Le.
         le: Rgb,
-        /// Per-voxel multiplier (pbrt-v4's `Lescale` array), or none for 1.
-        scale: Option<DenseGrid<f32>>,
+        /// Multiplier grid: pbrt-v4's `Lescale` array, or a single sample of 1 when absent —
+        /// which pbrt-v4 interpolates with zero outside, fading emission from 1 at the box's
+        /// centre to ⅛ at its corners. nimbus does the same so its images match.
+        scale: DenseGrid<f32>,
     },
     /// Blackbody emission from a temperature grid: T' = (T − offset)·scale, emitting only
     /// above 100 K, Le = scale_le · B(T') with B normalised to a peak of 1.
     Temperature {
         /// Temperatures.
-        grid: DenseGrid<f32>,
+        grid: Field,
         /// Subtracted from T.
         offset: f32,
         /// Multiplies T − offset.
         scale: f32,
         /// Multiplies the emission.
         le_scale: f32,
-        /// Per-voxel multiplier (`Lescale` array), or none for 1.
+        /// Multiplier grid, as for [`Emission::Radiance`] (`uniformgrid`); none for the
+        /// VDB media, which pbrt-v4 scales by a constant.
         scale_grid: Option<DenseGrid<f32>>,
         /// RGB of the peak-normalised blackbody by temperature.
         table: BlackbodyRgbTable,
@@ -172,17 +203,7 @@ impl Medium {
     /// A homogeneous medium.
     pub fn homogeneous(name: String, sigma_a: Rgb, sigma_s: Rgb, le: Rgb, g: f32) -> Medium {
         let chromatic = !is_gray(sigma_a) || !is_gray(sigma_s);
-        Medium {
-            name,
-            kind: MediumKind::Homogeneous {
-                sigma_a,
-                sigma_s,
-                le,
-            },
-            g,
-            chromatic,
-            emissive: le != Rgb::ZERO,
-        }
+        Medium { name, kind: MediumKind::Homogeneous { sigma_a, sigma_s, le }, g, chromatic, emissive: le != Rgb::ZERO }
     }
 
     /// A density-grid medium; builds its majorant grid (pbrt-v4 uses 16³ for grids).
@@ -198,9 +219,21 @@ impl Medium {
         g: f32,
     ) -> Medium {
         let majorant = match &density {
-            Density::Grid(d) => {
+            Density::Field(Field::Dense(d)) => {
                 MajorantGrid::new(bounds, UVec3::splat(16), |lo, hi| d.max_value(lo, hi))
             }
+            // pbrt-v4 uses 64³ for NanoVDB grids; each cell takes the maximum over the voxels
+            // whose trilinear footprint reaches it (one voxel of slop).
+            Density::Field(Field::Sparse(g)) => MajorantGrid::new(bounds, UVec3::splat(64), |lo, hi| {
+                let size = bounds.max - bounds.min;
+                let cell =
+                    Bounds3::new(bounds.min + lo * size, bounds.min + hi * size).transformed(&g.index_from_world());
+                let i0 = (cell.min.floor() - Vec3::ONE).as_ivec3();
+                let i1 = (cell.max.ceil() + Vec3::ONE).as_ivec3();
+                let (b0, b1) = g.index_bounds();
+                let (i0, i1) = (i0.max(b0), i1.min(b1));
+                if i0.cmpgt(i1).any() { 0.0 } else { g.max_over(i0, i1) }
+            }),
             // The procedural cloud's density never exceeds 1.
             Density::Cloud(_) => MajorantGrid::new(bounds, UVec3::ONE, |_, _| 1.0),
         };
@@ -260,12 +293,10 @@ impl Medium {
             MediumKind::Homogeneous { .. } => 0,
             MediumKind::Grid(g) => {
                 let e = match &g.emission {
-                    Emission::Radiance { scale, .. } => {
-                        scale.as_ref().map_or(0, |s| s.memory_bytes())
+                    Emission::Radiance { scale, .. } => scale.memory_bytes(),
+                    Emission::Temperature { grid, scale_grid, .. } => {
+                        grid.memory_bytes() + scale_grid.as_ref().map_or(0, |s| s.memory_bytes())
                     }
-                    Emission::Temperature {
-                        grid, scale_grid, ..
-                    } => grid.memory_bytes() + scale_grid.as_ref().map_or(0, |s| s.memory_bytes()),
                     _ => 0,
                 };
                 g.density.memory_bytes() + g.majorant.memory_bytes() + e
@@ -279,18 +310,19 @@ impl Medium {
 
     /// A one-line description of how the medium is represented, for `--stats`.
     pub fn representation(&self) -> String {
-        let channels = if self.chromatic {
-            "chromatic (3-channel MIS)"
-        } else {
-            "gray (1 channel)"
-        };
+        let channels = if self.chromatic { "chromatic (3-channel MIS)" } else { "gray (1 channel)" };
         match &self.kind {
             MediumKind::Homogeneous { .. } => format!("homogeneous, closed-form, {channels}"),
             MediumKind::Grid(g) => {
                 let src = match &g.density {
-                    Density::Grid(d) => {
+                    Density::Field(Field::Dense(d)) => {
                         let n = d.resolution();
-                        format!("density grid {}x{}x{}", n.x, n.y, n.z)
+                        format!("dense density grid {}x{}x{}", n.x, n.y, n.z)
+                    }
+                    Density::Field(Field::Sparse(s)) => {
+                        let (a, b) = s.index_bounds();
+                        let n = b - a + glam::IVec3::ONE;
+                        format!("sparse density grid {}x{}x{} ({} bricks)", n.x, n.y, n.z, s.brick_count())
                     }
                     Density::Cloud(_) => "procedural cloud".to_string(),
                 };
@@ -299,10 +331,7 @@ impl Medium {
             }
             MediumKind::RgbGrid(g) => {
                 let r = g.majorant.res;
-                format!(
-                    "rgb grid, majorant {}x{}x{}, chromatic (3-channel MIS)",
-                    r.x, r.y, r.z
-                )
+                format!("rgb grid, majorant {}x{}x{}, chromatic (3-channel MIS)", r.x, r.y, r.z)
             }
         }
     }
@@ -311,47 +340,26 @@ impl Medium {
     #[inline]
     pub fn sample_point(&self, p: Vec3) -> MediumPoint {
         match &self.kind {
-            MediumKind::Homogeneous {
-                sigma_a,
-                sigma_s,
-                le,
-            } => MediumPoint {
-                sigma_a: *sigma_a,
-                sigma_s: *sigma_s,
-                le: *le,
-            },
+            MediumKind::Homogeneous { sigma_a, sigma_s, le } => {
+                MediumPoint { sigma_a: *sigma_a, sigma_s: *sigma_s, le: *le }
+            }
             MediumKind::Grid(g) => {
                 let pm = g.medium_from_world.transform_point3(p);
                 let pu = (pm - g.bounds.min) / (g.bounds.max - g.bounds.min);
-                let d = g.density.at(pu);
+                let d = g.density.at(pm, pu);
                 let le = match &g.emission {
                     Emission::None => Rgb::ZERO,
-                    Emission::Radiance { le, scale } => {
-                        *le * scale.as_ref().map_or(1.0, |s| s.lookup(pu))
-                    }
-                    Emission::Temperature {
-                        grid,
-                        offset,
-                        scale,
-                        le_scale,
-                        scale_grid,
-                        table,
-                    } => {
-                        let t = (grid.lookup(pu) - offset) * scale;
+                    Emission::Radiance { le, scale } => *le * scale.lookup(pu),
+                    Emission::Temperature { grid, offset, scale, le_scale, scale_grid, table } => {
+                        let t = (grid.at(pm, pu) - offset) * scale;
                         if t > 100.0 {
-                            table.lookup(t)
-                                * *le_scale
-                                * scale_grid.as_ref().map_or(1.0, |s| s.lookup(pu))
+                            table.lookup(t) * *le_scale * scale_grid.as_ref().map_or(1.0, |s| s.lookup(pu))
                         } else {
                             Rgb::ZERO
                         }
                     }
                 };
-                MediumPoint {
-                    sigma_a: g.sigma_a * d,
-                    sigma_s: g.sigma_s * d,
-                    le,
-                }
+                MediumPoint { sigma_a: g.sigma_a * d, sigma_s: g.sigma_s * d, le }
             }
             MediumKind::RgbGrid(g) => {
                 let pm = g.medium_from_world.transform_point3(p);
@@ -359,11 +367,7 @@ impl Medium {
                 let sa = g.sigma_a.as_ref().map_or(Rgb::ONE, |s| s.lookup(pu));
                 let ss = g.sigma_s.as_ref().map_or(Rgb::ONE, |s| s.lookup(pu));
                 let le = g.le.as_ref().map_or(Rgb::ZERO, |l| l.lookup(pu));
-                MediumPoint {
-                    sigma_a: sa,
-                    sigma_s: ss,
-                    le,
-                }
+                MediumPoint { sigma_a: sa, sigma_s: ss, le }
             }
         }
     }
@@ -372,29 +376,13 @@ impl Medium {
     #[inline]
     pub fn segments(&self, ray: &Ray, t_max: f32) -> Segments<'_> {
         match &self.kind {
-            MediumKind::Homogeneous {
-                sigma_a, sigma_s, ..
-            } => Segments::Single(Some(Segment {
-                t_min: 0.0,
-                t_max,
-                sigma_maj: *sigma_a + *sigma_s,
-            })),
-            MediumKind::Grid(g) => grid_segments(
-                &g.medium_from_world,
-                &g.bounds,
-                &g.majorant,
-                ray,
-                t_max,
-                g.sigma_a + g.sigma_s,
-            ),
-            MediumKind::RgbGrid(g) => grid_segments(
-                &g.medium_from_world,
-                &g.bounds,
-                &g.majorant,
-                ray,
-                t_max,
-                Rgb::ONE,
-            ),
+            MediumKind::Homogeneous { sigma_a, sigma_s, .. } => {
+                Segments::Single(Some(Segment { t_min: 0.0, t_max, sigma_maj: *sigma_a + *sigma_s }))
+            }
+            MediumKind::Grid(g) => {
+                grid_segments(&g.medium_from_world, &g.bounds, &g.majorant, ray, t_max, g.sigma_a + g.sigma_s)
+            }
+            MediumKind::RgbGrid(g) => grid_segments(&g.medium_from_world, &g.bounds, &g.majorant, ray, t_max, Rgb::ONE),
         }
     }
 }

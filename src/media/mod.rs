@@ -8,4 +8,4 @@ pub mod majorant;
 mod medium;
 pub mod phase;
 
-pub use medium::{Density, Emission, GridMedium, Medium, MediumKind, MediumPoint, RgbGridMedium, Segments};
+pub use medium::{Density, Emission, Field, GridMedium, Medium, MediumKind, MediumPoint, RgbGridMedium, Segments};

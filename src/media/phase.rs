@@ -106,17 +106,11 @@ mod tests {
             for u in stratified_2d(n) {
                 let s = hg.sample_p(wo, u).expect("HG sampling never fails");
                 assert!((s.wi.length() - 1.0).abs() < 1e-4);
-                assert!(
-                    (s.pdf - hg.pdf(wo, s.wi)).abs() <= 2e-3 * s.pdf.max(1.0),
-                    "g {g}"
-                );
+                assert!((s.pdf - hg.pdf(wo, s.wi)).abs() <= 2e-3 * s.pdf.max(1.0), "g {g}");
                 mean += wo.dot(s.wi) as f64;
             }
             mean /= (n * n) as f64;
-            assert!(
-                (mean + g.clamp(-0.99, 0.99) as f64).abs() < 2e-3,
-                "g {g}: {mean}"
-            );
+            assert!((mean + g.clamp(-0.99, 0.99) as f64).abs() < 2e-3, "g {g}: {mean}");
         }
     }
 }

@@ -37,6 +37,33 @@ pub struct BlockZ {
     pub z: f64,
 }
 
+/// For a scene whose true image is gray (all lights and materials gray), an estimate of the
+/// reference's own noise contribution to [`Parity::excess`]'s numerator relative to its
+/// denominator: a spectral renderer's noise makes a gray image's channels differ, and the
+/// spread of the channels around their mean measures it (assuming independent channels).
+pub fn reference_noise_share(a: &Image, b: &Image, reference: &Image) -> f64 {
+    let (bw, bh) = (a.width / 8, a.height / 8);
+    let (mut noise, mut den) = (0.0f64, 0.0f64);
+    for by in 0..bh {
+        for bx in 0..bw {
+            let mut r = [0.0f64; 3];
+            let mut d = [0.0f64; 3];
+            for y in by * 8..by * 8 + 8 {
+                for x in bx * 8..bx * 8 + 8 {
+                    for c in 0..3 {
+                        r[c] += channel(reference.get(x, y), c) / 64.0;
+                        d[c] += 0.5 * (channel(a.get(x, y), c) - channel(b.get(x, y), c)) / 64.0;
+                    }
+                }
+            }
+            let mean = (r[0] + r[1] + r[2]) / 3.0;
+            noise += 1.5 * r.iter().map(|v| (v - mean).powi(2)).sum::<f64>();
+            den += d.iter().map(|v| v * v).sum::<f64>();
+        }
+    }
+    if den > 0.0 { noise / den } else { 0.0 }
+}
+
 /// Per-block z-scores of M = (A + B)/2 against the reference, largest |z| first.
 pub fn block_z_scores(a: &Image, b: &Image, reference: &Image) -> Vec<BlockZ> {
     let mut out = Vec::new();
@@ -44,28 +71,22 @@ pub fn block_z_scores(a: &Image, b: &Image, reference: &Image) -> Vec<BlockZ> {
         for bx in 0..a.width / 8 {
             let (mut d, mut n) = (0.0f64, 0.0f64);
             for c in 0..3 {
-                let (mut sm, mut sr, mut sd) = (0.0, 0.0, 0.0);
+                let (mut sm, mut sr, mut sd2) = (0.0, 0.0, 0.0);
                 for y in by * 8..by * 8 + 8 {
                     for x in bx * 8..bx * 8 + 8 {
-                        let (pa, pb, pr) = (
-                            channel(a.get(x, y), c),
-                            channel(b.get(x, y), c),
-                            channel(reference.get(x, y), c),
-                        );
+                        let (pa, pb, pr) =
+                            (channel(a.get(x, y), c), channel(b.get(x, y), c), channel(reference.get(x, y), c));
                         sm += 0.5 * (pa + pb);
                         sr += pr;
-                        sd += 0.5 * (pa - pb);
+                        sd2 += (0.5 * (pa - pb)).powi(2);
                     }
                 }
                 d += (sm - sr) / 64.0 / 3.0;
-                n += (sd / 64.0).powi(2) / 3.0;
+                // Noise of the block mean of M from the per-pixel spread of (A − B)/2, whose mean
+                // square estimates a pixel's variance of M.
+                n += sd2 / 64.0 / 64.0 / 3.0;
             }
-            out.push(BlockZ {
-                bx,
-                by,
-                diff: d,
-                z: if n > 0.0 { d / n.sqrt() } else { 0.0 },
-            });
+            out.push(BlockZ { bx, by, diff: d, z: if n > 0.0 { d / n.sqrt() } else { 0.0 } });
         }
     }
     out.sort_by(|p, q| q.z.abs().total_cmp(&p.z.abs()));
@@ -76,28 +97,16 @@ pub fn block_z_scores(a: &Image, b: &Image, reference: &Image) -> Vec<BlockZ> {
 pub fn parity(a: &Image, b: &Image, reference: &Image) -> Result<Parity, String> {
     for (name, img) in [("second render", b), ("reference", reference)] {
         if (img.width, img.height) != (a.width, a.height) {
-            return Err(format!(
-                "{name} is {}x{}, the render is {}x{}",
-                img.width, img.height, a.width, a.height
-            ));
+            return Err(format!("{name} is {}x{}, the render is {}x{}", img.width, img.height, a.width, a.height));
         }
     }
     let n = a.pixels.len() as f64;
     let mut mean_rel = [0.0; 3];
     for (c, m) in mean_rel.iter_mut().enumerate() {
-        let mm: f64 = a
-            .pixels
-            .iter()
-            .zip(&b.pixels)
-            .map(|(x, y)| 0.5 * (channel(*x, c) + channel(*y, c)))
-            .sum::<f64>()
-            / n;
+        let mm: f64 =
+            a.pixels.iter().zip(&b.pixels).map(|(x, y)| 0.5 * (channel(*x, c) + channel(*y, c))).sum::<f64>() / n;
         let mr: f64 = reference.pixels.iter().map(|x| channel(*x, c)).sum::<f64>() / n;
-        *m = if mr > 0.0 {
-            (mm - mr).abs() / mr
-        } else {
-            (mm - mr).abs()
-        };
+        *m = if mr > 0.0 { (mm - mr).abs() / mr } else { (mm - mr).abs() };
     }
     let (bw, bh) = (a.width / 8, a.height / 8);
     let (mut num, mut den) = (0.0f64, 0.0f64);
@@ -107,11 +116,8 @@ pub fn parity(a: &Image, b: &Image, reference: &Image) -> Result<Parity, String>
                 let (mut sm, mut sr, mut sd) = (0.0, 0.0, 0.0);
                 for y in by * 8..by * 8 + 8 {
                     for x in bx * 8..bx * 8 + 8 {
-                        let (pa, pb, pr) = (
-                            channel(a.get(x, y), c),
-                            channel(b.get(x, y), c),
-                            channel(reference.get(x, y), c),
-                        );
+                        let (pa, pb, pr) =
+                            (channel(a.get(x, y), c), channel(b.get(x, y), c), channel(reference.get(x, y), c));
                         sm += 0.5 * (pa + pb);
                         sr += pr;
                         sd += 0.5 * (pa - pb);
@@ -163,8 +169,7 @@ pub fn error_metrics(test: &Image, reference: &Image) -> Result<ErrorMetrics, St
             test.width, test.height, reference.width, reference.height
         ));
     }
-    let (mut se, mut rel, mut ae, mut pe, mut ne, mut st, mut sr) =
-        (0.0f64, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+    let (mut se, mut rel, mut ae, mut pe, mut ne, mut st, mut sr) = (0.0f64, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
     for (a, b) in test.pixels.iter().zip(&reference.pixels) {
         for c in 0..3 {
             let (x, y) = (a[c] as f64, b[c] as f64);
@@ -195,17 +200,9 @@ pub fn error_metrics(test: &Image, reference: &Image) -> Result<ErrorMetrics, St
 /// darker, scaled so that `scale` (per-pixel channel-mean difference) is full intensity.
 pub fn difference_image(test: &Image, reference: &Image, scale: f32) -> Image {
     let mut out = Image::new(test.width, test.height);
-    for (o, (a, b)) in out
-        .pixels
-        .iter_mut()
-        .zip(test.pixels.iter().zip(&reference.pixels))
-    {
+    for (o, (a, b)) in out.pixels.iter_mut().zip(test.pixels.iter().zip(&reference.pixels)) {
         let d = ((*a - *b).x + (*a - *b).y + (*a - *b).z) / 3.0 / scale;
-        *o = if d >= 0.0 {
-            glam::Vec3::new(0.0, d.min(1.0), 0.0)
-        } else {
-            glam::Vec3::new((-d).min(1.0), 0.0, 0.0)
-        };
+        *o = if d >= 0.0 { glam::Vec3::new(0.0, d.min(1.0), 0.0) } else { glam::Vec3::new((-d).min(1.0), 0.0, 0.0) };
     }
     out
 }
@@ -235,10 +232,7 @@ mod tests {
 
     #[test]
     fn parity_of_identical_noise_free_images() {
-        let a = Image {
-            pixels: vec![glam::Vec3::ONE; 64],
-            ..Image::new(8, 8)
-        };
+        let a = Image { pixels: vec![glam::Vec3::ONE; 64], ..Image::new(8, 8) };
         let p = parity(&a, &a, &a).unwrap();
         assert_eq!(p.worst_mean_rel(), 0.0);
         assert_eq!(p.excess, 1.0);

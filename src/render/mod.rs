@@ -70,11 +70,7 @@ impl Accumulator {
         for (o, p) in img.pixels.iter_mut().zip(&self.pixels) {
             if p.weight != 0.0 {
                 let s = imaging_ratio as f64 / p.weight;
-                *o = Rgb::new(
-                    (p.rgb[0] * s) as f32,
-                    (p.rgb[1] * s) as f32,
-                    (p.rgb[2] * s) as f32,
-                );
+                *o = Rgb::new((p.rgb[0] * s) as f32, (p.rgb[1] * s) as f32, (p.rgb[2] * s) as f32);
             }
         }
         img
@@ -186,8 +182,7 @@ pub fn render(scene: &Scene, integrator: &dyn Integrator, options: &RenderOption
             .par_iter()
             .map(|tile| {
                 let mut sampler = base_sampler.clone();
-                let mut out =
-                    Vec::with_capacity(((tile[2] - tile[0]) * (tile[3] - tile[1])) as usize);
+                let mut out = Vec::with_capacity(((tile[2] - tile[0]) * (tile[3] - tile[1])) as usize);
                 let mut stats = RayStats::default();
                 render_tile(
                     scene,

@@ -26,10 +26,5 @@ pub fn get_camera_sample(sampler: &mut Sampler, pixel: UVec2, filter: &Filter) -
     let fs = filter.sample(sampler.get_pixel_2d());
     let time = sampler.get_1d();
     let p_lens = sampler.get_2d();
-    CameraSample {
-        p_film: pixel.as_vec2() + fs.offset + Vec2::splat(0.5),
-        time,
-        p_lens,
-        filter_weight: fs.weight,
-    }
+    CameraSample { p_film: pixel.as_vec2() + fs.offset + Vec2::splat(0.5), time, p_lens, filter_weight: fs.weight }
 }

@@ -94,9 +94,7 @@ pub(crate) fn sample_key(pixel: UVec2, sample_index: u32, seed: i32) -> u64 {
 /// state is carried, so a value depends on its inputs alone and never on call order.
 #[inline]
 pub(crate) fn hashed_uniform(key: u64, counter: u32) -> f32 {
-    unit_from_bits(mix_bits(
-        key.wrapping_add((counter as u64 + 1).wrapping_mul(GOLDEN)),
-    ))
+    unit_from_bits(mix_bits(key.wrapping_add((counter as u64 + 1).wrapping_mul(GOLDEN))))
 }
 
 #[cfg(test)]

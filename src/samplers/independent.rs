@@ -19,12 +19,7 @@ pub struct IndependentSampler {
 impl IndependentSampler {
     /// A sampler taking `samples_per_pixel` samples, decorrelated across scenes by `seed`.
     pub fn new(samples_per_pixel: u32, seed: i32) -> IndependentSampler {
-        IndependentSampler {
-            samples_per_pixel,
-            seed,
-            key: 0,
-            dimension: 0,
-        }
+        IndependentSampler { samples_per_pixel, seed, key: 0, dimension: 0 }
     }
 
     /// Samples per pixel.
@@ -47,10 +42,7 @@ impl IndependentSampler {
 
     /// The next two values.
     pub fn get_2d(&mut self) -> Vec2 {
-        let u = Vec2::new(
-            hashed_uniform(self.key, self.dimension),
-            hashed_uniform(self.key, self.dimension + 1),
-        );
+        let u = Vec2::new(hashed_uniform(self.key, self.dimension), hashed_uniform(self.key, self.dimension + 1));
         self.dimension += 2;
         u
     }

@@ -47,16 +47,11 @@ impl Sampler {
         let seed = settings.seed;
         match settings.kind {
             SamplerKind::Independent => Sampler::Independent(IndependentSampler::new(spp, seed)),
-            SamplerKind::Stratified { x, y, jitter } => {
-                Sampler::Stratified(StratifiedSampler::new(x, y, jitter, seed))
-            }
+            SamplerKind::Stratified { x, y, jitter } => Sampler::Stratified(StratifiedSampler::new(x, y, jitter, seed)),
             SamplerKind::Sobol => Sampler::Sobol(SobolSampler::new(spp, seed)),
-            SamplerKind::ZSobol => Sampler::ZSobol(ZSobolSampler::new(
-                spp,
-                full_resolution,
-                settings.randomization,
-                seed,
-            )),
+            SamplerKind::ZSobol => {
+                Sampler::ZSobol(ZSobolSampler::new(spp, full_resolution, settings.randomization, seed))
+            }
         }
     }
 

@@ -33,14 +33,7 @@ pub struct SobolSampler {
 impl SobolSampler {
     /// A sampler taking `samples_per_pixel` samples, decorrelated across scenes by `seed`.
     pub fn new(samples_per_pixel: u32, seed: i32) -> SobolSampler {
-        SobolSampler {
-            samples_per_pixel,
-            seed,
-            pixel_seed: 0,
-            key: 0,
-            sample_index: 0,
-            dimension: 0,
-        }
+        SobolSampler { samples_per_pixel, seed, pixel_seed: 0, key: 0, sample_index: 0, dimension: 0 }
     }
 
     /// Samples per pixel.

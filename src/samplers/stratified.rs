@@ -68,11 +68,7 @@ impl StratifiedSampler {
 
     /// Offset inside a stratum for counter `c` of this pixel sample.
     fn delta(&self, c: u32) -> f32 {
-        if self.jitter {
-            hashed_uniform(self.key, c)
-        } else {
-            0.5
-        }
+        if self.jitter { hashed_uniform(self.key, c) } else { 0.5 }
     }
 
     /// The next value: one of `x·y` strata of [0, 1).
@@ -90,10 +86,7 @@ impl StratifiedSampler {
         let (dx, dy) = (self.delta(self.dimension), self.delta(self.dimension + 1));
         self.dimension += 2;
         let (x, y) = (stratum % self.x_samples, stratum / self.x_samples);
-        Vec2::new(
-            (x as f32 + dx) / self.x_samples as f32,
-            (y as f32 + dy) / self.y_samples as f32,
-        )
-        .min(Vec2::splat(ONE_MINUS_EPSILON))
+        Vec2::new((x as f32 + dx) / self.x_samples as f32, (y as f32 + dy) / self.y_samples as f32)
+            .min(Vec2::splat(ONE_MINUS_EPSILON))
     }
 }

@@ -9,44 +9,20 @@ use crate::scene::sampler::{Randomization, SamplerKind, SamplerSettings};
 const RESOLUTION: UVec2 = UVec2::new(16, 16);
 
 fn sampler(kind: SamplerKind, spp: u32, randomization: Randomization) -> Sampler {
-    let settings = SamplerSettings {
-        kind,
-        pixel_samples: spp,
-        seed: 7,
-        randomization,
-    };
+    let settings = SamplerSettings { kind, pixel_samples: spp, seed: 7, randomization };
     Sampler::new(&settings, RESOLUTION)
 }
 
 /// Every sampler kind at `spp` samples per pixel (a square number; stratified gets √spp²).
 fn all(spp: u32) -> Vec<(&'static str, Sampler)> {
     let side = spp.isqrt();
-    let stratified = SamplerKind::Stratified {
-        x: side,
-        y: side,
-        jitter: true,
-    };
+    let stratified = SamplerKind::Stratified { x: side, y: side, jitter: true };
     vec![
-        (
-            "independent",
-            sampler(SamplerKind::Independent, spp, Randomization::FastOwen),
-        ),
-        (
-            "stratified",
-            sampler(stratified, spp, Randomization::FastOwen),
-        ),
-        (
-            "sobol",
-            sampler(SamplerKind::Sobol, spp, Randomization::FastOwen),
-        ),
-        (
-            "zsobol fastowen",
-            sampler(SamplerKind::ZSobol, spp, Randomization::FastOwen),
-        ),
-        (
-            "zsobol owen",
-            sampler(SamplerKind::ZSobol, spp, Randomization::Owen),
-        ),
+        ("independent", sampler(SamplerKind::Independent, spp, Randomization::FastOwen)),
+        ("stratified", sampler(stratified, spp, Randomization::FastOwen)),
+        ("sobol", sampler(SamplerKind::Sobol, spp, Randomization::FastOwen)),
+        ("zsobol fastowen", sampler(SamplerKind::ZSobol, spp, Randomization::FastOwen)),
+        ("zsobol owen", sampler(SamplerKind::ZSobol, spp, Randomization::Owen)),
     ]
 }
 
@@ -84,11 +60,8 @@ fn values_depend_only_on_pixel_index_and_dimension() {
     for (name, s) in all(16) {
         // Forward on one clone, backward on another: a value must not depend on history.
         let (mut a, mut b) = (s.clone(), s.clone());
-        let forward: Vec<Vec<f32>> = pixels
-            .iter()
-            .flat_map(|&p| (0..16).map(move |i| (p, i)))
-            .map(|(p, i)| values(&mut a, p, i))
-            .collect();
+        let forward: Vec<Vec<f32>> =
+            pixels.iter().flat_map(|&p| (0..16).map(move |i| (p, i))).map(|(p, i)| values(&mut a, p, i)).collect();
         let mut backward: Vec<Vec<f32>> = pixels
             .iter()
             .flat_map(|&p| (0..16).map(move |i| (p, i)))
@@ -102,13 +75,7 @@ fn values_depend_only_on_pixel_index_and_dimension() {
         assert_ne!(forward[0], forward[32], "{name}");
         assert_ne!(forward[0], forward[1], "{name}");
         // The seed changes everything.
-        let mut reseeded = Sampler::new(
-            &SamplerSettings {
-                seed: 8,
-                ..settings_of(name)
-            },
-            RESOLUTION,
-        );
+        let mut reseeded = Sampler::new(&SamplerSettings { seed: 8, ..settings_of(name) }, RESOLUTION);
         assert_ne!(values(&mut reseeded, pixels[0], 0), forward[0], "{name}");
     }
 }
@@ -116,11 +83,7 @@ fn values_depend_only_on_pixel_index_and_dimension() {
 fn settings_of(name: &str) -> SamplerSettings {
     let kind = match name {
         "independent" => SamplerKind::Independent,
-        "stratified" => SamplerKind::Stratified {
-            x: 4,
-            y: 4,
-            jitter: true,
-        },
+        "stratified" => SamplerKind::Stratified { x: 4, y: 4, jitter: true },
         "sobol" => SamplerKind::Sobol,
         _ => SamplerKind::ZSobol,
     };
@@ -128,11 +91,7 @@ fn settings_of(name: &str) -> SamplerSettings {
         kind,
         pixel_samples: 16,
         seed: 7,
-        randomization: if name == "zsobol owen" {
-            Randomization::Owen
-        } else {
-            Randomization::FastOwen
-        },
+        randomization: if name == "zsobol owen" { Randomization::Owen } else { Randomization::FastOwen },
     }
 }
 
@@ -161,14 +120,8 @@ fn camera_samples_come_in_pbrt_order() {
         let cs = get_camera_sample(&mut s, pixel, &filter);
         s.start_pixel_sample(pixel, 5, 0);
         let p = s.get_pixel_2d();
-        assert!(
-            (cs.p_film - (pixel.as_vec2() + p)).abs().max_element() < 1e-5,
-            "{name}"
-        );
-        assert_eq!(
-            (cs.time, cs.p_lens, cs.filter_weight),
-            (s.get_1d(), s.get_2d(), 1.0)
-        );
+        assert!((cs.p_film - (pixel.as_vec2() + p)).abs().max_element() < 1e-5, "{name}");
+        assert_eq!((cs.time, cs.p_lens, cs.filter_weight), (s.get_1d(), s.get_2d(), 1.0));
     }
 }
 
@@ -184,11 +137,7 @@ fn cell_counts(points: &[Vec2], n: usize) -> Vec<u32> {
 #[test]
 fn stratified_sampler_hits_every_stratum_once() {
     for jitter in [true, false] {
-        let mut s = sampler(
-            SamplerKind::Stratified { x: 4, y: 3, jitter },
-            12,
-            Randomization::FastOwen,
-        );
+        let mut s = sampler(SamplerKind::Stratified { x: 4, y: 3, jitter }, 12, Randomization::FastOwen);
         for pixel in [UVec2::ZERO, UVec2::new(9, 4)] {
             let mut cells = vec![[0u32; 12]; 3];
             for index in 0..12 {
@@ -244,9 +193,7 @@ fn sobol_samplers_fill_every_elementary_interval() {
 #[test]
 fn low_discrepancy_samplers_integrate_smooth_functions_faster() {
     // ∫∫ sin(πx) sin(πy) + x y² over [0, 1]² = 4/π² + 1/6.
-    let f = |p: Vec2| {
-        (std::f32::consts::PI * p.x).sin() * (std::f32::consts::PI * p.y).sin() + p.x * p.y * p.y
-    };
+    let f = |p: Vec2| (std::f32::consts::PI * p.x).sin() * (std::f32::consts::PI * p.y).sin() + p.x * p.y * p.y;
     let exact = 4.0 / std::f64::consts::PI.powi(2) + 1.0 / 6.0;
     let spp = 256;
     for start in [0u32, 3] {

@@ -33,11 +33,7 @@ const fn matrix(dimension: u32) -> [u32; 64] {
     let mut m = [0u32; 64];
     let mut j = 0;
     while j < 64 {
-        m[j as usize] = if dimension == 0 {
-            sobol0_column(j)
-        } else {
-            sobol1_column(j)
-        };
+        m[j as usize] = if dimension == 0 { sobol0_column(j) } else { sobol1_column(j) };
         j += 1;
     }
     m
@@ -170,8 +166,7 @@ impl ZSobolSampler {
     pub fn start_pixel_sample(&mut self, pixel: UVec2, sample_index: u32, dimension: u32) {
         debug_assert!(sample_index < self.samples_per_pixel());
         self.dimension = dimension;
-        self.morton_index =
-            (encode_morton2(pixel.x, pixel.y) << self.log2_samples_per_pixel) | sample_index as u64;
+        self.morton_index = (encode_morton2(pixel.x, pixel.y) << self.log2_samples_per_pixel) | sample_index as u64;
     }
 
     /// Hash that picks a digit permutation from the digits above it, as pbrt-v4 computes it:
@@ -234,10 +229,7 @@ impl ZSobolSampler {
         let a = self.sample_index();
         self.dimension += 2;
         let bits = self.scramble_bits();
-        Vec2::new(
-            self.sobol_sample(a, 0, bits as u32),
-            self.sobol_sample(a, 1, (bits >> 32) as u32),
-        )
+        Vec2::new(self.sobol_sample(a, 0, bits as u32), self.sobol_sample(a, 1, (bits >> 32) as u32))
     }
 }
 
@@ -301,12 +293,7 @@ mod tests {
             indices.sort_unstable();
             let base = indices[0];
             assert_eq!(base % 64, 0);
-            assert!(
-                indices
-                    .iter()
-                    .enumerate()
-                    .all(|(k, &i)| i == base + k as u64)
-            );
+            assert!(indices.iter().enumerate().all(|(k, &i)| i == base + k as u64));
         }
     }
 
@@ -325,14 +312,7 @@ mod tests {
                 0,
                 UVec2::new(5, 9),
                 3,
-                [
-                    0x8072_3c5e,
-                    0x45e2_b0ac,
-                    0x6f0a_5a47,
-                    0x4c96_e31f,
-                    0x1909_d454,
-                    0x0709_e07f,
-                ],
+                [0x8072_3c5e, 0x45e2_b0ac, 0x6f0a_5a47, 0x4c96_e31f, 0x1909_d454, 0x0709_e07f],
             ),
             (
                 32,
@@ -341,14 +321,7 @@ mod tests {
                 -3,
                 UVec2::new(77, 20),
                 31,
-                [
-                    0xd789_4c45,
-                    0xf605_8469,
-                    0x7fb8_a190,
-                    0x51c5_b0d8,
-                    0xc5e6_4a06,
-                    0x064b_d0bf,
-                ],
+                [0xd789_4c45, 0xf605_8469, 0x7fb8_a190, 0x51c5_b0d8, 0xc5e6_4a06, 0x064b_d0bf],
             ),
             (
                 8,
@@ -357,14 +330,7 @@ mod tests {
                 12345,
                 UVec2::new(639, 479),
                 7,
-                [
-                    0x9331_3c63,
-                    0x619e_79b2,
-                    0xc1bd_35ab,
-                    0x5bc4_1bf0,
-                    0x0871_682f,
-                    0x5b54_250b,
-                ],
+                [0x9331_3c63, 0x619e_79b2, 0xc1bd_35ab, 0x5bc4_1bf0, 0x0871_682f, 0x5b54_250b],
             ),
         ];
         let to_f32 = |v: u32| (v as f32 * (1.0 / 4_294_967_296.0)).min(ONE_MINUS_EPSILON);

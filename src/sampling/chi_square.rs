@@ -65,9 +65,7 @@ pub(crate) fn chi_square_test(observed: &[u64], expected: &[f64]) -> Result<(), 
     }
     let threshold = chi_square_threshold(cells.saturating_sub(1));
     if stat > threshold {
-        Err(format!(
-            "chi-square {stat:.1} over {cells} cells exceeds {threshold:.1} (p = 1e-4)"
-        ))
+        Err(format!("chi-square {stat:.1} over {cells} cells exceeds {threshold:.1} (p = 1e-4)"))
     } else {
         Ok(())
     }

@@ -56,11 +56,7 @@ fn sanitize(w: f32) -> f32 {
 /// Clamps a sample to [0, 1); NaN becomes 0.
 #[inline]
 fn unit(u: f32) -> f32 {
-    if u >= 0.0 {
-        u.min(ONE_MINUS_EPSILON)
-    } else {
-        0.0
-    }
+    if u >= 0.0 { u.min(ONE_MINUS_EPSILON) } else { 0.0 }
 }
 
 /// A piecewise-constant density over `[min, max]` proportional to |f|, sampled by inverting
@@ -155,22 +151,14 @@ impl PiecewiseConstant1D {
         // their left one, so it is also at or below u.
         let o = self.cdf[..n].partition_point(|&c| c <= u) - 1;
         let width = self.cdf[o + 1] - self.cdf[o];
-        let du = if width > 0.0 {
-            ((u - self.cdf[o]) / width).clamp(0.0, ONE_MINUS_EPSILON)
-        } else {
-            0.0
-        };
+        let du = if width > 0.0 { ((u - self.cdf[o]) / width).clamp(0.0, ONE_MINUS_EPSILON) } else { 0.0 };
         (o, du)
     }
 
     /// Density of piece `o`.
     #[inline]
     fn piece_pdf(&self, o: usize) -> f32 {
-        if self.integral > 0.0 {
-            self.func[o] / self.integral
-        } else {
-            1.0 / (self.max - self.min)
-        }
+        if self.integral > 0.0 { self.func[o] / self.integral } else { 1.0 / (self.max - self.min) }
     }
 
     /// A point distributed proportionally to |f|, from `u` in [0, 1).
@@ -187,11 +175,7 @@ impl PiecewiseConstant1D {
     /// A piece chosen with probability proportional to its |f|, from `u` in [0, 1).
     pub fn sample_discrete(&self, u: f32) -> DiscreteSample {
         let (o, du) = self.find(u);
-        DiscreteSample {
-            index: o,
-            pmf: self.pmf(o),
-            u_remapped: du,
-        }
+        DiscreteSample { index: o, pmf: self.pmf(o), u_remapped: du }
     }
 
     /// Density of [`Self::sample_continuous`] at `x` (0 outside the domain).
@@ -244,12 +228,7 @@ impl PiecewiseConstant2D {
             .collect();
         let row_integrals: Vec<f32> = conditional.iter().map(|c| c.integral()).collect();
         let marginal = PiecewiseConstant1D::with_domain(&row_integrals, min.y, max.y);
-        PiecewiseConstant2D {
-            min,
-            max,
-            conditional,
-            marginal,
-        }
+        PiecewiseConstant2D { min, max, conditional, marginal }
     }
 
     /// ∫|f| over the domain.
@@ -321,22 +300,11 @@ impl AliasTable {
         let sum: f64 = w.iter().sum();
         // Probabilities in f64, as pbrt does: with many outcomes of very different weights,
         // f32 round-off leaves bins unfilled.
-        let p: Vec<f64> = if sum > 0.0 {
-            w.iter().map(|&w| w / sum).collect()
-        } else {
-            vec![1.0 / n as f64; n]
-        };
-        let mut bins: Vec<Bin> = (0..n)
-            .map(|i| Bin {
-                q: 1.0,
-                pmf: p[i] as f32,
-                alias: i as u32,
-            })
-            .collect();
+        let p: Vec<f64> = if sum > 0.0 { w.iter().map(|&w| w / sum).collect() } else { vec![1.0 / n as f64; n] };
+        let mut bins: Vec<Bin> = (0..n).map(|i| Bin { q: 1.0, pmf: p[i] as f32, alias: i as u32 }).collect();
         // Scaled probabilities: bin i must hold n * p[i] of the unit mass of one bin.
         let mut scaled: Vec<f64> = p.iter().map(|&p| p * n as f64).collect();
-        let (mut under, mut over): (Vec<usize>, Vec<usize>) =
-            (0..n).partition(|&i| scaled[i] < 1.0);
+        let (mut under, mut over): (Vec<usize>, Vec<usize>) = (0..n).partition(|&i| scaled[i] < 1.0);
         while let (Some(&un), Some(&ov)) = (under.last(), over.last()) {
             under.pop();
             over.pop();
@@ -377,16 +345,9 @@ impl AliasTable {
         let offset = (un as usize).min(n - 1);
         let up = ((un - offset as f64) as f32).clamp(0.0, ONE_MINUS_EPSILON);
         let bin = self.bins[offset];
-        let (index, u_remapped) = if up < bin.q {
-            (offset, up / bin.q)
-        } else {
-            (bin.alias as usize, (up - bin.q) / (1.0 - bin.q))
-        };
-        Some(DiscreteSample {
-            index,
-            pmf: self.bins[index].pmf,
-            u_remapped: u_remapped.clamp(0.0, ONE_MINUS_EPSILON),
-        })
+        let (index, u_remapped) =
+            if up < bin.q { (offset, up / bin.q) } else { (bin.alias as usize, (up - bin.q) / (1.0 - bin.q)) };
+        Some(DiscreteSample { index, pmf: self.bins[index].pmf, u_remapped: u_remapped.clamp(0.0, ONE_MINUS_EPSILON) })
     }
 
     /// Probability of outcome `index` (0 past the end).
@@ -422,9 +383,7 @@ mod tests {
             let b = (((s.value + 1.0) / 3.0 * bins as f32) as usize).min(bins - 1);
             counts[b] += 1;
         }
-        let expected: Vec<f64> = (0..bins)
-            .map(|b| N as f64 * WEIGHTS[b / 4] as f64 / (4.0 * total as f64))
-            .collect();
+        let expected: Vec<f64> = (0..bins).map(|b| N as f64 * WEIGHTS[b / 4] as f64 / (4.0 * total as f64)).collect();
         chi_square_test(&counts, &expected).unwrap();
     }
 
@@ -440,9 +399,7 @@ mod tests {
             counts[s.index] += 1;
             remapped[(s.u_remapped * 16.0) as usize] += 1;
         }
-        let expected: Vec<f64> = (0..WEIGHTS.len())
-            .map(|i| N as f64 * d.pmf(i) as f64)
-            .collect();
+        let expected: Vec<f64> = (0..WEIGHTS.len()).map(|i| N as f64 * d.pmf(i) as f64).collect();
         chi_square_test(&counts, &expected).unwrap();
         chi_square_test(&remapped, &[N as f64 / 16.0; 16]).unwrap();
         assert!(((0..WEIGHTS.len()).map(|i| d.pmf(i)).sum::<f32>() - 1.0).abs() < 1e-6);
@@ -478,11 +435,7 @@ mod tests {
         let f = (0..nu * nv)
             .map(|i| {
                 let (x, y) = (i % nu, i / nu);
-                if y == 2 || x == 0 {
-                    0.0
-                } else {
-                    ((x * 3 + y * 5) % 7) as f32 + 0.5
-                }
+                if y == 2 || x == 0 { 0.0 } else { ((x * 3 + y * 5) % 7) as f32 + 0.5 }
             })
             .collect();
         (f, nu, nv)
@@ -552,10 +505,7 @@ mod tests {
             counts[s.index] += 1;
             remapped[(s.u_remapped * 16.0) as usize] += 1;
         }
-        let expected: Vec<f64> = weights
-            .iter()
-            .map(|&w| N as f64 * (w / total) as f64)
-            .collect();
+        let expected: Vec<f64> = weights.iter().map(|&w| N as f64 * (w / total) as f64).collect();
         chi_square_test(&counts, &expected).unwrap();
         chi_square_test(&remapped, &[N as f64 / 16.0; 16]).unwrap();
     }

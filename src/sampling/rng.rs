@@ -19,20 +19,14 @@ pub struct Pcg32 {
 
 impl Default for Pcg32 {
     fn default() -> Pcg32 {
-        Pcg32 {
-            state: PCG32_DEFAULT_STATE,
-            inc: PCG32_DEFAULT_STREAM,
-        }
+        Pcg32 { state: PCG32_DEFAULT_STATE, inc: PCG32_DEFAULT_STREAM }
     }
 }
 
 impl Pcg32 {
     /// pbrt-v4's `RNG(seqIndex, start)`, i.e. `SetSequence(sequence_index, seed)`.
     pub fn new(sequence_index: u64, seed: u64) -> Pcg32 {
-        let mut rng = Pcg32 {
-            state: 0,
-            inc: (sequence_index << 1) | 1,
-        };
+        let mut rng = Pcg32 { state: 0, inc: (sequence_index << 1) | 1 };
         rng.next_u32();
         rng.state = rng.state.wrapping_add(seed);
         rng.next_u32();
@@ -115,14 +109,7 @@ mod tests {
     fn pcg32_matches_the_reference_generator() {
         // O'Neill's pcg32-demo: seed 42, sequence 54 gives these first outputs.
         let mut rng = Pcg32::new(54, 42);
-        let expected = [
-            0xa15c_02b7u32,
-            0x7b47_f409,
-            0xba1d_3330,
-            0x83d2_f293,
-            0xbfa4_784b,
-            0xcbed_606e,
-        ];
+        let expected = [0xa15c_02b7u32, 0x7b47_f409, 0xba1d_3330, 0x83d2_f293, 0xbfa4_784b, 0xcbed_606e];
         for e in expected {
             assert_eq!(rng.next_u32(), e);
         }
@@ -140,15 +127,9 @@ mod tests {
         let a = murmur_hash64a(&[1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12], 0);
         let b = murmur_hash64a(&[1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 13], 0);
         assert_ne!(a, b, "the tail bytes must matter");
-        assert_eq!(
-            hash_vec3(Vec3::new(0.1, 0.2, 0.3)),
-            hash_vec3(Vec3::new(0.1, 0.2, 0.3))
-        );
+        assert_eq!(hash_vec3(Vec3::new(0.1, 0.2, 0.3)), hash_vec3(Vec3::new(0.1, 0.2, 0.3)));
         // Hash(uc, u) packs the same 12 bytes as Hash(Vector3f(uc, u.x, u.y)).
-        assert_eq!(
-            hash_vec3(Vec3::new(0.1, 0.2, 0.3)),
-            hash_sample(0.1, Vec2::new(0.2, 0.3))
-        );
+        assert_eq!(hash_vec3(Vec3::new(0.1, 0.2, 0.3)), hash_sample(0.1, Vec2::new(0.2, 0.3)));
         assert_ne!(hash_seed_vec3(0, Vec3::X), hash_seed_vec3(1, Vec3::X));
     }
 }

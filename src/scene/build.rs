@@ -9,8 +9,7 @@ use std::time::Instant;
 
 use glam::{Affine3A, DMat4, UVec2, Vec2, Vec3};
 use nimbus_parser::{
-    AnimatedTransform, ColorSpace, Error, FileLoc, MaterialRef, SceneDescription, ShapeEntity,
-    TextureValue, Warning,
+    AnimatedTransform, ColorSpace, Error, FileLoc, MaterialRef, SceneDescription, ShapeEntity, TextureValue, Warning,
 };
 
 use super::camera::CameraSettings;
@@ -34,11 +33,12 @@ use crate::lights::{EnvironmentMap, Light, LightKind, LightSampler, SceneSphere}
 use crate::materials::{ConductorInput, Material, RoughnessTex};
 use crate::math::Frame;
 use crate::media::dense::DenseGrid;
-use crate::media::{Density, Emission, Medium};
+use crate::media::grid::VdbFile;
+use crate::media::{Density, Emission, Field, Medium};
 use crate::shapes::{Cylinder, Disk, Mesh, Sphere, uniform_scale};
 use crate::spectra::{
-    BlackbodyRgbTable, conductor_rgb, convert_reflectance_rgb, dielectric_eta, emission_rgb,
-    illuminant_rgb, reflectance_rgb,
+    BlackbodyRgbTable, conductor_rgb, convert_reflectance_rgb, dielectric_eta, emission_rgb, illuminant_rgb,
+    reflectance_rgb,
 };
 use crate::textures::{Tex, TexMapping, TexNode, Textures, Wrap};
 
@@ -139,10 +139,7 @@ fn fixed_transform(t: &AnimatedTransform, loc: &FileLoc, what: &str) -> Result<A
 fn affine(m: &DMat4, loc: &FileLoc) -> Result<Affine3A, Error> {
     let row3 = m.row(3);
     if (row3.x, row3.y, row3.z, row3.w) != (0.0, 0.0, 0.0, 1.0) {
-        return Err(err(
-            loc,
-            "projective transforms are not supported (the last row must be 0 0 0 1)",
-        ));
+        return Err(err(loc, "projective transforms are not supported (the last row must be 0 0 0 1)"));
     }
     let a = Affine3A::from_mat4(m.as_mat4());
     if !a.is_finite() || a.matrix3.determinant() == 0.0 {
@@ -174,14 +171,15 @@ impl TextureBuilder {
 
     fn spectrum(&self, input: &SpectrumInput, cs: ColorSpace, loc: &FileLoc) -> Result<Tex, Error> {
         Ok(match input {
-            SpectrumInput::Value(spec) => Tex::Const(
-                reflectance_rgb(spec, cs, self.film_cs).map_err(|e| err(loc, e.to_string()))?,
-            ),
-            SpectrumInput::Texture(name) => {
-                Tex::Node(*self.spectrum_names.get(name).ok_or_else(|| {
-                    err(loc, format!("spectrum texture \"{name}\" is not defined"))
-                })?)
+            SpectrumInput::Value(spec) => {
+                Tex::Const(reflectance_rgb(spec, cs, self.film_cs).map_err(|e| err(loc, e.to_string()))?)
             }
+            SpectrumInput::Texture(name) => Tex::Node(
+                *self
+                    .spectrum_names
+                    .get(name)
+                    .ok_or_else(|| err(loc, format!("spectrum texture \"{name}\" is not defined")))?,
+            ),
         })
     }
 
@@ -192,20 +190,12 @@ impl TextureBuilder {
         }
     }
 
-    fn add(
-        &mut self,
-        t: &nimbus_parser::TextureEntity,
-        warnings: &mut Vec<Warning>,
-    ) -> Result<(), Error> {
+    fn add(&mut self, t: &nimbus_parser::TextureEntity, warnings: &mut Vec<Warning>) -> Result<(), Error> {
         let e = &t.entity;
         let settings = TextureSettings::from_entity(t, warnings)?;
-        let texture_from_world =
-            fixed_transform(&t.world_from_texture, &e.loc, "texture")?.inverse();
+        let texture_from_world = fixed_transform(&t.world_from_texture, &e.loc, "texture")?.inverse();
         let mapping = |m: &Mapping| match m {
-            Mapping::Uv { su, sv, du, dv } => TexMapping::Uv {
-                s: Vec2::new(*su, *sv),
-                d: Vec2::new(*du, *dv),
-            },
+            Mapping::Uv { su, sv, du, dv } => TexMapping::Uv { s: Vec2::new(*su, *sv), d: Vec2::new(*du, *dv) },
             Mapping::Spherical => TexMapping::Spherical { texture_from_world },
             Mapping::Cylindrical => TexMapping::Cylindrical { texture_from_world },
             Mapping::Planar { v1, v2, du, dv } => TexMapping::Planar {
@@ -217,36 +207,21 @@ impl TextureBuilder {
         };
         let cs = e.color_space;
         let node = match &settings.kind {
-            TextureKind::Constant(v) => TexNode::Scale {
-                tex: self.input(v, cs, &e.loc)?,
-                scale: Tex::Const(Rgb::ONE),
-            },
-            TextureKind::Scale { tex, scale } => TexNode::Scale {
-                tex: self.input(tex, cs, &e.loc)?,
-                scale: self.float(scale, &e.loc)?,
-            },
+            TextureKind::Constant(v) => TexNode::Scale { tex: self.input(v, cs, &e.loc)?, scale: Tex::Const(Rgb::ONE) },
+            TextureKind::Scale { tex, scale } => {
+                TexNode::Scale { tex: self.input(tex, cs, &e.loc)?, scale: self.float(scale, &e.loc)? }
+            }
             TextureKind::Mix { tex1, tex2, amount } => TexNode::Mix {
                 a: self.input(tex1, cs, &e.loc)?,
                 b: self.input(tex2, cs, &e.loc)?,
                 amount: self.float(amount, &e.loc)?,
             },
-            TextureKind::Checkerboard {
-                tex1,
-                tex2,
-                mapping: m,
-            } => TexNode::Checkerboard {
+            TextureKind::Checkerboard { tex1, tex2, mapping: m } => TexNode::Checkerboard {
                 a: self.input(tex1, cs, &e.loc)?,
                 b: self.input(tex2, cs, &e.loc)?,
                 mapping: mapping(m),
             },
-            TextureKind::ImageMap {
-                filename,
-                scale,
-                invert,
-                wrap,
-                encoding,
-                mapping: m,
-            } => {
+            TextureKind::ImageMap { filename, scale, invert, wrap, encoding, mapping: m } => {
                 let image = load_texture_image(filename, encoding).map_err(|m| err(&e.loc, m))?;
                 let wrap = match wrap.as_str() {
                     "repeat" => Wrap::Repeat,
@@ -255,24 +230,15 @@ impl TextureBuilder {
                     other => {
                         return Err(err(
                             &e.loc,
-                            format!(
-                                "imagemap: unknown wrap mode \"{other}\" (repeat, black or clamp)"
-                            ),
+                            format!("imagemap: unknown wrap mode \"{other}\" (repeat, black or clamp)"),
                         ));
                     }
                 };
-                TexNode::Image {
-                    image: Arc::new(image),
-                    mapping: mapping(m),
-                    scale: *scale,
-                    invert: *invert,
-                    wrap,
-                }
+                TexNode::Image { image: Arc::new(image), mapping: mapping(m), scale: *scale, invert: *invert, wrap }
             }
-            TextureKind::Unsupported(_) => TexNode::Scale {
-                tex: Tex::Const(Rgb::splat(0.5)),
-                scale: Tex::Const(Rgb::ONE),
-            },
+            TextureKind::Unsupported(_) => {
+                TexNode::Scale { tex: Tex::Const(Rgb::splat(0.5)), scale: Tex::Const(Rgb::ONE) }
+            }
         };
         let id = self.textures.nodes.len() as u32;
         self.textures.nodes.push(node);
@@ -285,48 +251,31 @@ impl TextureBuilder {
 }
 
 fn load_texture_image(path: &Path, encoding: &str) -> Result<crate::imageio::Image, String> {
-    let is_png = path
-        .extension()
-        .is_some_and(|x| x.eq_ignore_ascii_case("png"));
+    let is_png = path.extension().is_some_and(|x| x.eq_ignore_ascii_case("png"));
     let mut image = crate::imageio::read_image(path)?;
     if is_png && encoding != "sRGB" {
         // read_image decoded sRGB; re-encode and apply the requested encoding instead.
         let gamma = match encoding {
             "linear" => 1.0,
-            e if e.starts_with("gamma ") => e[6..]
-                .trim()
-                .parse::<f32>()
-                .map_err(|_| format!("imagemap: bad encoding \"{e}\""))?,
+            e if e.starts_with("gamma ") => {
+                e[6..].trim().parse::<f32>().map_err(|_| format!("imagemap: bad encoding \"{e}\""))?
+            }
             other => {
-                return Err(format!(
-                    "imagemap: unknown encoding \"{other}\" (sRGB, linear or \"gamma g\")"
-                ));
+                return Err(format!("imagemap: unknown encoding \"{other}\" (sRGB, linear or \"gamma g\")"));
             }
         };
         for p in &mut image.pixels {
             let enc = |v: f32| {
-                if v <= 0.003_130_8 {
-                    12.92 * v
-                } else {
-                    1.055 * v.powf(1.0 / 2.4) - 0.055
-                }
+                if v <= 0.003_130_8 { 12.92 * v } else { 1.055 * v.powf(1.0 / 2.4) - 0.055 }
             };
-            *p = Rgb::new(
-                enc(p.x).powf(gamma),
-                enc(p.y).powf(gamma),
-                enc(p.z).powf(gamma),
-            );
+            *p = Rgb::new(enc(p.x).powf(gamma), enc(p.y).powf(gamma), enc(p.z).powf(gamma));
         }
     }
     Ok(image)
 }
 
 fn roughness(r: &Roughness, tb: &TextureBuilder, loc: &FileLoc) -> Result<RoughnessTex, Error> {
-    Ok(RoughnessTex {
-        u: tb.float(&r.u, loc)?,
-        v: tb.float(&r.v, loc)?,
-        remap: r.remap,
-    })
+    Ok(RoughnessTex { u: tb.float(&r.u, loc)?, v: tb.float(&r.v, loc)?, remap: r.remap })
 }
 
 fn eta_value(eta: &Eta, cs: ColorSpace, loc: &FileLoc) -> Result<f32, Error> {
@@ -336,89 +285,53 @@ fn eta_value(eta: &Eta, cs: ColorSpace, loc: &FileLoc) -> Result<f32, Error> {
     }
 }
 
-fn material(
-    e: &nimbus_parser::Entity,
-    tb: &TextureBuilder,
-    warnings: &mut Vec<Warning>,
-) -> Result<Material, Error> {
+fn material(e: &nimbus_parser::Entity, tb: &TextureBuilder, warnings: &mut Vec<Warning>) -> Result<Material, Error> {
     let settings = MaterialSettings::from_entity(e, warnings)?;
     let cs = e.color_space;
     let loc = &e.loc;
     Ok(match &settings.kind {
-        MaterialKind::Diffuse { reflectance } => Material::Diffuse {
-            reflectance: tb.spectrum(reflectance, cs, loc)?,
-        },
+        MaterialKind::Diffuse { reflectance } => Material::Diffuse { reflectance: tb.spectrum(reflectance, cs, loc)? },
         MaterialKind::Conductor { spec, roughness: r } => {
             let input = match spec {
-                ConductorSpec::Reflectance(r) => {
-                    ConductorInput::Reflectance(tb.spectrum(r, cs, loc)?)
-                }
-                ConductorSpec::EtaK {
-                    eta: SpectrumInput::Value(eta),
-                    k: SpectrumInput::Value(k),
-                } => {
-                    let fit = conductor_rgb(eta, k, cs, tb.film_cs)
-                        .map_err(|m| err(loc, m.to_string()))?;
-                    ConductorInput::EtaK {
-                        eta: Tex::Const(fit.eta),
-                        k: Tex::Const(fit.k),
-                        scale: fit.scale,
-                    }
+                ConductorSpec::Reflectance(r) => ConductorInput::Reflectance(tb.spectrum(r, cs, loc)?),
+                ConductorSpec::EtaK { eta: SpectrumInput::Value(eta), k: SpectrumInput::Value(k) } => {
+                    let fit = conductor_rgb(eta, k, cs, tb.film_cs).map_err(|m| err(loc, m.to_string()))?;
+                    ConductorInput::EtaK { eta: Tex::Const(fit.eta), k: Tex::Const(fit.k), scale: fit.scale }
                 }
                 ConductorSpec::EtaK { eta, k } => {
                     // Textured optical constants: used per channel as given.
                     let as_tex = |s: &SpectrumInput| -> Result<Tex, Error> {
                         Ok(match s {
                             SpectrumInput::Value(v) => {
-                                let fit = conductor_rgb(v, v, cs, tb.film_cs)
-                                    .map_err(|m| err(loc, m.to_string()))?;
+                                let fit = conductor_rgb(v, v, cs, tb.film_cs).map_err(|m| err(loc, m.to_string()))?;
                                 Tex::Const(fit.eta)
                             }
                             t => tb.spectrum(t, cs, loc)?,
                         })
                     };
-                    ConductorInput::EtaK {
-                        eta: as_tex(eta)?,
-                        k: as_tex(k)?,
-                        scale: Rgb::ONE,
-                    }
+                    ConductorInput::EtaK { eta: as_tex(eta)?, k: as_tex(k)?, scale: Rgb::ONE }
                 }
             };
-            Material::Conductor {
-                input,
+            Material::Conductor { input, roughness: roughness(r, tb, loc)? }
+        }
+        MaterialKind::Dielectric { eta, roughness: r } => {
+            Material::Dielectric { eta: eta_value(eta, cs, loc)?, roughness: roughness(r, tb, loc)? }
+        }
+        MaterialKind::ThinDielectric { eta } => Material::ThinDielectric { eta: eta_value(eta, cs, loc)? },
+        MaterialKind::Interface => Material::Interface,
+        MaterialKind::CoatedDiffuse { reflectance, roughness: r, thickness, eta, albedo, g, max_depth, n_samples } => {
+            Material::CoatedDiffuse {
+                reflectance: tb.spectrum(reflectance, cs, loc)?,
                 roughness: roughness(r, tb, loc)?,
+                thickness: tb.float(thickness, loc)?,
+                eta: eta_value(eta, cs, loc)?,
+                albedo: tb.spectrum(albedo, cs, loc)?,
+                g: tb.float(g, loc)?,
+                max_depth: *max_depth,
+                n_samples: *n_samples,
             }
         }
-        MaterialKind::Dielectric { eta, roughness: r } => Material::Dielectric {
-            eta: eta_value(eta, cs, loc)?,
-            roughness: roughness(r, tb, loc)?,
-        },
-        MaterialKind::ThinDielectric { eta } => Material::ThinDielectric {
-            eta: eta_value(eta, cs, loc)?,
-        },
-        MaterialKind::Interface => Material::Interface,
-        MaterialKind::CoatedDiffuse {
-            reflectance,
-            roughness: r,
-            thickness,
-            eta,
-            albedo,
-            g,
-            max_depth,
-            n_samples,
-        } => Material::CoatedDiffuse {
-            reflectance: tb.spectrum(reflectance, cs, loc)?,
-            roughness: roughness(r, tb, loc)?,
-            thickness: tb.float(thickness, loc)?,
-            eta: eta_value(eta, cs, loc)?,
-            albedo: tb.spectrum(albedo, cs, loc)?,
-            g: tb.float(g, loc)?,
-            max_depth: *max_depth,
-            n_samples: *n_samples,
-        },
-        MaterialKind::Unsupported(_) => Material::Diffuse {
-            reflectance: Tex::Const(Rgb::splat(0.5)),
-        },
+        MaterialKind::Unsupported(_) => Material::Diffuse { reflectance: Tex::Const(Rgb::splat(0.5)) },
     })
 }
 
@@ -429,8 +342,7 @@ fn area_light_radiance(
     area: f32,
     film_cs: ColorSpace,
 ) -> Result<Rgb, Error> {
-    let l = illuminant_rgb(&settings.radiance, e.color_space, film_cs)
-        .map_err(|m| err(&e.loc, m.to_string()))?;
+    let l = illuminant_rgb(&settings.radiance, e.color_space, film_cs).map_err(|m| err(&e.loc, m.to_string()))?;
     let mut scale = settings.scale;
     if let Some(phi) = settings.power {
         let k_e = if settings.two_sided { 2.0 } else { 1.0 } * area * std::f32::consts::PI;
@@ -471,91 +383,34 @@ impl ShapeBuilder<'_> {
         let first = prims.len();
         let mut push = |g: Geometry, store: &ShapeStore| {
             bounds.push(store.bounds(g));
-            prims.push(Primitive {
-                geometry: g,
-                material,
-                area_light: NONE,
-                interface,
-            });
+            prims.push(Primitive { geometry: g, material, area_light: NONE, interface });
         };
         match &settings.kind {
-            ShapeKind::Sphere {
-                radius,
-                zmin,
-                zmax,
-                phimax,
-            } => {
-                self.store
-                    .spheres
-                    .push(Sphere::new(world, rev, *radius, *zmin, *zmax, *phimax));
-                push(
-                    Geometry::Sphere(self.store.spheres.len() as u32 - 1),
-                    &self.store,
-                );
+            ShapeKind::Sphere { radius, zmin, zmax, phimax } => {
+                self.store.spheres.push(Sphere::new(world, rev, *radius, *zmin, *zmax, *phimax));
+                push(Geometry::Sphere(self.store.spheres.len() as u32 - 1), &self.store);
             }
-            ShapeKind::Disk {
-                height,
-                radius,
-                inner_radius,
-                phimax,
-            } => {
-                self.store.disks.push(Disk::new(
-                    world,
-                    rev,
-                    *height,
-                    *radius,
-                    *inner_radius,
-                    *phimax,
-                ));
-                push(
-                    Geometry::Disk(self.store.disks.len() as u32 - 1),
-                    &self.store,
-                );
+            ShapeKind::Disk { height, radius, inner_radius, phimax } => {
+                self.store.disks.push(Disk::new(world, rev, *height, *radius, *inner_radius, *phimax));
+                push(Geometry::Disk(self.store.disks.len() as u32 - 1), &self.store);
             }
-            ShapeKind::Cylinder {
-                radius,
-                zmin,
-                zmax,
-                phimax,
-            } => {
-                self.store
-                    .cylinders
-                    .push(Cylinder::new(world, rev, *radius, *zmin, *zmax, *phimax));
-                push(
-                    Geometry::Cylinder(self.store.cylinders.len() as u32 - 1),
-                    &self.store,
-                );
+            ShapeKind::Cylinder { radius, zmin, zmax, phimax } => {
+                self.store.cylinders.push(Cylinder::new(world, rev, *radius, *zmin, *zmax, *phimax));
+                push(Geometry::Cylinder(self.store.cylinders.len() as u32 - 1), &self.store);
             }
             ShapeKind::TriangleMesh(m) => {
-                let mesh = Mesh::new(
-                    &world,
-                    rev,
-                    m.positions,
-                    m.normals,
-                    m.uvs,
-                    m.indices.clone(),
-                );
+                let mesh = Mesh::new(&world, rev, m.positions, m.normals, m.uvs, m.indices.clone());
                 self.add_mesh(mesh, material, interface, prims, bounds);
             }
             ShapeKind::BilinearMesh(m) => {
-                let tris: Vec<u32> = m
-                    .indices
-                    .chunks_exact(4)
-                    .flat_map(|q| [q[0], q[1], q[3], q[0], q[3], q[2]])
-                    .collect();
+                let tris: Vec<u32> =
+                    m.indices.chunks_exact(4).flat_map(|q| [q[0], q[1], q[3], q[0], q[3], q[2]]).collect();
                 let mesh = Mesh::new(&world, rev, m.positions, m.normals, m.uvs, tris);
                 self.add_mesh(mesh, material, interface, prims, bounds);
             }
             ShapeKind::PlyMesh(path) => {
                 let ply = read_ply(path).map_err(|m| err(&e.loc, format!("plymesh: {m}")))?;
-                let mesh = Mesh::new(
-                    &world,
-                    rev,
-                    &ply.positions,
-                    &ply.normals,
-                    &ply.uvs,
-                    ply.indices,
-                );
+                let mesh = Mesh::new(&world, rev, &ply.positions, &ply.normals, &ply.uvs, ply.indices);
                 self.add_mesh(mesh, material, interface, prims, bounds);
             }
             ShapeKind::ObjMesh(path) | ShapeKind::GltfMesh(path) => {
@@ -579,43 +434,25 @@ impl ShapeBuilder<'_> {
             let settings = AreaLightSettings::from_entity(al_entity)?;
             for prim in &mut prims[first..] {
                 let area = match prim.geometry {
-                    Geometry::Triangle { mesh, tri } => {
-                        self.store.meshes[mesh as usize].triangle_area(tri)
-                    }
+                    Geometry::Triangle { mesh, tri } => self.store.meshes[mesh as usize].triangle_area(tri),
                     Geometry::Sphere(i) => {
                         let s = &self.store.spheres[i as usize];
-                        let scale = uniform_scale(&world).ok_or_else(|| {
-                            err(
-                                &e.loc,
-                                "an emitting sphere must not be scaled non-uniformly",
-                            )
-                        })?;
+                        let scale = uniform_scale(&world)
+                            .ok_or_else(|| err(&e.loc, "an emitting sphere must not be scaled non-uniformly"))?;
                         s.area() * scale * scale
                     }
-                    Geometry::Disk(i) => {
-                        self.store.disks[i as usize].world_area().ok_or_else(|| {
-                            err(&e.loc, "an emitting disk must not be scaled non-uniformly")
-                        })?
-                    }
+                    Geometry::Disk(i) => self.store.disks[i as usize]
+                        .world_area()
+                        .ok_or_else(|| err(&e.loc, "an emitting disk must not be scaled non-uniformly"))?,
                     Geometry::Cylinder(i) => self.store.cylinders[i as usize]
                         .world_area()
-                        .ok_or_else(|| {
-                            err(
-                                &e.loc,
-                                "an emitting cylinder must not be scaled non-uniformly",
-                            )
-                        })?,
+                        .ok_or_else(|| err(&e.loc, "an emitting cylinder must not be scaled non-uniformly"))?,
                     Geometry::Instance(_) => continue,
                 };
                 let l = area_light_radiance(&settings, al_entity, area, self.film_cs)?;
                 prim.area_light = self.lights.len() as u32;
                 self.lights.push(Light {
-                    kind: LightKind::Area {
-                        geometry: prim.geometry,
-                        l,
-                        two_sided: settings.two_sided,
-                        area,
-                    },
+                    kind: LightKind::Area { geometry: prim.geometry, l, two_sided: settings.two_sided, area },
                     medium: NONE,
                 });
             }
@@ -633,10 +470,8 @@ impl ShapeBuilder<'_> {
     ) {
         let id = self.store.meshes.len() as u32;
         self.triangles += mesh.triangle_count();
-        self.mesh_bytes += mesh.positions.len() * 12
-            + mesh.normals.len() * 12
-            + mesh.uvs.len() * 8
-            + mesh.indices.len() * 4;
+        self.mesh_bytes +=
+            mesh.positions.len() * 12 + mesh.normals.len() * 12 + mesh.uvs.len() * 8 + mesh.indices.len() * 4;
         for tri in 0..mesh.triangle_count() as u32 {
             bounds.push(mesh.triangle_bounds(tri));
             prims.push(Primitive {
@@ -659,47 +494,27 @@ fn light(
     let e = &l.entity;
     let settings = LightSettings::from_entity(l)?;
     let world = fixed_transform(&l.world_from_light, &e.loc, "light")?;
-    let rgb = |s: &SpectrumSpec| {
-        illuminant_rgb(s, e.color_space, film_cs).map_err(|m| err(&e.loc, m.to_string()))
-    };
+    let rgb = |s: &SpectrumSpec| illuminant_rgb(s, e.color_space, film_cs).map_err(|m| err(&e.loc, m.to_string()));
     let kind = match &settings.kind {
-        LightSpec::Point {
-            intensity,
-            from,
-            power,
-        } => {
+        LightSpec::Point { intensity, from, power } => {
             let mut scale = settings.scale;
             if let Some(phi) = power {
                 scale *= phi / (4.0 * std::f32::consts::PI);
             }
-            LightKind::Point {
-                p: world.transform_point3(Vec3::from(*from)),
-                i: rgb(intensity)? * scale,
-            }
+            LightKind::Point { p: world.transform_point3(Vec3::from(*from)), i: rgb(intensity)? * scale }
         }
-        LightSpec::Spot {
-            intensity,
-            from,
-            to,
-            cone_angle,
-            cone_delta_angle,
-            power,
-        } => {
+        LightSpec::Spot { intensity, from, to, cone_angle, cone_delta_angle, power } => {
             let cos_end = cone_angle.to_radians().cos();
             let cos_start = (cone_angle - cone_delta_angle).to_radians().cos();
             let mut scale = settings.scale;
             if let Some(phi) = power {
-                let k_e =
-                    2.0 * std::f32::consts::PI * ((1.0 - cos_start) + (cos_start - cos_end) / 2.0);
+                let k_e = 2.0 * std::f32::consts::PI * ((1.0 - cos_start) + (cos_start - cos_end) / 2.0);
                 scale *= phi / k_e;
             }
             let p = world.transform_point3(Vec3::from(*from));
             let dir = world.transform_vector3(Vec3::from(*to) - Vec3::from(*from));
             if dir.length_squared() == 0.0 {
-                return Err(err(
-                    &e.loc,
-                    "spot light: \"from\" and \"to\" are the same point",
-                ));
+                return Err(err(&e.loc, "spot light: \"from\" and \"to\" are the same point"));
             }
             LightKind::Spot {
                 p,
@@ -709,41 +524,21 @@ fn light(
                 cos_falloff_end: cos_end,
             }
         }
-        LightSpec::Distant {
-            radiance,
-            from,
-            to,
-            illuminance,
-        } => {
-            let w = world
-                .transform_vector3(Vec3::from(*from) - Vec3::from(*to))
-                .normalize();
+        LightSpec::Distant { radiance, from, to, illuminance } => {
+            let w = world.transform_vector3(Vec3::from(*from) - Vec3::from(*to)).normalize();
             let scale = settings.scale * illuminance.unwrap_or(1.0);
-            LightKind::Distant {
-                w,
-                l: rgb(radiance)? * scale,
-            }
+            LightKind::Distant { w, l: rgb(radiance)? * scale }
         }
-        LightSpec::Infinite {
-            radiance: Some(r),
-            illuminance,
-            ..
-        } => {
+        LightSpec::Infinite { radiance: Some(r), illuminance, .. } => {
             let scale = settings.scale * illuminance.map_or(1.0, |ev| ev / std::f32::consts::PI);
             LightKind::UniformInfinite { l: rgb(r)? * scale }
         }
-        LightSpec::Infinite {
-            radiance: None,
-            filename: Some(path),
-            illuminance,
-        } => {
-            let mut map =
-                EnvironmentMap::load(path, world, settings.scale).map_err(|m| err(&e.loc, m))?;
+        LightSpec::Infinite { radiance: None, filename: Some(path), illuminance } => {
+            let mut map = EnvironmentMap::load(path, world, settings.scale).map_err(|m| err(&e.loc, m))?;
             if let Some(ev) = illuminance {
                 let k_e = map.upper_hemisphere_illuminance();
                 if k_e > 0.0 {
-                    map = EnvironmentMap::load(path, world, settings.scale * ev / k_e)
-                        .map_err(|m| err(&e.loc, m))?;
+                    map = EnvironmentMap::load(path, world, settings.scale * ev / k_e).map_err(|m| err(&e.loc, m))?;
                 }
             }
             LightKind::ImageInfinite(Box::new(map))
@@ -758,14 +553,8 @@ fn light(
 
 /// Names of the media that the camera, lights or boundary surfaces refer to.
 fn used_media(desc: &SceneDescription) -> std::collections::HashSet<&str> {
-    let shapes = desc.shapes.iter().chain(
-        desc.instance_definitions
-            .iter()
-            .flat_map(|d| d.shapes.iter()),
-    );
-    let from_shapes = shapes
-        .filter_map(|s| s.medium_interface.as_ref())
-        .flat_map(|mi| [&mi.inside, &mi.outside]);
+    let shapes = desc.shapes.iter().chain(desc.instance_definitions.iter().flat_map(|d| d.shapes.iter()));
+    let from_shapes = shapes.filter_map(|s| s.medium_interface.as_ref()).flat_map(|mi| [&mi.inside, &mi.outside]);
     std::iter::once(&desc.camera.medium)
         .chain(desc.lights.iter().map(|l| &l.medium))
         .chain(from_shapes)
@@ -781,46 +570,36 @@ fn build_medium(
 ) -> Result<Medium, Error> {
     let e = &m.entity;
     let cs = e.color_space;
-    let unbounded =
-        |s: &SpectrumSpec| reflectance_rgb(s, cs, film_cs).map_err(|x| err(&e.loc, x.to_string()));
+    let unbounded = |s: &SpectrumSpec| reflectance_rgb(s, cs, film_cs).map_err(|x| err(&e.loc, x.to_string()));
     let sigma_a = unbounded(&settings.sigma_a)? * settings.scale;
     let sigma_s = unbounded(&settings.sigma_s)? * settings.scale;
     let le = match &settings.le {
-        Some(s) => {
-            illuminant_rgb(s, cs, film_cs).map_err(|x| err(&e.loc, x.to_string()))?
-                * settings.le_scale
-        }
+        Some(s) => illuminant_rgb(s, cs, film_cs).map_err(|x| err(&e.loc, x.to_string()))? * settings.le_scale,
         None => Rgb::ZERO,
     };
     let world = fixed_transform(&m.world_from_medium, &e.loc, "medium")?;
     let g = settings.g;
     let dense = |n: [u32; 3], v: &[f32]| {
-        DenseGrid::new(glam::UVec3::from(n), v.to_vec())
-            .ok_or_else(|| err(&e.loc, "grid size mismatch"))
+        DenseGrid::new(glam::UVec3::from(n), v.to_vec()).ok_or_else(|| err(&e.loc, "grid size mismatch"))
     };
     Ok(match &settings.kind {
         MediumSpec::Homogeneous => Medium::homogeneous(m.name.clone(), sigma_a, sigma_s, le, g),
-        MediumSpec::UniformGrid {
-            n,
-            bounds,
-            density,
-            temperature,
-            le_scale_grid,
-        } => {
-            let scale_grid = || le_scale_grid.map(|v| dense(*n, v)).transpose();
+        MediumSpec::UniformGrid { n, bounds, density, temperature, le_scale_grid } => {
+            // pbrt-v4 keeps `Lescale` as a grid; without one it is a single sample of 1.
+            let scale_grid = || match le_scale_grid {
+                Some(v) => dense(*n, v),
+                None => dense([1, 1, 1], &[1.0]),
+            };
             let emission = match temperature {
                 Some(t) => Emission::Temperature {
-                    grid: dense(*n, t.values.unwrap_or(&[]))?,
+                    grid: Field::Dense(dense(*n, t.values.unwrap_or(&[]))?),
                     offset: t.offset,
                     scale: t.scale,
                     le_scale: settings.le_scale,
-                    scale_grid: scale_grid()?,
+                    scale_grid: Some(scale_grid()?),
                     table: BlackbodyRgbTable::new(film_cs),
                 },
-                None if le != Rgb::ZERO => Emission::Radiance {
-                    le,
-                    scale: scale_grid()?,
-                },
+                None if le != Rgb::ZERO => Emission::Radiance { le, scale: scale_grid()? },
                 None => Emission::None,
             };
             let b = Bounds3::new(Vec3::from(bounds[0]), Vec3::from(bounds[1]));
@@ -828,62 +607,28 @@ fn build_medium(
                 m.name.clone(),
                 world,
                 b,
-                Density::Grid(dense(*n, density)?),
+                Density::Field(Field::Dense(dense(*n, density)?)),
                 sigma_a,
                 sigma_s,
                 emission,
                 g,
             )
         }
-        MediumSpec::Cloud {
-            bounds,
-            density,
-            wispiness,
-            frequency,
-        } => {
+        MediumSpec::Cloud { bounds, density, wispiness, frequency } => {
             let b = Bounds3::new(Vec3::from(bounds[0]), Vec3::from(bounds[1]));
-            let cloud = crate::media::cloud::Cloud {
-                density: *density,
-                wispiness: *wispiness,
-                frequency: *frequency,
-            };
-            let emission = if le != Rgb::ZERO {
-                Emission::Radiance { le, scale: None }
-            } else {
-                Emission::None
-            };
-            Medium::grid(
-                m.name.clone(),
-                world,
-                b,
-                Density::Cloud(cloud),
-                sigma_a,
-                sigma_s,
-                emission,
-                g,
-            )
+            let cloud = crate::media::cloud::Cloud { density: *density, wispiness: *wispiness, frequency: *frequency };
+            // pbrt-v4's procedural cloud does not emit.
+            let emission = Emission::None;
+            Medium::grid(m.name.clone(), world, b, Density::Cloud(cloud), sigma_a, sigma_s, emission, g)
         }
-        MediumSpec::RgbGrid {
-            n,
-            bounds,
-            sigma_a: ga,
-            sigma_s: gs,
-            le: gl,
-        } => {
+        MediumSpec::RgbGrid { n, bounds, sigma_a: ga, sigma_s: gs, le: gl } => {
             let scale = settings.scale;
             let rgb_grid = |v: &[[f32; 3]], f: &dyn Fn(Rgb) -> Rgb| {
-                DenseGrid::new(
-                    glam::UVec3::from(*n),
-                    v.iter().map(|c| f(Rgb::from(*c))).collect(),
-                )
-                .ok_or_else(|| err(&e.loc, "grid size mismatch"))
+                DenseGrid::new(glam::UVec3::from(*n), v.iter().map(|c| f(Rgb::from(*c))).collect())
+                    .ok_or_else(|| err(&e.loc, "grid size mismatch"))
             };
             let adapt = |c: Rgb| {
-                if cs == film_cs {
-                    c
-                } else {
-                    convert_reflectance_rgb(c, cs, film_cs)
-                }
+                if cs == film_cs { c } else { convert_reflectance_rgb(c, cs, film_cs) }
             };
             // pbrt-v4 does not normalise rgbgrid emission: RGB illuminant spectra in film units.
             let le_unit = emission_rgb(&SpectrumSpec::Rgb([1.0, 1.0, 1.0]), cs, film_cs)
@@ -891,32 +636,45 @@ fn build_medium(
             let sa = ga.map(|v| rgb_grid(v, &|c| adapt(c) * scale)).transpose()?;
             let ss = gs.map(|v| rgb_grid(v, &|c| adapt(c) * scale)).transpose()?;
             let le_grid = gl
-                .map(|v| {
-                    rgb_grid(v, &|c| {
-                        crate::spectra::convert_rgb(c, cs, film_cs) * le_unit * settings.le_scale
-                    })
-                })
+                .map(|v| rgb_grid(v, &|c| crate::spectra::convert_rgb(c, cs, film_cs) * le_unit * settings.le_scale))
                 .transpose()?;
             let b = Bounds3::new(Vec3::from(bounds[0]), Vec3::from(bounds[1]));
             Medium::rgb_grid(m.name.clone(), world, b, sa, ss, le_grid, g)
         }
-        MediumSpec::Vdb { .. } => {
-            return Err(err(
-                &e.loc,
-                format!(
-                    "{} media are not supported by this build of nimbus yet",
-                    e.name
-                ),
-            ));
+        MediumSpec::Vdb { openvdb, filename, grid_name, temperature_name, temperature } => {
+            let loc = e.params.loc("filename").unwrap_or(&e.loc);
+            let file = VdbFile::open(filename, *openvdb).map_err(|x| err(loc, x.to_string()))?;
+            let density = file.read_grid(grid_name).map_err(|x| err(loc, x.to_string()))?;
+            // pbrt-v4 reads the temperature grid when the file has one.
+            let emission = if file.has_grid(temperature_name) {
+                let t = file.read_grid(temperature_name).map_err(|x| err(loc, x.to_string()))?;
+                Emission::Temperature {
+                    grid: Field::Sparse(t),
+                    offset: temperature.offset,
+                    scale: temperature.scale,
+                    le_scale: settings.le_scale,
+                    scale_grid: None,
+                    table: BlackbodyRgbTable::new(film_cs),
+                }
+            } else {
+                Emission::None
+            };
+            let b = density.world_bounds();
+            Medium::grid(
+                m.name.clone(),
+                world,
+                b,
+                Density::Field(Field::Sparse(density)),
+                sigma_a,
+                sigma_s,
+                emission,
+                g,
+            )
         }
     })
 }
 
-fn pixel_bounds(
-    film: &FilmSettings,
-    opts: &BuildOptions,
-    loc: &FileLoc,
-) -> Result<[u32; 4], Error> {
+fn pixel_bounds(film: &FilmSettings, opts: &BuildOptions, loc: &FileLoc) -> Result<[u32; 4], Error> {
     let [w, h] = film.resolution;
     let from_crop = |c: [f32; 4]| -> [i64; 4] {
         [
@@ -933,24 +691,11 @@ fn pixel_bounds(
     } else {
         [0, 0, w as i64, h as i64]
     };
-    let clamped = [
-        b[0].clamp(0, w as i64),
-        b[1].clamp(0, h as i64),
-        b[2].clamp(0, w as i64),
-        b[3].clamp(0, h as i64),
-    ];
+    let clamped = [b[0].clamp(0, w as i64), b[1].clamp(0, h as i64), b[2].clamp(0, w as i64), b[3].clamp(0, h as i64)];
     if clamped[0] >= clamped[2] || clamped[1] >= clamped[3] {
-        return Err(err(
-            loc,
-            format!("the pixel bounds {b:?} select no pixels of the {w}x{h} image"),
-        ));
+        return Err(err(loc, format!("the pixel bounds {b:?} select no pixels of the {w}x{h} image")));
     }
-    Ok([
-        clamped[0] as u32,
-        clamped[1] as u32,
-        clamped[2] as u32,
-        clamped[3] as u32,
-    ])
+    Ok([clamped[0] as u32, clamped[1] as u32, clamped[2] as u32, clamped[3] as u32])
 }
 
 /// Builds the render-time scene.
@@ -959,24 +704,17 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions) -> Result<Scene
     let mut warnings = desc.warnings.clone();
     let mut film = FilmSettings::from_entity(&desc.film)?;
     if opts.quick {
-        film.resolution = [
-            (film.resolution[0] / 4).max(1),
-            (film.resolution[1] / 4).max(1),
-        ];
+        film.resolution = [(film.resolution[0] / 4).max(1), (film.resolution[1] / 4).max(1)];
     }
     let film_cs = film.color_space;
     let camera_settings = CameraSettings::from_entity(&desc.camera)?;
     let world_from_camera = &desc.camera.world_from_camera;
     if world_from_camera.is_animated() {
-        return Err(err(
-            &desc.camera.entity.loc,
-            "animated camera transforms are not supported by nimbus",
-        ));
+        return Err(err(&desc.camera.entity.loc, "animated camera transforms are not supported by nimbus"));
     }
     let camera = Camera::new(&camera_settings, &world_from_camera.start, film.resolution);
     let pixel_bounds = pixel_bounds(&film, opts, &desc.film.loc)?;
-    let mut sampler =
-        SamplerSettings::from_entity(&desc.sampler, desc.options.seed, &mut warnings)?;
+    let mut sampler = SamplerSettings::from_entity(&desc.sampler, desc.options.seed, &mut warnings)?;
     if let Some(spp) = opts.spp {
         sampler.pixel_samples = spp.max(1);
     }
@@ -1031,10 +769,7 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions) -> Result<Scene
         }
     }
     let interfaces = std::cell::RefCell::new(Vec::<[u32; 2]>::new());
-    let medium_id = |name: &Option<String>| {
-        name.as_deref()
-            .map_or(NONE, |n| media_ids.get(n).copied().unwrap_or(NONE))
-    };
+    let medium_id = |name: &Option<String>| name.as_deref().map_or(NONE, |n| media_ids.get(n).copied().unwrap_or(NONE));
     let interface_ids = |mi: &nimbus_parser::MediumInterface| -> Result<u32, Error> {
         let pair = [medium_id(&mi.inside), medium_id(&mi.outside)];
         let mut list = interfaces.borrow_mut();
@@ -1085,11 +820,7 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions) -> Result<Scene
         };
         let world = fixed_transform(&u.world_from_instance, &u.loc, "object instance")?;
         let object_bounds = blas[accel as usize].bounds();
-        instances.push(Instance {
-            accel,
-            world_from_instance: world,
-            instance_from_world: world.inverse(),
-        });
+        instances.push(Instance { accel, world_from_instance: world, instance_from_world: world.inverse() });
         bounds.push(object_bounds.transformed(&world));
         prims.push(Primitive {
             geometry: Geometry::Instance(instances.len() as u32 - 1),
@@ -1116,30 +847,16 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions) -> Result<Scene
 
     let sb_bounds = surfaces.bounds();
     let sphere = if sb_bounds.is_empty() {
-        SceneSphere {
-            center: camera.position(),
-            radius: 1.0,
-        }
+        SceneSphere { center: camera.position(), radius: 1.0 }
     } else {
         let (center, radius) = sb_bounds.bounding_sphere();
-        SceneSphere {
-            center,
-            radius: radius.max(1e-3),
-        }
+        SceneSphere { center, radius: radius.max(1e-3) }
     };
     for l in &desc.lights {
-        let medium = l
-            .medium
-            .as_deref()
-            .map_or(NONE, |n| media_ids.get(n).copied().unwrap_or(NONE));
+        let medium = l.medium.as_deref().map_or(NONE, |n| media_ids.get(n).copied().unwrap_or(NONE));
         lights.push(light(l, film_cs, &sphere, medium)?);
     }
-    let infinite_lights = lights
-        .iter()
-        .enumerate()
-        .filter(|(_, l)| l.is_infinite())
-        .map(|(i, _)| i as u32)
-        .collect();
+    let infinite_lights = lights.iter().enumerate().filter(|(_, l)| l.is_infinite()).map(|(i, _)| i as u32).collect();
     let by_power = !matches!(&integrator, IntegratorSettings::VolPath(v) if v.light_sampler == crate::integrators::volpath::LightSamplerKind::Uniform);
     let light_sampler = LightSampler::new(&lights, &sphere, by_power);
     let camera_settings_exposure = camera_settings.shutter_close - camera_settings.shutter_open;

@@ -69,36 +69,20 @@ impl CameraSettings {
             other => {
                 return Err(Error::new(
                     &e.loc,
-                    format!(
-                        "camera \"{other}\" is not supported by nimbus (it has perspective and orthographic)"
-                    ),
+                    format!("camera \"{other}\" is not supported by nimbus (it has perspective and orthographic)"),
                 ));
             }
         };
-        let lens_radius = checked_float(
-            p,
-            "lensradius",
-            0.0,
-            |r| r >= 0.0,
-            "the lens radius cannot be negative",
-        )?;
-        let focal_distance = checked_float(
-            p,
-            "focaldistance",
-            1e6,
-            |d| d > 0.0,
-            "the focal distance must be positive",
-        )?;
+        let lens_radius = checked_float(p, "lensradius", 0.0, |r| r >= 0.0, "the lens radius cannot be negative")?;
+        let focal_distance =
+            checked_float(p, "focaldistance", 1e6, |d| d > 0.0, "the focal distance must be positive")?;
         let screen_window = match p.get_floats("screenwindow")? {
             [] => None,
             [a, b, c, d] => Some([*a, *b, *c, *d]),
             other => {
                 return Err(Error::new(
                     p.loc("screenwindow").unwrap_or(&e.loc),
-                    format!(
-                        "\"screenwindow\" takes 4 values (xmin xmax ymin ymax), not {}",
-                        other.len()
-                    ),
+                    format!("\"screenwindow\" takes 4 values (xmin xmax ymin ymax), not {}", other.len()),
                 ));
             }
         };

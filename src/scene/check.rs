@@ -76,8 +76,7 @@ fn shape_triangles(shape: &ShapeEntity, settings: &ShapeSettings<'_>) -> Result<
         ShapeKind::TriangleMesh(m) => m.indices.len() as u64 / 3,
         ShapeKind::BilinearMesh(m) => m.indices.len() as u64 / 2,
         ShapeKind::PlyMesh(path) => {
-            let mesh = read_ply(path)
-                .map_err(|e| Error::new(&shape.entity.loc, format!("plymesh: {e}")))?;
+            let mesh = read_ply(path).map_err(|e| Error::new(&shape.entity.loc, format!("plymesh: {e}")))?;
             mesh.indices.len() as u64 / 3
         }
         _ => 0,
@@ -96,12 +95,7 @@ pub fn unused_parameters(scene: &SceneDescription) -> Vec<Warning> {
         &scene.integrator.params,
     ];
     dicts.extend(scene.shapes.iter().map(|s| &s.entity.params));
-    dicts.extend(
-        scene
-            .instance_definitions
-            .iter()
-            .flat_map(|d| d.shapes.iter().map(|s| &s.entity.params)),
-    );
+    dicts.extend(scene.instance_definitions.iter().flat_map(|d| d.shapes.iter().map(|s| &s.entity.params)));
     dicts.extend(scene.lights.iter().map(|l| &l.entity.params));
     dicts.extend(scene.area_lights.iter().map(|a| &a.params));
     dicts.extend(scene.media.iter().map(|m| &m.entity.params));
@@ -140,29 +134,20 @@ pub fn check_scene(scene: &SceneDescription) -> Result<SceneCheck, Error> {
     if scene.accelerator.name != "bvh" && scene.accelerator.name != "kdtree" {
         return Err(Error::new(
             &scene.accelerator.loc,
-            format!(
-                "unknown accelerator \"{}\" (bvh or kdtree)",
-                scene.accelerator.name
-            ),
+            format!("unknown accelerator \"{}\" (bvh or kdtree)", scene.accelerator.name),
         ));
     }
     // nimbus always builds a BVH; the accelerator's tuning parameters have no counterpart.
     for p in scene.accelerator.params.iter() {
         warnings.push(Warning::new(
             &p.loc,
-            format!(
-                "accelerator parameter \"{}\" is ignored (nimbus builds its own BVH)",
-                p.name
-            ),
+            format!("accelerator parameter \"{}\" is ignored (nimbus builds its own BVH)", p.name),
         ));
     }
 
     let mut shapes = BTreeMap::new();
     let mut triangles = 0;
-    let object_shapes = scene
-        .instance_definitions
-        .iter()
-        .flat_map(|d| d.shapes.iter());
+    let object_shapes = scene.instance_definitions.iter().flat_map(|d| d.shapes.iter());
     for shape in scene.shapes.iter().chain(object_shapes) {
         let settings = ShapeSettings::from_entity(shape)?;
         triangles += shape_triangles(shape, &settings)?;
@@ -194,10 +179,7 @@ pub fn check_scene(scene: &SceneDescription) -> Result<SceneCheck, Error> {
         Ok(())
     };
     // Material 0 is pbrt-v4's implicit default; count it only if a shape uses it.
-    let uses_default = scene
-        .shapes
-        .iter()
-        .any(|s| s.material == nimbus_parser::MaterialRef::Index(0));
+    let uses_default = scene.shapes.iter().any(|s| s.material == nimbus_parser::MaterialRef::Index(0));
     for (i, m) in scene.materials.iter().enumerate() {
         if i > 0 || uses_default {
             material(m, &mut warnings)?;

@@ -33,22 +33,13 @@ impl FilmSettings {
     /// Reads a film entity. Only the `rgb` film is supported; `sensor` must be `cie1931`.
     pub fn from_entity(e: &Entity) -> Result<FilmSettings, Error> {
         if e.name != "rgb" {
-            return Err(Error::new(
-                &e.loc,
-                format!(
-                    "film \"{}\" is not supported by nimbus (it has \"rgb\")",
-                    e.name
-                ),
-            ));
+            return Err(Error::new(&e.loc, format!("film \"{}\" is not supported by nimbus (it has \"rgb\")", e.name)));
         }
         let p = &e.params;
         let x = p.get_one_int("xresolution", 1280)?;
         let y = p.get_one_int("yresolution", 720)?;
         if x <= 0 || y <= 0 {
-            return Err(Error::new(
-                &e.loc,
-                format!("film resolution {x}x{y} must be positive"),
-            ));
+            return Err(Error::new(&e.loc, format!("film resolution {x}x{y} must be positive")));
         }
         let crop_window = match p.get_floats("cropwindow")? {
             [] => None,
@@ -94,13 +85,8 @@ impl FilmSettings {
         };
         let filename = p.get_one_string("filename", "pbrt.exr")?.to_string();
         let diagonal = p.get_one_float("diagonal", 35.0)?;
-        let max_component_value = checked_float(
-            p,
-            "maxcomponentvalue",
-            f32::INFINITY,
-            |v| v > 0.0,
-            "must be positive",
-        )?;
+        let max_component_value =
+            checked_float(p, "maxcomponentvalue", f32::INFINITY, |v| v > 0.0, "must be positive")?;
         let save_fp16 = p.get_one_bool("savefp16", true)?;
         let iso = checked_float(p, "iso", 100.0, |v| v > 0.0, "ISO must be positive")?;
         let white_balance = p.get_one_float("whitebalance", 0.0)?;

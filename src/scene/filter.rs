@@ -48,42 +48,23 @@ impl FilterSettings {
         let p = &e.params;
         let radius = |default: f32| -> Result<[f32; 2], Error> {
             Ok([
-                checked_float(
-                    p,
-                    "xradius",
-                    default,
-                    |r| r > 0.0,
-                    "filter radius must be positive",
-                )?,
-                checked_float(
-                    p,
-                    "yradius",
-                    default,
-                    |r| r > 0.0,
-                    "filter radius must be positive",
-                )?,
+                checked_float(p, "xradius", default, |r| r > 0.0, "filter radius must be positive")?,
+                checked_float(p, "yradius", default, |r| r > 0.0, "filter radius must be positive")?,
             ])
         };
         Ok(match e.name.as_str() {
-            "box" => FilterSettings::Box {
-                radius: radius(0.5)?,
-            },
+            "box" => FilterSettings::Box { radius: radius(0.5)? },
             "gaussian" => FilterSettings::Gaussian {
                 radius: radius(1.5)?,
                 sigma: checked_float(p, "sigma", 0.5, |s| s > 0.0, "sigma must be positive")?,
             },
-            "triangle" => FilterSettings::Triangle {
-                radius: radius(2.0)?,
-            },
+            "triangle" => FilterSettings::Triangle { radius: radius(2.0)? },
             "mitchell" => FilterSettings::Mitchell {
                 radius: radius(2.0)?,
                 b: p.get_one_float("B", 1.0 / 3.0)?,
                 c: p.get_one_float("C", 1.0 / 3.0)?,
             },
-            "sinc" => FilterSettings::LanczosSinc {
-                radius: radius(4.0)?,
-                tau: p.get_one_float("tau", 3.0)?,
-            },
+            "sinc" => FilterSettings::LanczosSinc { radius: radius(4.0)?, tau: p.get_one_float("tau", 3.0)? },
             other => {
                 return Err(Error::new(
                     &e.loc,

@@ -76,10 +76,7 @@ fn positive_opt(e: &Entity, name: &str) -> Result<Option<f32>, Error> {
     if let Some(x) = v
         && x <= 0.0
     {
-        return Err(Error::new(
-            e.params.loc(name).unwrap_or(&e.loc),
-            format!("\"{name}\" must be positive"),
-        ));
+        return Err(Error::new(e.params.loc(name).unwrap_or(&e.loc), format!("\"{name}\" must be positive")));
     }
     Ok(v)
 }
@@ -107,13 +104,7 @@ impl LightSettings {
                     |a| a > 0.0 && a <= 180.0,
                     "must be in (0, 180] degrees",
                 )?,
-                cone_delta_angle: checked_float(
-                    p,
-                    "conedeltaangle",
-                    5.0,
-                    |a| a >= 0.0,
-                    "cannot be negative",
-                )?,
+                cone_delta_angle: checked_float(p, "conedeltaangle", 5.0, |a| a >= 0.0, "cannot be negative")?,
                 power: positive_opt(e, "power")?,
             },
             "distant" => {
@@ -142,20 +133,14 @@ impl LightSettings {
                         if !path.is_file() {
                             return Err(Error::new(
                                 loc,
-                                format!(
-                                    "infinite light: cannot find image \"{name}\" ({})",
-                                    path.display()
-                                ),
+                                format!("infinite light: cannot find image \"{name}\" ({})", path.display()),
                             ));
                         }
                         Some(path)
                     }
                 };
                 if radiance.is_some() && filename.is_some() {
-                    return Err(Error::new(
-                        &e.loc,
-                        "infinite light: give either \"L\" or \"filename\", not both",
-                    ));
+                    return Err(Error::new(&e.loc, "infinite light: give either \"L\" or \"filename\", not both"));
                 }
                 if !p.get_point3s("portal")?.is_empty() {
                     return Err(Error::new(
@@ -163,16 +148,8 @@ impl LightSettings {
                         "infinite light portals (\"portal\") are not supported by nimbus",
                     ));
                 }
-                let radiance = if filename.is_none() {
-                    Some(radiance.unwrap_or_else(white))
-                } else {
-                    None
-                };
-                LightKind::Infinite {
-                    radiance,
-                    filename,
-                    illuminance: positive_opt(e, "illuminance")?,
-                }
+                let radiance = if filename.is_none() { Some(radiance.unwrap_or_else(white)) } else { None };
+                LightKind::Infinite { radiance, filename, illuminance: positive_opt(e, "illuminance")? }
             }
             other => {
                 return Err(Error::new(
@@ -206,19 +183,14 @@ impl AreaLightSettings {
         if e.name != "diffuse" {
             return Err(Error::new(
                 &e.loc,
-                format!(
-                    "area light \"{}\" is not supported by nimbus (it has \"diffuse\")",
-                    e.name
-                ),
+                format!("area light \"{}\" is not supported by nimbus (it has \"diffuse\")", e.name),
             ));
         }
         let p = &e.params;
         if let Some(f) = p.get_opt_string("filename")? {
             return Err(Error::new(
                 p.loc("filename").unwrap_or(&e.loc),
-                format!(
-                    "image-textured area lights (\"filename\" \"{f}\") are not supported by nimbus"
-                ),
+                format!("image-textured area lights (\"filename\" \"{f}\") are not supported by nimbus"),
             ));
         }
         Ok(AreaLightSettings {

@@ -4,8 +4,7 @@
 use nimbus_parser::{Entity, Error, Warning};
 
 use super::values::{
-    FloatInput, SpectrumInput, SpectrumSpec, checked_float, checked_int, float_input, spectrum,
-    spectrum_input,
+    FloatInput, SpectrumInput, SpectrumSpec, checked_float, checked_int, float_input, spectrum, spectrum_input,
 };
 
 /// Microfacet roughness along u and v, possibly textured.
@@ -116,11 +115,7 @@ fn roughness(e: &Entity) -> Result<Roughness, Error> {
             ));
         }
     }
-    Ok(Roughness {
-        u,
-        v,
-        remap: p.get_one_bool("remaproughness", true)?,
-    })
+    Ok(Roughness { u, v, remap: p.get_one_bool("remaproughness", true)? })
 }
 
 fn eta(e: &Entity, default: f32) -> Result<Eta, Error> {
@@ -131,13 +126,7 @@ fn eta(e: &Entity, default: f32) -> Result<Eta, Error> {
     {
         return Ok(Eta::Spectrum(spectrum(p, "eta")?.expect("peeked")));
     }
-    let v = checked_float(
-        p,
-        "eta",
-        default,
-        |v| v > 0.0,
-        "the index of refraction must be positive",
-    )?;
+    let v = checked_float(p, "eta", default, |v| v > 0.0, "the index of refraction must be positive")?;
     Ok(Eta::Constant(v))
 }
 
@@ -162,30 +151,22 @@ impl MaterialSettings {
             ));
         }
         let kind = match e.name.as_str() {
-            "diffuse" => MaterialKind::Diffuse {
-                reflectance: spectrum_input(p, "reflectance")?.unwrap_or_else(|| gray(0.5)),
-            },
+            "diffuse" => {
+                MaterialKind::Diffuse { reflectance: spectrum_input(p, "reflectance")?.unwrap_or_else(|| gray(0.5)) }
+            }
             "conductor" => {
                 let spec = match spectrum_input(p, "reflectance")? {
                     Some(r) => ConductorSpec::Reflectance(r),
                     None => ConductorSpec::EtaK {
-                        eta: spectrum_input(p, "eta")?.unwrap_or_else(|| {
-                            SpectrumInput::Value(SpectrumSpec::Named("metal-Cu-eta".into()))
-                        }),
-                        k: spectrum_input(p, "k")?.unwrap_or_else(|| {
-                            SpectrumInput::Value(SpectrumSpec::Named("metal-Cu-k".into()))
-                        }),
+                        eta: spectrum_input(p, "eta")?
+                            .unwrap_or_else(|| SpectrumInput::Value(SpectrumSpec::Named("metal-Cu-eta".into()))),
+                        k: spectrum_input(p, "k")?
+                            .unwrap_or_else(|| SpectrumInput::Value(SpectrumSpec::Named("metal-Cu-k".into()))),
                     },
                 };
-                MaterialKind::Conductor {
-                    spec,
-                    roughness: roughness(e)?,
-                }
+                MaterialKind::Conductor { spec, roughness: roughness(e)? }
             }
-            "dielectric" => MaterialKind::Dielectric {
-                eta: eta(e, 1.5)?,
-                roughness: roughness(e)?,
-            },
+            "dielectric" => MaterialKind::Dielectric { eta: eta(e, 1.5)?, roughness: roughness(e)? },
             "thindielectric" => MaterialKind::ThinDielectric { eta: eta(e, 1.5)? },
             "interface" | "" | "none" => MaterialKind::Interface,
             "coateddiffuse" => MaterialKind::CoatedDiffuse {
@@ -199,7 +180,10 @@ impl MaterialSettings {
                 n_samples: checked_int(p, "nsamples", 1, |v| v > 0, "must be positive")? as u32,
             },
             other => {
-                warnings.push(Warning::new(&e.loc, format!("material \"{other}\" is not supported by nimbus; rendering it as gray diffuse")));
+                warnings.push(Warning::new(
+                    &e.loc,
+                    format!("material \"{other}\" is not supported by nimbus; rendering it as gray diffuse"),
+                ));
                 MaterialKind::Unsupported(other.to_string())
             }
         };

@@ -68,8 +68,7 @@ impl SamplerSettings {
             name => {
                 // pbrt-v4's independent sampler defaults to 4 samples, all others to 16.
                 let default_spp = if name == "independent" { 4 } else { 16 };
-                let spp = checked_int(p, "pixelsamples", default_spp, positive, "must be positive")?
-                    as u32;
+                let spp = checked_int(p, "pixelsamples", default_spp, positive, "must be positive")? as u32;
                 let kind = match name {
                     "independent" => SamplerKind::Independent,
                     "sobol" => SamplerKind::Sobol,
@@ -77,7 +76,10 @@ impl SamplerSettings {
                     "halton" | "paddedsobol" | "pmj02bn" => {
                         // These read "randomization"; accept it so it is not reported unused.
                         p.get_opt_string("randomization")?;
-                        warnings.push(Warning::new(&e.loc, format!("sampler \"{name}\" is not in nimbus; using \"zsobol\" (same expected image)")));
+                        warnings.push(Warning::new(
+                            &e.loc,
+                            format!("sampler \"{name}\" is not in nimbus; using \"zsobol\" (same expected image)"),
+                        ));
                         SamplerKind::ZSobol
                     }
                     other => {
@@ -98,9 +100,7 @@ impl SamplerSettings {
                         _ => {
                             return Err(Error::new(
                                 p.loc("randomization").unwrap_or(&e.loc),
-                                format!(
-                                    "randomization \"{r}\" is not supported by nimbus (it has owen and fastowen)"
-                                ),
+                                format!("randomization \"{r}\" is not supported by nimbus (it has owen and fastowen)"),
                             ));
                         }
                     };
@@ -117,12 +117,7 @@ impl SamplerSettings {
                 (kind, spp)
             }
         };
-        Ok(SamplerSettings {
-            kind,
-            pixel_samples,
-            seed,
-            randomization,
-        })
+        Ok(SamplerSettings { kind, pixel_samples, seed, randomization })
     }
 }
 
@@ -131,8 +126,7 @@ mod tests {
     use super::*;
 
     fn settings(directive: &str) -> Result<SamplerSettings, Error> {
-        let scene = nimbus_parser::load_str(&format!("{directive}\nWorldBegin\n"), "t.pbrt")
-            .expect("scene parses");
+        let scene = nimbus_parser::load_str(&format!("{directive}\nWorldBegin\n"), "t.pbrt").expect("scene parses");
         SamplerSettings::from_entity(&scene.sampler, scene.options.seed, &mut Vec::new())
     }
 
@@ -140,19 +134,10 @@ mod tests {
     fn sampler_defaults_follow_pbrt() {
         let z = settings("").unwrap();
         assert_eq!(z.kind, SamplerKind::ZSobol);
-        assert_eq!(
-            (z.pixel_samples, z.randomization),
-            (16, Randomization::FastOwen)
-        );
-        assert_eq!(
-            settings("Sampler \"independent\"").unwrap().pixel_samples,
-            4
-        );
+        assert_eq!((z.pixel_samples, z.randomization), (16, Randomization::FastOwen));
+        assert_eq!(settings("Sampler \"independent\"").unwrap().pixel_samples, 4);
         let s = settings("Sampler \"sobol\" \"string randomization\" \"owen\"").unwrap();
-        assert_eq!(
-            (s.kind, s.randomization),
-            (SamplerKind::Sobol, Randomization::Owen)
-        );
+        assert_eq!((s.kind, s.randomization), (SamplerKind::Sobol, Randomization::Owen));
         assert!(settings("Sampler \"zsobol\" \"string randomization\" \"none\"").is_err());
         // Replaced samplers accept their own randomization values.
         let h = settings("Sampler \"halton\" \"string randomization\" \"permutedigits\"").unwrap();
@@ -161,11 +146,8 @@ mod tests {
 
     #[test]
     fn zsobol_warns_that_it_rounds_sample_counts_down() {
-        let scene = nimbus_parser::load_str(
-            "Sampler \"zsobol\" \"integer pixelsamples\" 100\nWorldBegin\n",
-            "t.pbrt",
-        )
-        .unwrap();
+        let scene =
+            nimbus_parser::load_str("Sampler \"zsobol\" \"integer pixelsamples\" 100\nWorldBegin\n", "t.pbrt").unwrap();
         let mut warnings = Vec::new();
         SamplerSettings::from_entity(&scene.sampler, None, &mut warnings).unwrap();
         assert_eq!(warnings.len(), 1);

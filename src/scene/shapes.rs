@@ -80,18 +80,12 @@ pub struct ShapeSettings<'a> {
 fn file_param(shape: &ShapeEntity, kind: &str) -> Result<PathBuf, Error> {
     let p = &shape.entity.params;
     let Some(name) = p.get_opt_string("filename")? else {
-        return Err(Error::new(
-            &shape.entity.loc,
-            format!("{kind}: missing \"string filename\""),
-        ));
+        return Err(Error::new(&shape.entity.loc, format!("{kind}: missing \"string filename\"")));
     };
     let loc: &FileLoc = p.loc("filename").unwrap_or(&shape.entity.loc);
     let path = loc.resolve(name);
     if !path.is_file() {
-        return Err(Error::new(
-            loc,
-            format!("{kind}: cannot find file \"{name}\" ({})", path.display()),
-        ));
+        return Err(Error::new(loc, format!("{kind}: cannot find file \"{name}\" ({})", path.display())));
     }
     Ok(path)
 }
@@ -101,43 +95,26 @@ fn inline_mesh<'a>(shape: &'a ShapeEntity, per_face: usize) -> Result<InlineMesh
     let p = &e.params;
     let positions = p.get_point3s("P")?;
     if positions.is_empty() {
-        return Err(Error::new(
-            &e.loc,
-            format!("{}: vertex positions \"P\" are missing", e.name),
-        ));
+        return Err(Error::new(&e.loc, format!("{}: vertex positions \"P\" are missing", e.name)));
     }
     let raw = p.get_ints("indices")?;
     let indices: Vec<u32> = if raw.is_empty() {
         if positions.len() == per_face {
             (0..per_face as u32).collect()
         } else {
-            return Err(Error::new(
-                &e.loc,
-                format!("{}: vertex indices \"indices\" are missing", e.name),
-            ));
+            return Err(Error::new(&e.loc, format!("{}: vertex indices \"indices\" are missing", e.name)));
         }
     } else {
         let loc = p.loc("indices").unwrap_or(&e.loc);
         if raw.len() % per_face != 0 {
-            return Err(Error::new(
-                loc,
-                format!(
-                    "{}: {} indices is not a multiple of {per_face}",
-                    e.name,
-                    raw.len()
-                ),
-            ));
+            return Err(Error::new(loc, format!("{}: {} indices is not a multiple of {per_face}", e.name, raw.len())));
         }
         let mut out = Vec::with_capacity(raw.len());
         for &i in raw {
             if i < 0 || i as usize >= positions.len() {
                 return Err(Error::new(
                     loc,
-                    format!(
-                        "{}: index {i} out of range (there are {} vertices)",
-                        e.name,
-                        positions.len()
-                    ),
+                    format!("{}: index {i} out of range (there are {} vertices)", e.name, positions.len()),
                 ));
             }
             out.push(i as u32);
@@ -148,24 +125,14 @@ fn inline_mesh<'a>(shape: &'a ShapeEntity, per_face: usize) -> Result<InlineMesh
     if !normals.is_empty() && normals.len() != positions.len() {
         return Err(Error::new(
             p.loc("N").unwrap_or(&e.loc),
-            format!(
-                "{}: {} normals for {} vertices",
-                e.name,
-                normals.len(),
-                positions.len()
-            ),
+            format!("{}: {} normals for {} vertices", e.name, normals.len(), positions.len()),
         ));
     }
     let uvs = p.get_point2s("uv")?;
     if !uvs.is_empty() && uvs.len() != positions.len() {
         return Err(Error::new(
             p.loc("uv").unwrap_or(&e.loc),
-            format!(
-                "{}: {} uvs for {} vertices",
-                e.name,
-                uvs.len(),
-                positions.len()
-            ),
+            format!("{}: {} uvs for {} vertices", e.name, uvs.len(), positions.len()),
         ));
     }
     if per_face == 3 {
@@ -173,12 +140,7 @@ fn inline_mesh<'a>(shape: &'a ShapeEntity, per_face: usize) -> Result<InlineMesh
         if !s.is_empty() && s.len() != positions.len() {
             return Err(Error::new(
                 p.loc("S").unwrap_or(&e.loc),
-                format!(
-                    "{}: {} tangents for {} vertices",
-                    e.name,
-                    s.len(),
-                    positions.len()
-                ),
+                format!("{}: {} tangents for {} vertices", e.name, s.len(), positions.len()),
             ));
         }
     }
@@ -186,20 +148,10 @@ fn inline_mesh<'a>(shape: &'a ShapeEntity, per_face: usize) -> Result<InlineMesh
     if !face_indices.is_empty() && face_indices.len() != indices.len() / per_face {
         return Err(Error::new(
             p.loc("faceIndices").unwrap_or(&e.loc),
-            format!(
-                "{}: {} face indices for {} faces",
-                e.name,
-                face_indices.len(),
-                indices.len() / per_face
-            ),
+            format!("{}: {} face indices for {} faces", e.name, face_indices.len(), indices.len() / per_face),
         ));
     }
-    Ok(InlineMesh {
-        positions,
-        indices,
-        normals,
-        uvs,
-    })
+    Ok(InlineMesh { positions, indices, normals, uvs })
 }
 
 impl<'a> ShapeSettings<'a> {
@@ -209,26 +161,14 @@ impl<'a> ShapeSettings<'a> {
         let p = &e.params;
         let positive = |v: f32| v > 0.0;
         let phimax = |p: &nimbus_parser::ParameterDictionary| -> Result<f32, Error> {
-            checked_float(
-                p,
-                "phimax",
-                360.0,
-                |v| v > 0.0 && v <= 360.0,
-                "phimax must be in (0, 360] degrees",
-            )
+            checked_float(p, "phimax", 360.0, |v| v > 0.0 && v <= 360.0, "phimax must be in (0, 360] degrees")
         };
         let kind = match e.name.as_str() {
             "sphere" => {
-                let radius =
-                    checked_float(p, "radius", 1.0, positive, "the radius must be positive")?;
+                let radius = checked_float(p, "radius", 1.0, positive, "the radius must be positive")?;
                 let zmin = p.get_one_float("zmin", -radius)?;
                 let zmax = p.get_one_float("zmax", radius)?;
-                ShapeKind::Sphere {
-                    radius,
-                    zmin,
-                    zmax,
-                    phimax: phimax(p)?,
-                }
+                ShapeKind::Sphere { radius, zmin, zmax, phimax: phimax(p)? }
             }
             "disk" => ShapeKind::Disk {
                 height: p.get_one_float("height", 0.0)?,
@@ -254,9 +194,7 @@ impl<'a> ShapeSettings<'a> {
                 if let Some(d) = p.get_texture("displacement")? {
                     return Err(Error::new(
                         p.loc("displacement").unwrap_or(&e.loc),
-                        format!(
-                            "plymesh displacement (texture \"{d}\") is not supported by nimbus"
-                        ),
+                        format!("plymesh displacement (texture \"{d}\") is not supported by nimbus"),
                     ));
                 }
                 p.get_one_float("edgelength", 1.0)?;

@@ -132,22 +132,16 @@ fn mapping(t: &TextureEntity) -> Result<Mapping, Error> {
 fn input(t: &TextureEntity, name: &str, default: f32) -> Result<TexInput, Error> {
     let p = &t.entity.params;
     Ok(match t.value {
-        TextureValue::Float => {
-            TexInput::Float(float_input(p, name)?.unwrap_or(FloatInput::Value(default)))
-        }
+        TextureValue::Float => TexInput::Float(float_input(p, name)?.unwrap_or(FloatInput::Value(default))),
         TextureValue::Spectrum => TexInput::Spectrum(
-            spectrum_input(p, name)?
-                .unwrap_or(SpectrumInput::Value(SpectrumSpec::Rgb([default; 3]))),
+            spectrum_input(p, name)?.unwrap_or(SpectrumInput::Value(SpectrumSpec::Rgb([default; 3]))),
         ),
     })
 }
 
 impl TextureSettings {
     /// Reads a texture entity.
-    pub fn from_entity(
-        t: &TextureEntity,
-        warnings: &mut Vec<Warning>,
-    ) -> Result<TextureSettings, Error> {
+    pub fn from_entity(t: &TextureEntity, warnings: &mut Vec<Warning>) -> Result<TextureSettings, Error> {
         let e = &t.entity;
         let p = &e.params;
         let kind = match e.name.as_str() {
@@ -166,9 +160,7 @@ impl TextureSettings {
                 if dim != 2 {
                     return Err(Error::new(
                         p.loc("dimension").unwrap_or(&e.loc),
-                        format!(
-                            "checkerboard dimension {dim} is not supported by nimbus (it has 2)"
-                        ),
+                        format!("checkerboard dimension {dim} is not supported by nimbus (it has 2)"),
                     ));
                 }
                 TextureKind::Checkerboard {
@@ -186,10 +178,7 @@ impl TextureSettings {
                 if !filename.is_file() {
                     return Err(Error::new(
                         loc,
-                        format!(
-                            "imagemap: cannot find image \"{name}\" ({})",
-                            filename.display()
-                        ),
+                        format!("imagemap: cannot find image \"{name}\" ({})", filename.display()),
                     ));
                 }
                 p.get_one_string("filter", "bilinear")?;

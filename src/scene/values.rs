@@ -3,9 +3,7 @@
 
 use std::path::PathBuf;
 
-use nimbus_parser::{
-    Error, FloatOrTexture, ParameterDictionary, SpectrumOrTexture, SpectrumParam, SpectrumValue,
-};
+use nimbus_parser::{Error, FloatOrTexture, ParameterDictionary, SpectrumOrTexture, SpectrumParam, SpectrumValue};
 
 use crate::spectra::is_named_spectrum;
 
@@ -30,10 +28,7 @@ impl SpectrumSpec {
         Ok(match p.value {
             SpectrumValue::Rgb(rgb) => {
                 if rgb.iter().any(|c| *c < 0.0) {
-                    return Err(Error::new(
-                        p.loc,
-                        format!("rgb \"{name}\" has a negative component"),
-                    ));
+                    return Err(Error::new(p.loc, format!("rgb \"{name}\" has a negative component")));
                 }
                 SpectrumSpec::Rgb(rgb)
             }
@@ -90,10 +85,7 @@ pub enum SpectrumInput {
 
 /// Reads an optional spectrum parameter.
 pub fn spectrum(params: &ParameterDictionary, name: &str) -> Result<Option<SpectrumSpec>, Error> {
-    params
-        .get_one_spectrum(name)?
-        .map(|p| SpectrumSpec::from_param(p, name))
-        .transpose()
+    params.get_one_spectrum(name)?.map(|p| SpectrumSpec::from_param(p, name)).transpose()
 }
 
 /// Reads an optional float-or-texture parameter.
@@ -105,16 +97,11 @@ pub fn float_input(params: &ParameterDictionary, name: &str) -> Result<Option<Fl
 }
 
 /// Reads an optional spectrum-or-texture parameter.
-pub fn spectrum_input(
-    params: &ParameterDictionary,
-    name: &str,
-) -> Result<Option<SpectrumInput>, Error> {
+pub fn spectrum_input(params: &ParameterDictionary, name: &str) -> Result<Option<SpectrumInput>, Error> {
     params
         .get_spectrum_or_texture(name)?
         .map(|s| match s {
-            SpectrumOrTexture::Value(p) => {
-                SpectrumSpec::from_param(p, name).map(SpectrumInput::Value)
-            }
+            SpectrumOrTexture::Value(p) => SpectrumSpec::from_param(p, name).map(SpectrumInput::Value),
             SpectrumOrTexture::Texture(t, _) => Ok(SpectrumInput::Texture(t.to_string())),
         })
         .transpose()
@@ -131,10 +118,7 @@ pub fn checked_float(
     let v = params.get_one_float(name, default)?;
     if !ok(v) {
         let loc = params.loc(name).cloned();
-        return Err(Error {
-            loc,
-            message: format!("\"{name}\" = {v}: {what}"),
-        });
+        return Err(Error { loc, message: format!("\"{name}\" = {v}: {what}") });
     }
     Ok(v)
 }
@@ -150,10 +134,7 @@ pub fn checked_int(
     let v = params.get_one_int(name, default)?;
     if !ok(v) {
         let loc = params.loc(name).cloned();
-        return Err(Error {
-            loc,
-            message: format!("\"{name}\" = {v}: {what}"),
-        });
+        return Err(Error { loc, message: format!("\"{name}\" = {v}: {what}") });
     }
     Ok(v)
 }

@@ -42,11 +42,8 @@ impl Cylinder {
 
     /// World-space bounds.
     pub fn bounds(&self) -> Bounds3 {
-        Bounds3::new(
-            Vec3::new(-self.radius, -self.radius, self.z_min),
-            Vec3::new(self.radius, self.radius, self.z_max),
-        )
-        .transformed(&self.world_from_object)
+        Bounds3::new(Vec3::new(-self.radius, -self.radius, self.z_min), Vec3::new(self.radius, self.radius, self.z_max))
+            .transformed(&self.world_from_object)
     }
 
     /// Object-space area.
@@ -71,11 +68,7 @@ impl Cylinder {
             return None;
         }
         let root = disc.sqrt();
-        let q = if b < 0.0 {
-            -0.5 * (b - root)
-        } else {
-            -0.5 * (b + root)
-        };
+        let q = if b < 0.0 { -0.5 * (b - root) } else { -0.5 * (b + root) };
         let (mut t0, mut t1) = (q / a, c / q);
         if t0 > t1 {
             std::mem::swap(&mut t0, &mut t1);
@@ -103,10 +96,7 @@ impl Cylinder {
     /// Surface details of a hit.
     pub fn hit(&self, t: f32, p_obj: Vec3) -> SurfaceHit {
         let phi = phi_of(p_obj.x, p_obj.y);
-        let uv = Vec2::new(
-            phi / self.phi_max,
-            (p_obj.z - self.z_min) / (self.z_max - self.z_min),
-        );
+        let uv = Vec2::new(phi / self.phi_max, (p_obj.z - self.z_min) / (self.z_max - self.z_min));
         let dpdu = Vec3::new(-self.phi_max * p_obj.y, self.phi_max * p_obj.x, 0.0);
         let mut n = transform_normal(&self.object_from_world, Vec3::new(p_obj.x, p_obj.y, 0.0));
         if self.flip_normal {
@@ -127,16 +117,8 @@ impl Cylinder {
         let s = uniform_scale(&self.world_from_object)?;
         let z = self.z_min + u.x * (self.z_max - self.z_min);
         let phi = u.y * self.phi_max;
-        let h = self.hit(
-            0.0,
-            Vec3::new(self.radius * phi.cos(), self.radius * phi.sin(), z),
-        );
-        Some(ShapeSample {
-            p: h.p,
-            n: h.n,
-            pdf: 1.0 / (self.area() * s * s),
-            solid_angle: false,
-        })
+        let h = self.hit(0.0, Vec3::new(self.radius * phi.cos(), self.radius * phi.sin(), z));
+        Some(ShapeSample { p: h.p, n: h.n, pdf: 1.0 / (self.area() * s * s), solid_angle: false })
     }
 
     /// World-space area, if the transform is a similarity.

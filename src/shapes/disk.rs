@@ -81,24 +81,14 @@ impl Disk {
     pub fn hit(&self, t: f32, p_obj: Vec3) -> SurfaceHit {
         let phi = phi_of(p_obj.x, p_obj.y);
         let r = (p_obj.x * p_obj.x + p_obj.y * p_obj.y).sqrt();
-        let uv = Vec2::new(
-            phi / self.phi_max,
-            (self.radius - r) / (self.radius - self.inner_radius),
-        );
+        let uv = Vec2::new(phi / self.phi_max, (self.radius - r) / (self.radius - self.inner_radius));
         let dpdu = Vec3::new(-self.phi_max * p_obj.y, self.phi_max * p_obj.x, 0.0);
         let mut n = transform_normal(&self.object_from_world, Vec3::Z);
         if self.flip_normal {
             n = -n;
         }
         let dpdu = self.world_from_object.transform_vector3(dpdu);
-        SurfaceHit {
-            t,
-            p: self.world_from_object.transform_point3(p_obj),
-            n,
-            ns: n,
-            uv,
-            dpdu,
-        }
+        SurfaceHit { t, p: self.world_from_object.transform_point3(p_obj), n, ns: n, uv, dpdu }
     }
 
     /// Uniform area sample (pdf per world-space area). `None` when the transform is not a
@@ -112,12 +102,7 @@ impl Disk {
         let phi = u.y * self.phi_max;
         let p_obj = Vec3::new(r * phi.cos(), r * phi.sin(), self.height);
         let h = self.hit(0.0, p_obj);
-        Some(ShapeSample {
-            p: h.p,
-            n: h.n,
-            pdf: 1.0 / (self.area() * s * s),
-            solid_angle: false,
-        })
+        Some(ShapeSample { p: h.p, n: h.n, pdf: 1.0 / (self.area() * s * s), solid_angle: false })
     }
 
     /// World-space area, if the transform is a similarity.

@@ -34,20 +34,13 @@ impl Mesh {
         let object_from_world = world_from_object.inverse();
         let m = object_from_world.matrix3;
         Mesh {
-            positions: positions
-                .iter()
-                .map(|p| world_from_object.transform_point3(Vec3::from(*p)))
-                .collect(),
+            positions: positions.iter().map(|p| world_from_object.transform_point3(Vec3::from(*p))).collect(),
             normals: normals
                 .iter()
                 .map(|n| {
                     let n = Vec3::from(*n);
-                    let w = Vec3::new(
-                        m.x_axis.dot(n.into()),
-                        m.y_axis.dot(n.into()),
-                        m.z_axis.dot(n.into()),
-                    )
-                    .normalize_or_zero();
+                    let w = Vec3::new(m.x_axis.dot(n.into()), m.y_axis.dot(n.into()), m.z_axis.dot(n.into()))
+                        .normalize_or_zero();
                     // pbrt-v4 flips stored normals too when the mesh is reversed.
                     if reverse_orientation { -w } else { w }
                 })
@@ -119,24 +112,12 @@ impl Mesh {
 /// Surface details of a hit on triangle `i` of `mesh` with barycentrics (b1, b2).
 pub fn triangle_hit(mesh: &Mesh, i: u32, t: f32, b1: f32, b2: f32) -> SurfaceHit {
     let k = 3 * i as usize;
-    let idx = [
-        mesh.indices[k] as usize,
-        mesh.indices[k + 1] as usize,
-        mesh.indices[k + 2] as usize,
-    ];
-    let [p0, p1, p2] = [
-        mesh.positions[idx[0]],
-        mesh.positions[idx[1]],
-        mesh.positions[idx[2]],
-    ];
+    let idx = [mesh.indices[k] as usize, mesh.indices[k + 1] as usize, mesh.indices[k + 2] as usize];
+    let [p0, p1, p2] = [mesh.positions[idx[0]], mesh.positions[idx[1]], mesh.positions[idx[2]]];
     let b0 = 1.0 - b1 - b2;
     let p = b0 * p0 + b1 * p1 + b2 * p2;
     let uv_of = |j: usize| {
-        if mesh.uvs.is_empty() {
-            [Vec2::ZERO, Vec2::X, Vec2::ONE][j]
-        } else {
-            mesh.uvs[idx[j]]
-        }
+        if mesh.uvs.is_empty() { [Vec2::ZERO, Vec2::X, Vec2::ONE][j] } else { mesh.uvs[idx[j]] }
     };
     let (uv0, uv1, uv2) = (uv_of(0), uv_of(1), uv_of(2));
     let uv = b0 * uv0 + b1 * uv1 + b2 * uv2;
@@ -150,8 +131,7 @@ pub fn triangle_hit(mesh: &Mesh, i: u32, t: f32, b1: f32, b2: f32) -> SurfaceHit
         n
     } else {
         let ns =
-            (b0 * mesh.normals[idx[0]] + b1 * mesh.normals[idx[1]] + b2 * mesh.normals[idx[2]])
-                .normalize_or_zero();
+            (b0 * mesh.normals[idx[0]] + b1 * mesh.normals[idx[1]] + b2 * mesh.normals[idx[2]]).normalize_or_zero();
         if ns == Vec3::ZERO {
             if mesh.flip_normals {
                 n = -n;
@@ -170,19 +150,8 @@ pub fn triangle_hit(mesh: &Mesh, i: u32, t: f32, b1: f32, b2: f32) -> SurfaceHit
     let dp02 = p0 - p2;
     let dp12 = p1 - p2;
     let det = duv02.x * duv12.y - duv02.y * duv12.x;
-    let dpdu = if det.abs() > 1e-9 {
-        (duv12.y * dp02 - duv02.y * dp12) / det
-    } else {
-        Vec3::ZERO
-    };
-    SurfaceHit {
-        t,
-        p,
-        n,
-        ns,
-        uv,
-        dpdu,
-    }
+    let dpdu = if det.abs() > 1e-9 { (duv12.y * dp02 - duv02.y * dp12) / det } else { Vec3::ZERO };
+    SurfaceHit { t, p, n, ns, uv, dpdu }
 }
 
 /// Uniform area sample on triangle `i`.
@@ -190,12 +159,7 @@ pub fn triangle_sample(mesh: &Mesh, i: u32, u: Vec2) -> ShapeSample {
     let (b0, b1) = warp::uniform_triangle(u);
     let b2 = 1.0 - b0 - b1;
     let h = triangle_hit(mesh, i, 0.0, b1, b2);
-    ShapeSample {
-        p: h.p,
-        n: h.n,
-        pdf: 1.0 / mesh.triangle_area(i),
-        solid_angle: false,
-    }
+    ShapeSample { p: h.p, n: h.n, pdf: 1.0 / mesh.triangle_area(i), solid_angle: false }
 }
 
 #[cfg(test)]
@@ -217,19 +181,8 @@ mod tests {
         assert!((t - 1.0).abs() < 1e-6);
         let h = triangle_hit(&mesh, 0, t, b1, b2);
         assert!((h.p - Vec3::new(0.2, 0.2, 0.0)).length() < 1e-6);
-        assert!(
-            (h.n - Vec3::Z).length() < 1e-6,
-            "counter-clockwise triangles face +z: {:?}",
-            h.n
-        );
-        assert!(
-            mesh.intersect(
-                0,
-                &Ray::new(Vec3::new(0.8, 0.8, 1.0), -Vec3::Z),
-                f32::INFINITY
-            )
-            .is_none()
-        );
+        assert!((h.n - Vec3::Z).length() < 1e-6, "counter-clockwise triangles face +z: {:?}", h.n);
+        assert!(mesh.intersect(0, &Ray::new(Vec3::new(0.8, 0.8, 1.0), -Vec3::Z), f32::INFINITY).is_none());
         let rev = Mesh::new(
             &Affine3A::IDENTITY,
             true,

@@ -67,10 +67,5 @@ pub fn uniform_scale(m: &Affine3A) -> Option<f32> {
 pub fn transform_normal(object_from_world: &Affine3A, n: Vec3) -> Vec3 {
     // (M^-1)^T n: component i is column i of M^-1 dotted with n.
     let m = object_from_world.matrix3;
-    Vec3::new(
-        m.x_axis.dot(n.into()),
-        m.y_axis.dot(n.into()),
-        m.z_axis.dot(n.into()),
-    )
-    .normalize_or_zero()
+    Vec3::new(m.x_axis.dot(n.into()), m.y_axis.dot(n.into()), m.z_axis.dot(n.into())).normalize_or_zero()
 }

@@ -50,11 +50,8 @@ impl Sphere {
 
     /// World-space bounds.
     pub fn bounds(&self) -> Bounds3 {
-        Bounds3::new(
-            Vec3::new(-self.radius, -self.radius, self.z_min),
-            Vec3::new(self.radius, self.radius, self.z_max),
-        )
-        .transformed(&self.world_from_object)
+        Bounds3::new(Vec3::new(-self.radius, -self.radius, self.z_min), Vec3::new(self.radius, self.radius, self.z_max))
+            .transformed(&self.world_from_object)
     }
 
     fn is_full(&self) -> bool {
@@ -84,11 +81,7 @@ impl Sphere {
             return None;
         }
         let root = disc.sqrt();
-        let q = if b < 0.0 {
-            -0.5 * (b - root)
-        } else {
-            -0.5 * (b + root)
-        };
+        let q = if b < 0.0 { -0.5 * (b - root) } else { -0.5 * (b + root) };
         let c = o.length_squared() - r * r;
         let (mut t0, mut t1) = (q / a, c / q);
         if t0 > t1 {
@@ -117,9 +110,7 @@ impl Sphere {
 
     fn clipped(&self, p: DVec3) -> bool {
         let r = self.radius as f64;
-        if (self.z_min as f64 > -r && p.z < self.z_min as f64)
-            || ((self.z_max as f64) < r && p.z > self.z_max as f64)
-        {
+        if (self.z_min as f64 > -r && p.z < self.z_min as f64) || ((self.z_max as f64) < r && p.z > self.z_max as f64) {
             return true;
         }
         self.phi_max < 2.0 * PI && phi_of(p.x as f32, p.y as f32) > self.phi_max
@@ -130,24 +121,14 @@ impl Sphere {
         let phi = phi_of(p_obj.x, p_obj.y);
         let cos_theta = (p_obj.z / self.radius).clamp(-1.0, 1.0);
         let theta = cos_theta.acos();
-        let uv = Vec2::new(
-            phi / self.phi_max,
-            (theta - self.theta_z_min) / (self.theta_z_max - self.theta_z_min),
-        );
+        let uv = Vec2::new(phi / self.phi_max, (theta - self.theta_z_min) / (self.theta_z_max - self.theta_z_min));
         let dpdu_obj = Vec3::new(-self.phi_max * p_obj.y, self.phi_max * p_obj.x, 0.0);
         let mut n = transform_normal(&self.object_from_world, p_obj);
         if self.flip_normal {
             n = -n;
         }
         let p = self.world_from_object.transform_point3(p_obj);
-        SurfaceHit {
-            t,
-            p,
-            n,
-            ns: n,
-            uv,
-            dpdu: self.world_from_object.transform_vector3(dpdu_obj),
-        }
+        SurfaceHit { t, p, n, ns: n, uv, dpdu: self.world_from_object.transform_vector3(dpdu_obj) }
     }
 
     /// Samples a point on the sphere as seen from `reference`: uniformly within the cone of
@@ -174,8 +155,7 @@ impl Sphere {
                 };
                 // Angle at the sphere's centre between the reference direction and the point.
                 let sin_max = sin2_max.sqrt();
-                let cos_alpha =
-                    sin2_t / sin_max + cos_t * (1.0 - sin2_t / sin2_max).max(0.0).sqrt();
+                let cos_alpha = sin2_t / sin_max + cos_t * (1.0 - sin2_t / sin2_max).max(0.0).sqrt();
                 let sin_alpha = (1.0 - cos_alpha * cos_alpha).max(0.0).sqrt();
                 let phi = u.y * 2.0 * PI;
                 let w_c = (center - reference) / dc;
@@ -184,12 +164,7 @@ impl Sphere {
                 let n_out = frame.to_world(n_local);
                 let p = center + radius * n_out;
                 let n = if self.flip_normal { -n_out } else { n_out };
-                return Some(ShapeSample {
-                    p,
-                    n,
-                    pdf: 1.0 / (2.0 * PI * one_minus_cos_max),
-                    solid_angle: true,
-                });
+                return Some(ShapeSample { p, n, pdf: 1.0 / (2.0 * PI * one_minus_cos_max), solid_angle: true });
             }
         }
         self.sample_area(u).map(|mut s| {
@@ -208,11 +183,7 @@ impl Sphere {
             if dc2 > radius * radius * 1.0001 {
                 let sin2_max = radius * radius / dc2;
                 let cos_max = (1.0 - sin2_max).max(0.0).sqrt();
-                let one_minus = if sin2_max < 0.00068523 {
-                    sin2_max / 2.0
-                } else {
-                    1.0 - cos_max
-                };
+                let one_minus = if sin2_max < 0.00068523 { sin2_max / 2.0 } else { 1.0 - cos_max };
                 return 1.0 / (2.0 * PI * one_minus);
             }
         }
@@ -231,22 +202,14 @@ impl Sphere {
             let uu = if i == 0 {
                 u
             } else {
-                Vec2::new(
-                    (u.x + 0.618_034 * i as f32).fract(),
-                    (u.y + 0.754_877_7 * i as f32).fract(),
-                )
+                Vec2::new((u.x + 0.618_034 * i as f32).fract(), (u.y + 0.754_877_7 * i as f32).fract())
             };
             let p_obj = self.radius * warp::uniform_sphere(uu);
             if self.clipped(p_obj.as_dvec3()) {
                 continue;
             }
             let hit = self.hit(0.0, p_obj);
-            return Some(ShapeSample {
-                p: hit.p,
-                n: hit.n,
-                pdf: 1.0 / self.world_area(),
-                solid_angle: false,
-            });
+            return Some(ShapeSample { p: hit.p, n: hit.n, pdf: 1.0 / self.world_area(), solid_angle: false });
         }
         None
     }
@@ -272,60 +235,32 @@ mod tests {
 
     #[test]
     fn unit_sphere_hits_and_normals() {
-        let s = Sphere::new(
-            Affine3A::from_translation(Vec3::new(0.0, 0.0, 5.0)),
-            false,
-            1.0,
-            -1.0,
-            1.0,
-            360.0,
-        );
+        let s = Sphere::new(Affine3A::from_translation(Vec3::new(0.0, 0.0, 5.0)), false, 1.0, -1.0, 1.0, 360.0);
         let ray = Ray::new(Vec3::ZERO, Vec3::Z);
         let (t, p) = s.intersect(&ray, f32::INFINITY).unwrap();
         assert!((t - 4.0).abs() < 1e-5);
         let h = s.hit(t, p);
-        assert!(
-            (h.n - (-Vec3::Z)).length() < 1e-4,
-            "outward normal faces the ray origin: {:?}",
-            h.n
-        );
+        assert!((h.n - (-Vec3::Z)).length() < 1e-4, "outward normal faces the ray origin: {:?}", h.n);
         assert!(s.intersect(&ray, 3.9).is_none());
         // From inside, the far side.
         let inside = Ray::new(Vec3::new(0.0, 0.0, 5.0), Vec3::Z);
         let (t, _) = s.intersect(&inside, f32::INFINITY).unwrap();
         assert!((t - 1.0).abs() < 1e-5);
         let rev = Sphere::new(Affine3A::IDENTITY, true, 1.0, -1.0, 1.0, 360.0);
-        let (t, p) = rev
-            .intersect(&Ray::new(Vec3::new(0.0, 0.0, -3.0), Vec3::Z), f32::INFINITY)
-            .unwrap();
-        assert!(
-            (rev.hit(t, p).n - Vec3::Z).length() < 1e-4,
-            "ReverseOrientation points inward"
-        );
+        let (t, p) = rev.intersect(&Ray::new(Vec3::new(0.0, 0.0, -3.0), Vec3::Z), f32::INFINITY).unwrap();
+        assert!((rev.hit(t, p).n - Vec3::Z).length() < 1e-4, "ReverseOrientation points inward");
     }
 
     #[test]
     fn clipped_sphere_misses_the_clipped_cap() {
         let s = Sphere::new(Affine3A::IDENTITY, false, 1.0, -1.0, 0.5, 360.0);
-        let (t, _) = s
-            .intersect(&Ray::new(Vec3::new(0.0, 0.0, 3.0), -Vec3::Z), f32::INFINITY)
-            .unwrap();
-        assert!(
-            (t - 4.0).abs() < 1e-4,
-            "enters through the open top, hits the bottom: {t}"
-        );
+        let (t, _) = s.intersect(&Ray::new(Vec3::new(0.0, 0.0, 3.0), -Vec3::Z), f32::INFINITY).unwrap();
+        assert!((t - 4.0).abs() < 1e-4, "enters through the open top, hits the bottom: {t}");
     }
 
     #[test]
     fn cone_sampling_pdf_matches_sample() {
-        let s = Sphere::new(
-            Affine3A::from_translation(Vec3::new(0.0, 3.0, 0.0)),
-            false,
-            0.5,
-            -0.5,
-            0.5,
-            360.0,
-        );
+        let s = Sphere::new(Affine3A::from_translation(Vec3::new(0.0, 3.0, 0.0)), false, 0.5, -0.5, 0.5, 360.0);
         let r = Vec3::ZERO;
         let smp = s.sample(r, Vec2::new(0.3, 0.7)).unwrap();
         assert!(smp.solid_angle);

@@ -53,9 +53,7 @@ impl BlackbodySpectrum {
 /// blackbody at `t` Kelvin — what a voxel of temperature `t` emits per unit `Lescale` in
 /// pbrt-v4's `uniformgrid`/`nanovdb` media, which do not normalise it photometrically.
 pub fn blackbody_emission_rgb(t: f64, film: ColorSpace) -> Rgb {
-    rgb_color_space(film)
-        .rgb_from_xyz(blackbody_xyz(t))
-        .as_vec3()
+    rgb_color_space(film).rgb_from_xyz(blackbody_xyz(t)).as_vec3()
 }
 
 fn blackbody_xyz(t: f64) -> DVec3 {
@@ -92,10 +90,7 @@ impl BlackbodyRgbTable {
                 DVec3::new(xyz.x.ln(), xyz.y.ln(), xyz.z.ln())
             })
             .collect();
-        BlackbodyRgbTable {
-            rgb_from_xyz: rgb_color_space(film).rgb_from_xyz,
-            ln_xyz,
-        }
+        BlackbodyRgbTable { rgb_from_xyz: rgb_color_space(film).rgb_from_xyz, ln_xyz }
     }
 
     /// Film RGB of the peak-normalised blackbody at `t` Kelvin; black at or below 100 K

@@ -25,18 +25,10 @@ fn cmf() -> &'static [DVec3; N_LAMBDA] {
     CMF.get_or_init(|| {
         let text = include_str!("data/cie1931-2deg-1nm.txt");
         let numbers = parse_numbers(text).expect("embedded CIE table parses");
-        assert_eq!(
-            numbers.len(),
-            4 * N_LAMBDA,
-            "embedded CIE table is complete"
-        );
+        assert_eq!(numbers.len(), 4 * N_LAMBDA, "embedded CIE table is complete");
         let mut table = Box::new([DVec3::ZERO; N_LAMBDA]);
         for (i, row) in numbers.chunks_exact(4).enumerate() {
-            assert_eq!(
-                row[0],
-                LAMBDA_MIN + i as f64,
-                "embedded CIE table is at 1 nm"
-            );
+            assert_eq!(row[0], LAMBDA_MIN + i as f64, "embedded CIE table is at 1 nm");
             table[i] = DVec3::new(row[1], row[2], row[3]);
         }
         table
@@ -56,21 +48,13 @@ pub fn cie_xyz_bar(lambda: f64) -> DVec3 {
 /// Σ f(λ)·(x̄, ȳ, z̄)(λ) over the integer wavelengths 360..=830: the XYZ pbrt-v4's `cie1931`
 /// film sensor records for radiance spectrum `f` (at iso 100, exposure 1).
 pub fn integrate_xyz(f: impl Fn(f64) -> f64) -> DVec3 {
-    cmf()
-        .iter()
-        .enumerate()
-        .map(|(i, bar)| *bar * f(LAMBDA_MIN + i as f64))
-        .sum()
+    cmf().iter().enumerate().map(|(i, bar)| *bar * f(LAMBDA_MIN + i as f64)).sum()
 }
 
 /// Σ f(λ)·ȳ(λ) over the integer wavelengths 360..=830: pbrt-v4's `SpectrumToPhotometric`,
 /// the factor it divides a light's scale by.
 pub fn integrate_y(f: impl Fn(f64) -> f64) -> f64 {
-    cmf()
-        .iter()
-        .enumerate()
-        .map(|(i, bar)| bar.y * f(LAMBDA_MIN + i as f64))
-        .sum()
+    cmf().iter().enumerate().map(|(i, bar)| bar.y * f(LAMBDA_MIN + i as f64)).sum()
 }
 
 #[cfg(test)]
@@ -80,10 +64,7 @@ mod tests {
     #[test]
     fn table_matches_the_published_values() {
         // Spot values of the CIE 1931 2° table (CIE 015:2018).
-        assert_eq!(
-            cie_xyz_bar(360.0),
-            DVec3::new(0.0001299, 0.000003917, 0.0006061)
-        );
+        assert_eq!(cie_xyz_bar(360.0), DVec3::new(0.0001299, 0.000003917, 0.0006061));
         assert_eq!(cie_xyz_bar(555.0).y, 1.0);
         assert_eq!(cie_xyz_bar(600.0).x, 1.0622);
         assert_eq!(cie_xyz_bar(830.0).x, 0.000001251141);

@@ -33,14 +33,8 @@ impl RgbColorSpace {
         let (primaries, illuminant) = match space {
             ColorSpace::Srgb => ([(0.64, 0.33), (0.3, 0.6), (0.15, 0.06)], "stdillum-D65"),
             ColorSpace::DciP3 => ([(0.68, 0.32), (0.265, 0.69), (0.15, 0.06)], "stdillum-D65"),
-            ColorSpace::Rec2020 => (
-                [(0.708, 0.292), (0.170, 0.797), (0.131, 0.046)],
-                "stdillum-D65",
-            ),
-            ColorSpace::Aces2065_1 => (
-                [(0.7347, 0.2653), (0.0, 1.0), (0.0001, -0.077)],
-                "illum-acesD60",
-            ),
+            ColorSpace::Rec2020 => ([(0.708, 0.292), (0.170, 0.797), (0.131, 0.046)], "stdillum-D65"),
+            ColorSpace::Aces2065_1 => ([(0.7347, 0.2653), (0.0, 1.0), (0.0001, -0.077)], "illum-acesD60"),
         };
         let primaries = primaries.map(|(x, y)| DVec2::new(x, y));
         let illuminant = named_spectrum(illuminant).expect("color space illuminant exists");
@@ -48,21 +42,10 @@ impl RgbColorSpace {
         let w = integrate_xyz(|l| illuminant.eval(l)) / CIE_Y_INTEGRAL;
         let white = DVec2::new(w.x, w.y) / (w.x + w.y + w.z);
         let w = xyz_from_xy(white);
-        let rgb = DMat3::from_cols(
-            xyz_from_xy(primaries[0]),
-            xyz_from_xy(primaries[1]),
-            xyz_from_xy(primaries[2]),
-        );
+        let rgb = DMat3::from_cols(xyz_from_xy(primaries[0]), xyz_from_xy(primaries[1]), xyz_from_xy(primaries[2]));
         let c = rgb.inverse() * w;
         let xyz_from_rgb = rgb * DMat3::from_diagonal(c);
-        RgbColorSpace {
-            space,
-            primaries,
-            white,
-            illuminant,
-            xyz_from_rgb,
-            rgb_from_xyz: xyz_from_rgb.inverse(),
-        }
+        RgbColorSpace { space, primaries, white, illuminant, xyz_from_rgb, rgb_from_xyz: xyz_from_rgb.inverse() }
     }
 
     /// Linear RGB of `xyz`.
@@ -90,13 +73,7 @@ fn xyz_from_xy(xy: DVec2) -> DVec3 {
 pub fn rgb_color_space(space: ColorSpace) -> &'static RgbColorSpace {
     static SPACES: OnceLock<[RgbColorSpace; 4]> = OnceLock::new();
     let spaces = SPACES.get_or_init(|| {
-        [
-            ColorSpace::Srgb,
-            ColorSpace::Rec2020,
-            ColorSpace::Aces2065_1,
-            ColorSpace::DciP3,
-        ]
-        .map(RgbColorSpace::new)
+        [ColorSpace::Srgb, ColorSpace::Rec2020, ColorSpace::Aces2065_1, ColorSpace::DciP3].map(RgbColorSpace::new)
     });
     match space {
         ColorSpace::Srgb => &spaces[0],
@@ -174,25 +151,14 @@ mod tests {
     #[test]
     fn white_points() {
         let d65 = rgb_color_space(ColorSpace::Srgb).white;
-        assert!(
-            (d65 - DVec2::new(0.3127, 0.3290)).abs().max_element() < 1e-4,
-            "{d65}"
-        );
+        assert!((d65 - DVec2::new(0.3127, 0.3290)).abs().max_element() < 1e-4, "{d65}");
         let d60 = rgb_color_space(ColorSpace::Aces2065_1).white;
-        assert!(
-            (d60 - DVec2::new(0.32168, 0.33767)).abs().max_element() < 3e-4,
-            "{d60}"
-        );
+        assert!((d60 - DVec2::new(0.32168, 0.33767)).abs().max_element() < 3e-4, "{d60}");
     }
 
     #[test]
     fn white_maps_to_one_in_every_space() {
-        for space in [
-            ColorSpace::Srgb,
-            ColorSpace::Rec2020,
-            ColorSpace::Aces2065_1,
-            ColorSpace::DciP3,
-        ] {
+        for space in [ColorSpace::Srgb, ColorSpace::Rec2020, ColorSpace::Aces2065_1, ColorSpace::DciP3] {
             let cs = rgb_color_space(space);
             let w = cs.rgb_from_xyz(cs.xyz_from_rgb(DVec3::ONE));
             assert!((w - DVec3::ONE).abs().max_element() < 1e-12);
@@ -213,12 +179,7 @@ mod tests {
             let there = convert_rgb(c, a, b);
             assert!((convert_rgb(there, b, a) - c).abs().max_element() < 1e-5);
             let there = convert_reflectance_rgb(c, a, b);
-            assert!(
-                (convert_reflectance_rgb(there, b, a) - c)
-                    .abs()
-                    .max_element()
-                    < 1e-5
-            );
+            assert!((convert_reflectance_rgb(there, b, a) - c).abs().max_element() < 1e-5);
         }
     }
 

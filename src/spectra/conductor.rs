@@ -38,10 +38,7 @@ impl Complex {
         Complex::new(self.re - o.re, self.im - o.im)
     }
     fn mul(self, o: Complex) -> Complex {
-        Complex::new(
-            self.re * o.re - self.im * o.im,
-            self.re * o.im + self.im * o.re,
-        )
+        Complex::new(self.re * o.re - self.im * o.im, self.re * o.im + self.im * o.re)
     }
     fn scale(self, s: f64) -> Complex {
         Complex::new(self.re * s, self.im * s)
@@ -51,10 +48,7 @@ impl Complex {
     }
     fn div(self, o: Complex) -> Complex {
         let d = o.norm();
-        Complex::new(
-            (self.re * o.re + self.im * o.im) / d,
-            (self.im * o.re - self.re * o.im) / d,
-        )
+        Complex::new((self.re * o.re + self.im * o.im) / d, (self.im * o.re - self.re * o.im) / d)
     }
     /// Principal square root (as `pstd::sqrt` in pbrt-v4).
     fn sqrt(self) -> Complex {
@@ -64,11 +58,7 @@ impl Complex {
         }
         let t1 = (0.5 * (n + self.re.abs())).sqrt();
         let t2 = 0.5 * self.im / t1;
-        if self.re >= 0.0 {
-            Complex::new(t1, t2)
-        } else {
-            Complex::new(t2.abs(), t1.copysign(self.im))
-        }
+        if self.re >= 0.0 { Complex::new(t1, t2) } else { Complex::new(t2.abs(), t1.copysign(self.im)) }
     }
 }
 
@@ -105,12 +95,7 @@ fn fit_cosines() -> Vec<f64> {
 
 /// The spectral Fresnel reflectance at incidence cosine `cos_theta_i`, projected onto the
 /// RGB channels of `film` under its illuminant, as [`spectrum_reflectance_rgb`] would.
-pub fn projected_conductor_fresnel(
-    eta: &Spectrum,
-    k: &Spectrum,
-    cos_theta_i: f64,
-    film: ColorSpace,
-) -> DVec3 {
+pub fn projected_conductor_fresnel(eta: &Spectrum, k: &Spectrum, cos_theta_i: f64, film: ColorSpace) -> DVec3 {
     ProjectionWeights::new(eta, k, film).reflectance(cos_theta_i)
 }
 
@@ -135,11 +120,7 @@ impl ProjectionWeights {
             etas.push(eta.eval(l));
             ks.push(k.eval(l));
         }
-        ProjectionWeights {
-            weights,
-            eta: etas,
-            k: ks,
-        }
+        ProjectionWeights { weights, eta: etas, k: ks }
     }
 
     fn reflectance(&self, cos_theta_i: f64) -> DVec3 {
@@ -178,12 +159,7 @@ pub fn fit_conductor(eta: &Spectrum, k: &Spectrum, film: ColorSpace) -> Conducto
     let weights = ProjectionWeights::new(eta, k, film);
     let cosines = fit_cosines();
     let targets: Vec<DVec3> = cosines.iter().map(|&c| weights.reflectance(c)).collect();
-    let mut fit = ConductorFit {
-        eta: Rgb::ZERO,
-        k: Rgb::ZERO,
-        scale: Rgb::ONE,
-        max_error: 0.0,
-    };
+    let mut fit = ConductorFit { eta: Rgb::ZERO, k: Rgb::ZERO, scale: Rgb::ONE, max_error: 0.0 };
     for c in 0..3 {
         let target: Vec<f64> = targets.iter().map(|t| t[c]).collect();
         let (e, kk, s) = fit_channel(&cosines, &target);
@@ -212,11 +188,7 @@ fn fit_channel(cosines: &[f64], target: &[f64]) -> (f64, f64, f64) {
     };
     let residuals = |p: DVec3| -> Vec<f64> {
         let (e, k, s) = to_params(p);
-        cosines
-            .iter()
-            .zip(target)
-            .map(|(&mu, t)| s * conductor_fresnel(mu, e, k) - t)
-            .collect()
+        cosines.iter().zip(target).map(|(&mu, t)| s * conductor_fresnel(mu, e, k) - t).collect()
     };
     let cost = |r: &[f64]| r.iter().map(|x| x * x).sum::<f64>();
 
@@ -305,20 +277,13 @@ pub fn conductor_rgb(
     film: ColorSpace,
 ) -> Result<ConductorFit, SpectrumError> {
     Ok(match (resolve(eta)?, resolve(k)?) {
-        (ResolvedSpectrum::Spectral(e), ResolvedSpectrum::Spectral(k)) => {
-            fit_conductor(&e, &k, film)
-        }
+        (ResolvedSpectrum::Spectral(e), ResolvedSpectrum::Spectral(k)) => fit_conductor(&e, &k, film),
         (e, k) => {
             let as_rgb = |s: ResolvedSpectrum| match s {
                 ResolvedSpectrum::Rgb(rgb) => convert_reflectance_rgb(rgb, entity, film),
                 ResolvedSpectrum::Spectral(s) => spectrum_reflectance_rgb(&s, film),
             };
-            ConductorFit {
-                eta: as_rgb(e),
-                k: as_rgb(k),
-                scale: Rgb::ONE,
-                max_error: 0.0,
-            }
+            ConductorFit { eta: as_rgb(e), k: as_rgb(k), scale: Rgb::ONE, max_error: 0.0 }
         }
     })
 }
@@ -329,13 +294,7 @@ mod tests {
     use crate::spectra::named_spectrum;
 
     fn metal(name: &str) -> (Spectrum, Spectrum) {
-        let get = |q: &str| {
-            Spectrum::PiecewiseLinear(
-                named_spectrum(&format!("metal-{name}-{q}"))
-                    .unwrap()
-                    .clone(),
-            )
-        };
+        let get = |q: &str| Spectrum::PiecewiseLinear(named_spectrum(&format!("metal-{name}-{q}")).unwrap().clone());
         (get("eta"), get("k"))
     }
 
@@ -386,11 +345,7 @@ mod tests {
     #[test]
     fn every_metal_fits_in_every_space() {
         for name in ["Ag", "Al", "Au", "Cu", "CuZn", "MgO", "TiO2"] {
-            for space in [
-                ColorSpace::Srgb,
-                ColorSpace::Rec2020,
-                ColorSpace::Aces2065_1,
-            ] {
+            for space in [ColorSpace::Srgb, ColorSpace::Rec2020, ColorSpace::Aces2065_1] {
                 let (fit, worst) = fit_error(name, space);
                 assert!(worst < 0.01, "{name} {space:?}: {worst} {fit:?}");
             }
@@ -410,13 +365,8 @@ mod tests {
     #[test]
     fn rgb_inputs_pass_through() {
         let s = ColorSpace::Srgb;
-        let fit = conductor_rgb(
-            &SpectrumSpec::Rgb([0.2, 0.9, 1.1]),
-            &SpectrumSpec::Rgb([3.9, 2.4, 2.2]),
-            s,
-            s,
-        )
-        .unwrap();
+        let fit =
+            conductor_rgb(&SpectrumSpec::Rgb([0.2, 0.9, 1.1]), &SpectrumSpec::Rgb([3.9, 2.4, 2.2]), s, s).unwrap();
         assert_eq!(fit.eta, Rgb::new(0.2, 0.9, 1.1));
         assert_eq!(fit.k, Rgb::new(3.9, 2.4, 2.2));
         assert_eq!(fit.scale, Rgb::ONE);

@@ -20,11 +20,7 @@ use crate::scene::values::SpectrumSpec;
 /// spectrum of 1 gives (1, 1, 1). An `rgb` value passes through, adapted from the entity's
 /// space `entity` if that differs (see [`convert_reflectance_rgb`]); values are not
 /// clamped (pbrt-v4 rejects RGB albedos outside [0, 1], a check left to the caller).
-pub fn reflectance_rgb(
-    spec: &SpectrumSpec,
-    entity: ColorSpace,
-    film: ColorSpace,
-) -> Result<Rgb, SpectrumError> {
+pub fn reflectance_rgb(spec: &SpectrumSpec, entity: ColorSpace, film: ColorSpace) -> Result<Rgb, SpectrumError> {
     Ok(match resolve(spec)? {
         ResolvedSpectrum::Rgb(rgb) => convert_reflectance_rgb(rgb, entity, film),
         ResolvedSpectrum::Spectral(s) => spectrum_reflectance_rgb(&s, film),
@@ -46,11 +42,7 @@ pub fn spectrum_reflectance_rgb(s: &Spectrum, film: ColorSpace) -> Rgb {
 /// there, so `rgb L [r g b]` renders exactly (r, g, b) (converted colorimetrically if the
 /// entity's space differs from the film's); blackbody, sampled, named and file spectra give
 /// the RGB of the spectrum scaled to luminance Y = 1. A spectrum without luminance is black.
-pub fn illuminant_rgb(
-    spec: &SpectrumSpec,
-    entity: ColorSpace,
-    film: ColorSpace,
-) -> Result<Rgb, SpectrumError> {
+pub fn illuminant_rgb(spec: &SpectrumSpec, entity: ColorSpace, film: ColorSpace) -> Result<Rgb, SpectrumError> {
     Ok(match resolve(spec)? {
         ResolvedSpectrum::Rgb(rgb) => convert_rgb(rgb, entity, film),
         ResolvedSpectrum::Spectral(s) => spectrum_illuminant_rgb(&s, film),
@@ -63,9 +55,7 @@ pub fn spectrum_illuminant_rgb(s: &Spectrum, film: ColorSpace) -> Rgb {
     if y.is_nan() || y <= 0.0 {
         return Rgb::ZERO;
     }
-    rgb_color_space(film)
-        .rgb_from_xyz(s.film_xyz() / y)
-        .as_vec3()
+    rgb_color_space(film).rgb_from_xyz(s.film_xyz() / y).as_vec3()
 }
 
 /// pbrt-v4's `SpectrumToPhotometric` of a spectrum: Σ s(λ)ȳ(λ) over 360..=830 nm, the
@@ -81,11 +71,7 @@ pub fn spectrum_to_photometric(s: &Spectrum) -> f64 {
 /// [`CIE_Y_INTEGRAL`] ≈ 106.86. For blackbody temperatures see
 /// [`blackbody_emission_rgb`](super::blackbody_emission_rgb) and
 /// [`BlackbodyRgbTable`](super::BlackbodyRgbTable).
-pub fn emission_rgb(
-    spec: &SpectrumSpec,
-    entity: ColorSpace,
-    film: ColorSpace,
-) -> Result<Rgb, SpectrumError> {
+pub fn emission_rgb(spec: &SpectrumSpec, entity: ColorSpace, film: ColorSpace) -> Result<Rgb, SpectrumError> {
     Ok(match resolve(spec)? {
         ResolvedSpectrum::Rgb(rgb) => convert_rgb(rgb, entity, film) * CIE_Y_INTEGRAL as f32,
         ResolvedSpectrum::Spectral(s) => spectrum_emission_rgb(&s, film),
@@ -116,12 +102,7 @@ mod tests {
     use super::*;
     use crate::spectra::BlackbodySpectrum;
 
-    const SPACES: [ColorSpace; 4] = [
-        ColorSpace::Srgb,
-        ColorSpace::Rec2020,
-        ColorSpace::Aces2065_1,
-        ColorSpace::DciP3,
-    ];
+    const SPACES: [ColorSpace; 4] = [ColorSpace::Srgb, ColorSpace::Rec2020, ColorSpace::Aces2065_1, ColorSpace::DciP3];
 
     fn named(name: &str) -> SpectrumSpec {
         SpectrumSpec::Named(name.to_string())
@@ -160,14 +141,8 @@ mod tests {
     fn rgb_passes_through() {
         let spec = SpectrumSpec::Rgb([0.2, 0.4, 0.8]);
         let s = ColorSpace::Srgb;
-        assert_eq!(
-            reflectance_rgb(&spec, s, s).unwrap(),
-            Rgb::new(0.2, 0.4, 0.8)
-        );
-        assert_eq!(
-            illuminant_rgb(&spec, s, s).unwrap(),
-            Rgb::new(0.2, 0.4, 0.8)
-        );
+        assert_eq!(reflectance_rgb(&spec, s, s).unwrap(), Rgb::new(0.2, 0.4, 0.8));
+        assert_eq!(illuminant_rgb(&spec, s, s).unwrap(), Rgb::new(0.2, 0.4, 0.8));
         let e = emission_rgb(&spec, s, s).unwrap() / CIE_Y_INTEGRAL as f32;
         assert!(close(e, Rgb::new(0.2, 0.4, 0.8), 1e-6));
         // Gray stays gray across spaces as a reflectance.
@@ -220,9 +195,6 @@ mod tests {
         let bk7 = dielectric_eta(&named("glass-BK7"), s).unwrap();
         // BK7's Sellmeier index at 550 nm is 1.51852.
         assert!((bk7 - 1.51852).abs() < 2e-4, "{bk7}");
-        assert_eq!(
-            dielectric_eta(&SpectrumSpec::Rgb([1.5; 3]), s).unwrap(),
-            1.5
-        );
+        assert_eq!(dielectric_eta(&SpectrumSpec::Rgb([1.5; 3]), s).unwrap(), 1.5);
     }
 }

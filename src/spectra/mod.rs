@@ -23,13 +23,11 @@ pub use blackbody::{BlackbodyRgbTable, BlackbodySpectrum, blackbody_emission_rgb
 pub use cie::{CIE_Y_INTEGRAL, LAMBDA_MAX, LAMBDA_MIN, cie_xyz_bar, integrate_xyz, integrate_y};
 pub use colorspace::{RgbColorSpace, convert_reflectance_rgb, convert_rgb, rgb_color_space};
 pub use conductor::{
-    ConductorFit, conductor_fresnel, conductor_fresnel_rgb, conductor_rgb, fit_conductor,
-    projected_conductor_fresnel,
+    ConductorFit, conductor_fresnel, conductor_fresnel_rgb, conductor_rgb, fit_conductor, projected_conductor_fresnel,
 };
 pub use convert::{
-    DIELECTRIC_ETA_WAVELENGTH, dielectric_eta, emission_rgb, illuminant_rgb, reflectance_rgb,
-    spectrum_emission_rgb, spectrum_illuminant_rgb, spectrum_reflectance_rgb,
-    spectrum_to_photometric,
+    DIELECTRIC_ETA_WAVELENGTH, dielectric_eta, emission_rgb, illuminant_rgb, reflectance_rgb, spectrum_emission_rgb,
+    spectrum_illuminant_rgb, spectrum_reflectance_rgb, spectrum_to_photometric,
 };
 pub use error::SpectrumError;
 pub use named::{NAMED_SPECTRA, is_named_spectrum, named_spectrum};

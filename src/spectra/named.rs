@@ -109,8 +109,7 @@ pub fn named_spectrum(name: &str) -> Option<&'static PiecewiseLinearSpectrum> {
         .get_or_init(|| {
             DATA.iter()
                 .map(|&(name, text)| {
-                    let mut s = PiecewiseLinearSpectrum::parse(text, name)
-                        .expect("embedded named spectrum parses");
+                    let mut s = PiecewiseLinearSpectrum::parse(text, name).expect("embedded named spectrum parses");
                     s.extend_to(LAMBDA_MIN, LAMBDA_MAX);
                     if name.starts_with("stdillum-") || name.starts_with("illum-") {
                         s.scale(CIE_Y_INTEGRAL / integrate_y(|l| s.eval(l)));

@@ -21,10 +21,7 @@ impl PiecewiseLinearSpectrum {
         origin: &str,
     ) -> Result<PiecewiseLinearSpectrum, SpectrumError> {
         let (lambdas, values): (Vec<f64>, Vec<f64>) = pairs.into_iter().unzip();
-        let invalid = |message: String| SpectrumError::Invalid {
-            origin: origin.to_string(),
-            message,
-        };
+        let invalid = |message: String| SpectrumError::Invalid { origin: origin.to_string(), message };
         if lambdas.is_empty() {
             return Err(invalid("no samples".to_string()));
         }
@@ -44,17 +41,11 @@ impl PiecewiseLinearSpectrum {
 
     /// Builds a spectrum from interleaved `wavelength value` numbers (the layout of inline
     /// `"spectrum"` parameters and `.spd` files).
-    pub fn from_interleaved(
-        values: &[f64],
-        origin: &str,
-    ) -> Result<PiecewiseLinearSpectrum, SpectrumError> {
+    pub fn from_interleaved(values: &[f64], origin: &str) -> Result<PiecewiseLinearSpectrum, SpectrumError> {
         if !values.len().is_multiple_of(2) {
             return Err(SpectrumError::Invalid {
                 origin: origin.to_string(),
-                message: format!(
-                    "{} numbers: wavelength/value pairs need an even count",
-                    values.len()
-                ),
+                message: format!("{} numbers: wavelength/value pairs need an even count", values.len()),
             });
         }
         Self::from_pairs(values.chunks_exact(2).map(|p| (p[0], p[1])), origin)
@@ -63,20 +54,16 @@ impl PiecewiseLinearSpectrum {
     /// Parses the text of a spectrum file: numbers separated by whitespace or commas, read as
     /// `wavelength value` pairs; `#` starts a comment that runs to the end of the line.
     pub fn parse(text: &str, origin: &str) -> Result<PiecewiseLinearSpectrum, SpectrumError> {
-        let numbers = parse_numbers(text).map_err(|message| SpectrumError::Invalid {
-            origin: origin.to_string(),
-            message,
-        })?;
+        let numbers =
+            parse_numbers(text).map_err(|message| SpectrumError::Invalid { origin: origin.to_string(), message })?;
         Self::from_interleaved(&numbers, origin)
     }
 
     /// Reads a `.spd` file. Any problem (unreadable file, stray text, odd count, wavelengths
     /// that do not increase) is an error naming the file.
     pub fn read(path: &Path) -> Result<PiecewiseLinearSpectrum, SpectrumError> {
-        let text = std::fs::read_to_string(path).map_err(|source| SpectrumError::Read {
-            path: path.to_path_buf(),
-            source,
-        })?;
+        let text =
+            std::fs::read_to_string(path).map_err(|source| SpectrumError::Read { path: path.to_path_buf(), source })?;
         Self::parse(&text, &path.display().to_string())
     }
 
@@ -89,11 +76,7 @@ impl PiecewiseLinearSpectrum {
         }
         // Index of the last sample at or below lambda, kept one short of the end so the
         // last wavelength interpolates within the final segment.
-        let i = self
-            .lambdas
-            .partition_point(|&l| l <= lambda)
-            .clamp(1, n - 1)
-            - 1;
+        let i = self.lambdas.partition_point(|&l| l <= lambda).clamp(1, n - 1) - 1;
         let t = (lambda - self.lambdas[i]) / (self.lambdas[i + 1] - self.lambdas[i]);
         self.values[i] + t * (self.values[i + 1] - self.values[i])
     }
@@ -110,10 +93,7 @@ impl PiecewiseLinearSpectrum {
 
     /// The largest sample value.
     pub fn max_value(&self) -> f64 {
-        self.values
-            .iter()
-            .copied()
-            .fold(f64::NEG_INFINITY, f64::max)
+        self.values.iter().copied().fold(f64::NEG_INFINITY, f64::max)
     }
 
     /// Multiplies every value by `s`.
@@ -188,11 +168,7 @@ mod tests {
     #[test]
     fn rejects_malformed_files() {
         let msg = |t: &str| spd(t).unwrap_err().to_string();
-        assert!(
-            msg("400 1 500").contains("even count"),
-            "{}",
-            msg("400 1 500")
-        );
+        assert!(msg("400 1 500").contains("even count"), "{}", msg("400 1 500"));
         assert!(msg("500 1\n400 2\n").contains("must increase"));
         assert!(msg("500 1\n500 2\n").contains("must increase"));
         assert!(msg("# nothing\n").contains("no numbers"));

@@ -54,20 +54,18 @@ pub fn resolve(spec: &SpectrumSpec) -> Result<ResolvedSpectrum, SpectrumError> {
         SpectrumSpec::Blackbody(t) => {
             ResolvedSpectrum::Spectral(Spectrum::Blackbody(BlackbodySpectrum::new(f64::from(*t))))
         }
-        SpectrumSpec::Samples(pairs) => ResolvedSpectrum::Spectral(Spectrum::PiecewiseLinear(
-            PiecewiseLinearSpectrum::from_pairs(
+        SpectrumSpec::Samples(pairs) => {
+            ResolvedSpectrum::Spectral(Spectrum::PiecewiseLinear(PiecewiseLinearSpectrum::from_pairs(
                 pairs.iter().map(|p| (f64::from(p[0]), f64::from(p[1]))),
                 "inline spectrum",
-            )?,
-        )),
+            )?))
+        }
         SpectrumSpec::Named(name) => ResolvedSpectrum::Spectral(Spectrum::PiecewiseLinear(
-            named_spectrum(name)
-                .ok_or_else(|| SpectrumError::UnknownName(name.clone()))?
-                .clone(),
+            named_spectrum(name).ok_or_else(|| SpectrumError::UnknownName(name.clone()))?.clone(),
         )),
-        SpectrumSpec::File(path) => ResolvedSpectrum::Spectral(Spectrum::PiecewiseLinear(
-            PiecewiseLinearSpectrum::read(path)?,
-        )),
+        SpectrumSpec::File(path) => {
+            ResolvedSpectrum::Spectral(Spectrum::PiecewiseLinear(PiecewiseLinearSpectrum::read(path)?))
+        }
     })
 }
 
@@ -88,9 +86,7 @@ mod tests {
     fn resolves_every_kind() {
         let rgb = resolve(&SpectrumSpec::Rgb([0.1, 0.2, 0.3])).unwrap();
         assert_eq!(rgb, ResolvedSpectrum::Rgb(Rgb::new(0.1, 0.2, 0.3)));
-        let bb = resolve_spectral(&SpectrumSpec::Blackbody(3000.0))
-            .unwrap()
-            .unwrap();
+        let bb = resolve_spectral(&SpectrumSpec::Blackbody(3000.0)).unwrap().unwrap();
         assert!(bb.eval(966.0) > 0.99);
         let samples = SpectrumSpec::Samples(vec![[400.0, 1.0], [700.0, 2.0]]);
         let s = resolve_spectral(&samples).unwrap().unwrap();
@@ -105,10 +101,7 @@ mod tests {
     fn errors_are_reported() {
         let bad = SpectrumSpec::Samples(vec![[700.0, 1.0], [400.0, 2.0]]);
         let err = resolve(&bad).unwrap_err().to_string();
-        assert!(
-            err.contains("inline spectrum") && err.contains("increase"),
-            "{err}"
-        );
+        assert!(err.contains("inline spectrum") && err.contains("increase"), "{err}");
         let unknown = resolve(&SpectrumSpec::Named("metal-Pt-eta".into())).unwrap_err();
         assert!(unknown.to_string().contains("metal-Pt-eta"));
         let missing = resolve(&SpectrumSpec::File("/nonexistent/x.spd".into())).unwrap_err();

@@ -67,9 +67,7 @@ impl TexMapping {
         match self {
             TexMapping::Uv { s, d } => *s * ctx.uv + *d,
             TexMapping::Spherical { texture_from_world } => {
-                let v = texture_from_world
-                    .transform_point3(ctx.p)
-                    .normalize_or_zero();
+                let v = texture_from_world.transform_point3(ctx.p).normalize_or_zero();
                 let theta = v.z.clamp(-1.0, 1.0).acos();
                 let mut phi = v.y.atan2(v.x);
                 if phi < 0.0 {
@@ -81,12 +79,7 @@ impl TexMapping {
                 let p = texture_from_world.transform_point3(ctx.p);
                 Vec2::new((PI + p.y.atan2(p.x)) / (2.0 * PI), p.z)
             }
-            TexMapping::Planar {
-                texture_from_world,
-                vs,
-                vt,
-                d,
-            } => {
+            TexMapping::Planar { texture_from_world, vs, vt, d } => {
                 let v = texture_from_world.transform_point3(ctx.p);
                 Vec2::new(d.x + v.dot(*vs), d.y + v.dot(*vt))
             }
@@ -175,24 +168,12 @@ impl Textures {
         match node {
             TexNode::Scale { tex, scale } => {
                 let s = self.eval_float(*scale, ctx);
-                if s == 0.0 {
-                    Rgb::ZERO
-                } else {
-                    self.eval(*tex, ctx) * s
-                }
+                if s == 0.0 { Rgb::ZERO } else { self.eval(*tex, ctx) * s }
             }
             TexNode::Mix { a, b, amount } => {
                 let t = self.eval_float(*amount, ctx);
-                let va = if t != 1.0 {
-                    self.eval(*a, ctx)
-                } else {
-                    Rgb::ZERO
-                };
-                let vb = if t != 0.0 {
-                    self.eval(*b, ctx)
-                } else {
-                    Rgb::ZERO
-                };
+                let va = if t != 1.0 { self.eval(*a, ctx) } else { Rgb::ZERO };
+                let vb = if t != 0.0 { self.eval(*b, ctx) } else { Rgb::ZERO };
                 (1.0 - t) * va + t * vb
             }
             TexNode::Checkerboard { a, b, mapping } => {
@@ -203,22 +184,12 @@ impl Textures {
                     self.eval(*b, ctx)
                 }
             }
-            TexNode::Image {
-                image,
-                mapping,
-                scale,
-                invert,
-                wrap,
-            } => {
+            TexNode::Image { image, mapping, scale, invert, wrap } => {
                 let mut st = mapping.map(ctx);
                 // pbrt-v4 flips t so that images are not upside down.
                 st.y = 1.0 - st.y;
                 let v = bilerp(image, st, *wrap) * *scale;
-                if *invert {
-                    (Rgb::ONE - v).max(Rgb::ZERO)
-                } else {
-                    v
-                }
+                if *invert { (Rgb::ONE - v).max(Rgb::ZERO) } else { v }
             }
         }
     }
@@ -262,20 +233,14 @@ mod tests {
         t.nodes.push(TexNode::Checkerboard {
             a: Tex::Const(Rgb::ONE),
             b: Tex::Const(Rgb::ZERO),
-            mapping: TexMapping::Uv {
-                s: Vec2::splat(2.0),
-                d: Vec2::ZERO,
-            },
+            mapping: TexMapping::Uv { s: Vec2::splat(2.0), d: Vec2::ZERO },
         });
         t.nodes.push(TexNode::Mix {
             a: Tex::Node(0),
             b: Tex::Const(Rgb::splat(0.5)),
             amount: Tex::Const(Rgb::splat(0.5)),
         });
-        let at = |u: f32, v: f32| TexContext {
-            p: Vec3::ZERO,
-            uv: Vec2::new(u, v),
-        };
+        let at = |u: f32, v: f32| TexContext { p: Vec3::ZERO, uv: Vec2::new(u, v) };
         assert_eq!(t.eval(Tex::Node(0), &at(0.25, 0.25)), Rgb::ONE);
         assert_eq!(t.eval(Tex::Node(0), &at(0.75, 0.25)), Rgb::ZERO);
         assert_eq!(t.eval(Tex::Node(1), &at(0.25, 0.25)), Rgb::splat(0.75));
@@ -288,21 +253,12 @@ mod tests {
         let mut t = Textures::default();
         t.nodes.push(TexNode::Image {
             image: Arc::new(img),
-            mapping: TexMapping::Uv {
-                s: Vec2::ONE,
-                d: Vec2::ZERO,
-            },
+            mapping: TexMapping::Uv { s: Vec2::ONE, d: Vec2::ZERO },
             scale: 1.0,
             invert: false,
             wrap: Wrap::Clamp,
         });
-        let v = t.eval(
-            Tex::Node(0),
-            &TexContext {
-                p: Vec3::ZERO,
-                uv: Vec2::new(0.5, 0.5),
-            },
-        );
+        let v = t.eval(Tex::Node(0), &TexContext { p: Vec3::ZERO, uv: Vec2::new(0.5, 0.5) });
         assert!((v.x - 0.5).abs() < 1e-6);
     }
 }

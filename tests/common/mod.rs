@@ -21,10 +21,7 @@ pub fn reference_scenes() -> Vec<PathBuf> {
 
 /// Runs the `nimbus` binary.
 pub fn nimbus(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_nimbus"))
-        .args(args)
-        .output()
-        .expect("nimbus runs")
+    Command::new(env!("CARGO_BIN_EXE_nimbus")).args(args).output().expect("nimbus runs")
 }
 
 /// A fresh directory for one test's files.

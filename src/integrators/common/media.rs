@@ -57,11 +57,7 @@ where
             } else {
                 let dt = seg.t_max - t_min;
                 // An infinite segment with σmaj > 0 has zero transmittance (avoid inf·0).
-                t_maj *= if dt.is_infinite() {
-                    Rgb::ZERO
-                } else {
-                    exp_rgb(dt * seg.sigma_maj)
-                };
+                t_maj *= if dt.is_infinite() { Rgb::ZERO } else { exp_rgb(dt * seg.sigma_maj) };
                 break;
             }
         }
@@ -82,11 +78,7 @@ pub struct ShadowEstimate {
 
 impl Default for ShadowEstimate {
     fn default() -> Self {
-        ShadowEstimate {
-            t_ray: Rgb::ONE,
-            r_u: Rgb::ONE,
-            r_l: Rgb::ONE,
-        }
+        ShadowEstimate { t_ray: Rgb::ONE, r_u: Rgb::ONE, r_l: Rgb::ONE }
     }
 }
 
@@ -94,40 +86,25 @@ impl Default for ShadowEstimate {
 /// `est` (unchanged for an empty segment). Russian roulette stops walks whose estimate has
 /// fallen below 0.05.
 #[inline]
-pub fn ratio_tracking(
-    medium: &Medium,
-    ray: &Ray,
-    t_max: f32,
-    rng: &mut Pcg32,
-    hero: usize,
-    est: &mut ShadowEstimate,
-) {
+pub fn ratio_tracking(medium: &Medium, ray: &Ray, t_max: f32, rng: &mut Pcg32, hero: usize, est: &mut ShadowEstimate) {
     let u = rng.uniform();
-    let t_maj = sample_t_maj(
-        medium,
-        ray,
-        t_max,
-        u,
-        rng,
-        hero,
-        |_, mp, sigma_maj, t_maj, rr| {
-            let sigma_n = (sigma_maj - mp.sigma_a - mp.sigma_s).max(Rgb::ZERO);
-            let pdf = t_maj[hero] * sigma_maj[hero];
-            est.t_ray *= t_maj * sigma_n / pdf;
-            est.r_l *= t_maj * sigma_maj / pdf;
-            est.r_u *= t_maj * sigma_n / pdf;
-            let tr = est.t_ray / crate::color::average(est.r_l + est.r_u);
-            if tr.max_element() < 0.05 {
-                let q = 0.75;
-                if rr.uniform() < q {
-                    est.t_ray = Rgb::ZERO;
-                } else {
-                    est.t_ray /= 1.0 - q;
-                }
+    let t_maj = sample_t_maj(medium, ray, t_max, u, rng, hero, |_, mp, sigma_maj, t_maj, rr| {
+        let sigma_n = (sigma_maj - mp.sigma_a - mp.sigma_s).max(Rgb::ZERO);
+        let pdf = t_maj[hero] * sigma_maj[hero];
+        est.t_ray *= t_maj * sigma_n / pdf;
+        est.r_l *= t_maj * sigma_maj / pdf;
+        est.r_u *= t_maj * sigma_n / pdf;
+        let tr = est.t_ray / crate::color::average(est.r_l + est.r_u);
+        if tr.max_element() < 0.05 {
+            let q = 0.75;
+            if rr.uniform() < q {
+                est.t_ray = Rgb::ZERO;
+            } else {
+                est.t_ray /= 1.0 - q;
             }
-            est.t_ray != Rgb::ZERO
-        },
-    );
+        }
+        est.t_ray != Rgb::ZERO
+    });
     let h = t_maj[hero];
     if h > 0.0 {
         est.t_ray *= t_maj / h;
@@ -160,9 +137,6 @@ mod tests {
         let est = sum / n as f64;
         let exact = (-2.0f64 * 0.7).exp();
         // Each estimate is 0 or exp(-σt d)/(P(no collision)) = 1 ... with variance ≤ 1/4n.
-        assert!(
-            (est - exact).abs() < 4.0 * (0.25 / n as f64).sqrt(),
-            "{est} vs {exact}"
-        );
+        assert!((est - exact).abs() < 4.0 * (0.25 / n as f64).sqrt(), "{est} vs {exact}");
     }
 }

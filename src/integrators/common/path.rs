@@ -39,11 +39,7 @@ pub struct PathConfig {
 #[inline]
 fn shading_frame(hit: &Hit) -> Frame {
     let s = &hit.surface;
-    if s.dpdu.length_squared() > 0.0 {
-        Frame::from_z_x(s.ns, s.dpdu)
-    } else {
-        Frame::from_z(s.ns)
-    }
+    if s.dpdu.length_squared() > 0.0 { Frame::from_z_x(s.ns, s.dpdu) } else { Frame::from_z(s.ns) }
 }
 
 /// The medium on the side of a surface that `w` points into.
@@ -53,24 +49,13 @@ fn medium_after(scene: &Scene, hit: &Hit, w: Vec3, current: u32) -> u32 {
         return current;
     }
     let [inside, outside] = scene.interfaces[hit.prim.interface as usize];
-    if w.dot(hit.surface.n) > 0.0 {
-        outside
-    } else {
-        inside
-    }
+    if w.dot(hit.surface.n) > 0.0 { outside } else { inside }
 }
 
 /// What scatters at a vertex: a BSDF in a local frame, or a phase function.
 enum Scatterer<'a> {
-    Surface {
-        bxdf: &'a Bxdf,
-        frame: &'a Frame,
-        wo_local: Vec3,
-    },
-    Medium {
-        phase: HenyeyGreenstein,
-        wo: Vec3,
-    },
+    Surface { bxdf: &'a Bxdf, frame: &'a Frame, wo_local: Vec3 },
+    Medium { phase: HenyeyGreenstein, wo: Vec3 },
 }
 
 impl Scatterer<'_> {
@@ -78,20 +63,13 @@ impl Scatterer<'_> {
     #[inline]
     fn eval(&self, wi: Vec3) -> (Rgb, f32) {
         match self {
-            Scatterer::Surface {
-                bxdf,
-                frame,
-                wo_local,
-            } => {
+            Scatterer::Surface { bxdf, frame, wo_local } => {
                 let wl = frame.to_local(wi);
                 let f = bxdf.f(*wo_local, wl, TransportMode::Radiance) * wl.z.abs();
                 if f == Rgb::ZERO {
                     return (f, 0.0);
                 }
-                (
-                    f,
-                    bxdf.pdf(*wo_local, wl, TransportMode::Radiance, ReflTransFlags::ALL),
-                )
+                (f, bxdf.pdf(*wo_local, wl, TransportMode::Radiance, ReflTransFlags::ALL))
             }
             Scatterer::Medium { phase, wo } => {
                 let p = phase.p(*wo, wi);
@@ -122,17 +100,8 @@ pub fn trace_path<O: PathObserver>(
 ) -> Rgb {
     let mut l = Rgb::ZERO;
     // Chromatic media need a randomly chosen hero channel for spectral MIS.
-    let hero = if scene.has_chromatic_media {
-        ((sampler.get_1d() * 3.0) as usize).min(2)
-    } else {
-        0
-    };
-    let mut st = PathState {
-        beta: Rgb::ONE,
-        r_u: Rgb::ONE,
-        r_l: Rgb::ONE,
-        hero,
-    };
+    let hero = if scene.has_chromatic_media { ((sampler.get_1d() * 3.0) as usize).min(2) } else { 0 };
+    let mut st = PathState { beta: Rgb::ONE, r_u: Rgb::ONE, r_l: Rgb::ONE, hero };
     let mut specular_bounce = false;
     let mut any_non_specular = false;
     let mut eta_scale = 1.0f32;
@@ -147,73 +116,60 @@ pub fn trace_path<O: PathObserver>(
         if medium != NONE {
             let m = &scene.media[medium as usize];
             let t_max = hit.as_ref().map_or(f32::INFINITY, |h| h.surface.t);
-            let mut rng = Pcg32::new(
-                hash_sample(sampler.get_1d(), Vec2::ZERO),
-                hash_sample(sampler.get_1d(), Vec2::ONE),
-            );
+            let mut rng =
+                Pcg32::new(hash_sample(sampler.get_1d(), Vec2::ZERO), hash_sample(sampler.get_1d(), Vec2::ONE));
             let u = sampler.get_1d();
             let (mut scattered, mut terminated) = (false, false);
             let mut scatter_p = Vec3::ZERO;
-            let t_maj = sample_t_maj(
-                m,
-                &ray,
-                t_max,
-                u,
-                &mut rng,
-                hero,
-                |p, mp, sigma_maj, t_maj, rng| {
-                    if st.beta == Rgb::ZERO {
+            let t_maj = sample_t_maj(m, &ray, t_max, u, &mut rng, hero, |p, mp, sigma_maj, t_maj, rng| {
+                if st.beta == Rgb::ZERO {
+                    terminated = true;
+                    return false;
+                }
+                // Medium emission, weighted by the chance of having reached it.
+                if depth < config.max_depth && mp.le != Rgb::ZERO {
+                    let pdf = sigma_maj[hero] * t_maj[hero];
+                    let betap = st.beta * t_maj / pdf;
+                    let r_e = st.r_u * sigma_maj * t_maj / pdf;
+                    if r_e != Rgb::ZERO {
+                        let c = betap * mp.sigma_a * mp.le / average(r_e);
+                        l += c;
+                        observer.on_emission(&EmissionEvent { depth, contribution: c });
+                    }
+                }
+                // Choose absorption, real scattering or null scattering with the hero
+                // channel's probabilities.
+                let p_absorb = mp.sigma_a[hero] / sigma_maj[hero];
+                let p_scatter = mp.sigma_s[hero] / sigma_maj[hero];
+                let um = rng.uniform();
+                if um < p_absorb {
+                    terminated = true;
+                    false
+                } else if um < p_absorb + p_scatter {
+                    if depth >= config.max_depth {
                         terminated = true;
                         return false;
                     }
-                    // Medium emission, weighted by the chance of having reached it.
-                    if depth < config.max_depth && mp.le != Rgb::ZERO {
-                        let pdf = sigma_maj[hero] * t_maj[hero];
-                        let betap = st.beta * t_maj / pdf;
-                        let r_e = st.r_u * sigma_maj * t_maj / pdf;
-                        if r_e != Rgb::ZERO {
-                            let c = betap * mp.sigma_a * mp.le / average(r_e);
-                            l += c;
-                            observer.on_emission(&EmissionEvent {
-                                depth,
-                                contribution: c,
-                            });
-                        }
-                    }
-                    // Choose absorption, real scattering or null scattering with the hero
-                    // channel's probabilities.
-                    let p_absorb = mp.sigma_a[hero] / sigma_maj[hero];
-                    let p_scatter = mp.sigma_s[hero] / sigma_maj[hero];
-                    let um = rng.uniform();
-                    if um < p_absorb {
-                        terminated = true;
-                        false
-                    } else if um < p_absorb + p_scatter {
-                        if depth >= config.max_depth {
-                            terminated = true;
-                            return false;
-                        }
-                        depth += 1;
-                        let pdf = t_maj[hero] * mp.sigma_s[hero];
-                        st.beta *= t_maj * mp.sigma_s / pdf;
-                        st.r_u *= t_maj * mp.sigma_s / pdf;
-                        scattered = true;
-                        scatter_p = p;
-                        false
+                    depth += 1;
+                    let pdf = t_maj[hero] * mp.sigma_s[hero];
+                    st.beta *= t_maj * mp.sigma_s / pdf;
+                    st.r_u *= t_maj * mp.sigma_s / pdf;
+                    scattered = true;
+                    scatter_p = p;
+                    false
+                } else {
+                    let sigma_n = (sigma_maj - mp.sigma_a - mp.sigma_s).max(Rgb::ZERO);
+                    let pdf = t_maj[hero] * sigma_n[hero];
+                    if pdf == 0.0 {
+                        st.beta = Rgb::ZERO;
                     } else {
-                        let sigma_n = (sigma_maj - mp.sigma_a - mp.sigma_s).max(Rgb::ZERO);
-                        let pdf = t_maj[hero] * sigma_n[hero];
-                        if pdf == 0.0 {
-                            st.beta = Rgb::ZERO;
-                        } else {
-                            st.beta *= t_maj * sigma_n / pdf;
-                            st.r_u *= t_maj * sigma_n / pdf;
-                            st.r_l *= t_maj * sigma_maj / pdf;
-                        }
-                        st.beta != Rgb::ZERO && st.r_u != Rgb::ZERO
+                        st.beta *= t_maj * sigma_n / pdf;
+                        st.r_u *= t_maj * sigma_n / pdf;
+                        st.r_l *= t_maj * sigma_maj / pdf;
                     }
-                },
-            );
+                    st.beta != Rgb::ZERO && st.r_u != Rgb::ZERO
+                }
+            });
             if terminated || st.beta == Rgb::ZERO || st.r_u == Rgb::ZERO {
                 return l;
             }
@@ -289,19 +245,11 @@ pub fn trace_path<O: PathObserver>(
                     st.beta * le / average(st.r_u)
                 } else {
                     let pdf = scene.light_sampler.pmf(i as usize)
-                        * light.pdf_li(
-                            &LightContext { p: prev_p },
-                            ray.d,
-                            None,
-                            &scene.surfaces.shapes,
-                        );
+                        * light.pdf_li(&LightContext { p: prev_p }, ray.d, None, &scene.surfaces.shapes);
                     st.beta * le / average(st.r_u + st.r_l * pdf)
                 };
                 l += c;
-                observer.on_emission(&EmissionEvent {
-                    depth,
-                    contribution: c,
-                });
+                observer.on_emission(&EmissionEvent { depth, contribution: c });
             }
             break;
         };
@@ -317,19 +265,11 @@ pub fn trace_path<O: PathObserver>(
                     st.beta * le / average(st.r_u)
                 } else {
                     let pdf = scene.light_sampler.pmf(hit.prim.area_light as usize)
-                        * light.pdf_li(
-                            &LightContext { p: prev_p },
-                            ray.d,
-                            Some(s),
-                            &scene.surfaces.shapes,
-                        );
+                        * light.pdf_li(&LightContext { p: prev_p }, ray.d, Some(s), &scene.surfaces.shapes);
                     st.beta * le / average(st.r_u + st.r_l * pdf)
                 };
                 l += c;
-                observer.on_emission(&EmissionEvent {
-                    depth,
-                    contribution: c,
-                });
+                observer.on_emission(&EmissionEvent { depth, contribution: c });
             }
         }
 
@@ -355,24 +295,10 @@ pub fn trace_path<O: PathObserver>(
         if config.next_event && bxdf.flags().is_non_specular() {
             let u_pick = sampler.get_1d();
             let u_light = sampler.get_2d();
-            let sc = Scatterer::Surface {
-                bxdf: &bxdf,
-                frame: &frame,
-                wo_local,
-            };
-            if let Some(c) = sample_direct(
-                scene,
-                s.p,
-                Some(&hit),
-                medium,
-                &sc,
-                u_pick,
-                u_light,
-                &st,
-                depth - 1,
-                observer,
-                stats,
-            ) {
+            let sc = Scatterer::Surface { bxdf: &bxdf, frame: &frame, wo_local };
+            if let Some(c) =
+                sample_direct(scene, s.p, Some(&hit), medium, &sc, u_pick, u_light, &st, depth - 1, observer, stats)
+            {
                 l += c;
             }
         }
@@ -380,13 +306,7 @@ pub fn trace_path<O: PathObserver>(
         // Continue the path by sampling the BSDF.
         let uc = sampler.get_1d();
         let u = sampler.get_2d();
-        let Some(bs) = bxdf.sample_f(
-            wo_local,
-            uc,
-            u,
-            TransportMode::Radiance,
-            ReflTransFlags::ALL,
-        ) else {
+        let Some(bs) = bxdf.sample_f(wo_local, uc, u, TransportMode::Radiance, ReflTransFlags::ALL) else {
             break;
         };
         let wi = frame.to_world(bs.wi);
@@ -405,13 +325,7 @@ pub fn trace_path<O: PathObserver>(
         });
         st.beta *= f_cos / bs.pdf;
         st.r_l = if bs.pdf_is_proportional {
-            st.r_u
-                / bxdf.pdf(
-                    wo_local,
-                    bs.wi,
-                    TransportMode::Radiance,
-                    ReflTransFlags::ALL,
-                )
+            st.r_u / bxdf.pdf(wo_local, bs.wi, TransportMode::Radiance, ReflTransFlags::ALL)
         } else {
             st.r_u / bs.pdf
         };
@@ -469,12 +383,7 @@ fn sample_direct<O: PathObserver>(
 ) -> Option<Rgb> {
     let (index, pmf) = scene.light_sampler.sample(u_pick)?;
     let light = &scene.lights[index];
-    let ls = light.sample_li(
-        &LightContext { p },
-        u_light,
-        &scene.surfaces.shapes,
-        &scene.sphere,
-    )?;
+    let ls = light.sample_li(&LightContext { p }, u_light, &scene.surfaces.shapes, &scene.sphere)?;
     if ls.pdf == 0.0 || ls.l == Rgb::ZERO {
         return None;
     }
@@ -487,8 +396,7 @@ fn sample_direct<O: PathObserver>(
         Some(h) => (h.surface.n, medium_after(scene, h, ls.wi, medium)),
         None => (Vec3::ZERO, medium),
     };
-    let ShadowEstimate { t_ray, r_u, r_l } =
-        transmittance(scene, p, n, medium, &ls, st.hero, stats)?;
+    let ShadowEstimate { t_ray, r_u, r_l } = transmittance(scene, p, n, medium, &ls, st.hero, stats)?;
     let pdf_light = pmf * ls.pdf;
     let r_l = r_l * st.r_u * pdf_light;
     let r_u = r_u * st.r_u * pdf_scatter;
@@ -520,26 +428,15 @@ fn transmittance(
     stats: &mut RayStats,
 ) -> Option<ShadowEstimate> {
     let mut est = ShadowEstimate::default();
-    let origin = if n == Vec3::ZERO {
-        p
-    } else {
-        offset_origin(p, n, ls.wi)
-    };
+    let origin = if n == Vec3::ZERO { p } else { offset_origin(p, n, ls.wi) };
     let mut ray = Ray::new(origin, ls.wi);
     // Distance left to the light point; the light's own surface is not an occluder.
-    let mut remaining = if ls.infinite {
-        f32::INFINITY
-    } else {
-        (ls.p - origin).length() * (1.0 - 1e-4)
-    };
+    let mut remaining = if ls.infinite { f32::INFINITY } else { (ls.p - origin).length() * (1.0 - 1e-4) };
     if medium == NONE && !scene.has_interfaces {
         stats.shadow += 1;
         return (!scene.surfaces.occluded(&ray, remaining)).then_some(est);
     }
-    let mut rng = Pcg32::new(
-        crate::sampling::rng::hash_vec3(ray.o),
-        crate::sampling::rng::hash_vec3(ray.d),
-    );
+    let mut rng = Pcg32::new(crate::sampling::rng::hash_vec3(ray.o), crate::sampling::rng::hash_vec3(ray.d));
     loop {
         stats.shadow += 1;
         let hit = scene.surfaces.intersect(&ray, remaining);
@@ -550,14 +447,7 @@ fn transmittance(
         }
         if medium != NONE {
             let t_max = hit.as_ref().map_or(remaining, |h| h.surface.t);
-            ratio_tracking(
-                &scene.media[medium as usize],
-                &ray,
-                t_max,
-                &mut rng,
-                hero,
-                &mut est,
-            );
+            ratio_tracking(&scene.media[medium as usize], &ray, t_max, &mut rng, hero, &mut est);
             if est.t_ray == Rgb::ZERO {
                 return None;
             }

@@ -20,13 +20,7 @@ pub struct VolPath {
 impl VolPath {
     /// A tracer with the given settings.
     pub fn new(s: &VolPathSettings) -> VolPath {
-        VolPath {
-            config: PathConfig {
-                max_depth: s.max_depth,
-                regularize: s.regularize,
-                next_event: true,
-            },
-        }
+        VolPath { config: PathConfig { max_depth: s.max_depth, regularize: s.regularize, next_event: true } }
     }
 
     /// A tracer with an explicit loop configuration (tests switch next-event estimation off).
@@ -41,14 +35,6 @@ impl Integrator for VolPath {
     }
 
     fn li(&self, scene: &Scene, ray: Ray, sampler: &mut Sampler, stats: &mut RayStats) -> Rgb {
-        trace_path(
-            scene,
-            ray,
-            scene.camera_medium,
-            sampler,
-            &self.config,
-            &mut NoObserver,
-            stats,
-        )
+        trace_path(scene, ray, scene.camera_medium, sampler, &self.config, &mut NoObserver, stats)
     }
 }

@@ -30,10 +30,7 @@ impl VolPathSettings {
         let p = &e.params;
         let max_depth = p.get_one_int("maxdepth", 5)?;
         if max_depth < 0 {
-            return Err(Error::new(
-                p.loc("maxdepth").unwrap_or(&e.loc),
-                "\"maxdepth\" cannot be negative",
-            ));
+            return Err(Error::new(p.loc("maxdepth").unwrap_or(&e.loc), "\"maxdepth\" cannot be negative"));
         }
         let light_sampler = match p.get_one_string("lightsampler", "bvh")? {
             "uniform" => LightSamplerKind::Uniform,

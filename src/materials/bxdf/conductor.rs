@@ -23,12 +23,7 @@ pub struct ConductorBxdf {
 impl ConductorBxdf {
     /// A conductor with the given microfacet distribution and optical constants.
     pub fn new(distrib: TrowbridgeReitz, eta: Rgb, k: Rgb) -> ConductorBxdf {
-        ConductorBxdf {
-            distrib,
-            eta,
-            k,
-            fresnel_scale: Rgb::ONE,
-        }
+        ConductorBxdf { distrib, eta, k, fresnel_scale: Rgb::ONE }
     }
 
     /// The same conductor with its Fresnel reflectance multiplied by `scale` per channel
@@ -111,17 +106,8 @@ impl ConductorBxdf {
     }
 
     /// Density of [`ConductorBxdf::sample_f`]; zero when smooth.
-    pub fn pdf(
-        &self,
-        wo: Vec3,
-        wi: Vec3,
-        _mode: TransportMode,
-        sample_flags: ReflTransFlags,
-    ) -> f32 {
-        if !sample_flags.reflection()
-            || !same_hemisphere(wo, wi)
-            || self.distrib.effectively_smooth()
-        {
+    pub fn pdf(&self, wo: Vec3, wi: Vec3, _mode: TransportMode, sample_flags: ReflTransFlags) -> f32 {
+        if !sample_flags.reflection() || !same_hemisphere(wo, wi) || self.distrib.effectively_smooth() {
             return 0.0;
         }
         let wm = wo + wi;
@@ -134,11 +120,7 @@ impl ConductorBxdf {
 
     /// Specular or glossy reflection.
     pub fn flags(&self) -> BxdfFlags {
-        if self.distrib.effectively_smooth() {
-            BxdfFlags::SPECULAR_REFLECTION
-        } else {
-            BxdfFlags::GLOSSY_REFLECTION
-        }
+        if self.distrib.effectively_smooth() { BxdfFlags::SPECULAR_REFLECTION } else { BxdfFlags::GLOSSY_REFLECTION }
     }
 
     /// Roughens the distribution (pbrt-v4's `Regularize`).
@@ -182,15 +164,8 @@ mod tests {
     fn rough_conductor_chi2() {
         for (i, b) in rough_conductors().iter().enumerate() {
             for (j, wo) in test_directions().into_iter().enumerate().skip(1).step_by(2) {
-                testing::chi2_test(
-                    b,
-                    wo,
-                    TransportMode::Radiance,
-                    ReflTransFlags::ALL,
-                    200_000,
-                    (10 * i + j) as u64,
-                )
-                .unwrap_or_else(|e| panic!("{b:?}: {e}"));
+                testing::chi2_test(b, wo, TransportMode::Radiance, ReflTransFlags::ALL, 200_000, (10 * i + j) as u64)
+                    .unwrap_or_else(|e| panic!("{b:?}: {e}"));
             }
         }
     }
@@ -201,15 +176,7 @@ mod tests {
         let b = Bxdf::from(ConductorBxdf::new(TrowbridgeReitz::new(0.0, 0.0), eta, k));
         assert_eq!(b.flags(), BxdfFlags::SPECULAR_REFLECTION);
         for wo in test_directions() {
-            let s = b
-                .sample_f(
-                    wo,
-                    0.3,
-                    Vec2::new(0.2, 0.9),
-                    TransportMode::Radiance,
-                    ReflTransFlags::ALL,
-                )
-                .unwrap();
+            let s = b.sample_f(wo, 0.3, Vec2::new(0.2, 0.9), TransportMode::Radiance, ReflTransFlags::ALL).unwrap();
             assert_eq!(s.wi, Vec3::new(-wo.x, -wo.y, wo.z));
             assert_eq!((s.pdf, s.flags), (1.0, BxdfFlags::SPECULAR_REFLECTION));
             let albedo = s.f * s.wi.z.abs() / s.pdf;
@@ -218,16 +185,7 @@ mod tests {
             testing::check_all(&b, wo, Check::default());
         }
         let wo = Vec3::new(0.1, 0.2, 0.9).normalize();
-        assert!(
-            b.sample_f(
-                wo,
-                0.3,
-                Vec2::splat(0.5),
-                TransportMode::Radiance,
-                ReflTransFlags::TRANSMISSION
-            )
-            .is_none()
-        );
+        assert!(b.sample_f(wo, 0.3, Vec2::splat(0.5), TransportMode::Radiance, ReflTransFlags::TRANSMISSION).is_none());
     }
 
     #[test]
@@ -235,36 +193,19 @@ mod tests {
         // (f) Smooth: the mirror sample carries fr_dielectric. Rough: f equals the rough
         // dielectric's reflection lobe for directions above the surface.
         for eta in [1.5f32, 1.33, 2.4] {
-            let smooth =
-                ConductorBxdf::new(TrowbridgeReitz::new(0.0, 0.0), Rgb::splat(eta), Rgb::ZERO);
-            let rough =
-                ConductorBxdf::new(TrowbridgeReitz::new(0.25, 0.4), Rgb::splat(eta), Rgb::ZERO);
+            let smooth = ConductorBxdf::new(TrowbridgeReitz::new(0.0, 0.0), Rgb::splat(eta), Rgb::ZERO);
+            let rough = ConductorBxdf::new(TrowbridgeReitz::new(0.25, 0.4), Rgb::splat(eta), Rgb::ZERO);
             let glass = DielectricBxdf::new(eta, TrowbridgeReitz::new(0.25, 0.4));
             for wo in test_directions().into_iter().filter(|w| w.z > 0.0) {
-                let s = smooth
-                    .sample_f(
-                        wo,
-                        0.5,
-                        Vec2::splat(0.5),
-                        TransportMode::Radiance,
-                        ReflTransFlags::ALL,
-                    )
-                    .unwrap();
+                let s =
+                    smooth.sample_f(wo, 0.5, Vec2::splat(0.5), TransportMode::Radiance, ReflTransFlags::ALL).unwrap();
                 let r = s.f * s.wi.z;
-                assert!(
-                    (r - Rgb::splat(fr_dielectric(wo.z, eta)))
-                        .abs()
-                        .max_element()
-                        < 2e-5
-                );
+                assert!((r - Rgb::splat(fr_dielectric(wo.z, eta))).abs().max_element() < 2e-5);
                 testing::integrate_sphere(16, 32, |wi| {
                     if wi.z > 0.0 {
                         let a = rough.f(wo, wi, TransportMode::Radiance);
                         let b = glass.f(wo, wi, TransportMode::Radiance);
-                        assert!(
-                            (a - b).abs().max_element() <= 1e-4 * b.x + 1e-7,
-                            "{a} vs {b}"
-                        );
+                        assert!((a - b).abs().max_element() <= 1e-4 * b.x + 1e-7, "{a} vs {b}");
                     }
                     0.0
                 });
@@ -276,15 +217,7 @@ mod tests {
     fn reflectance_parameterization_reflects_r_at_normal_incidence() {
         let r = Rgb::new(0.9, 0.5, 0.05);
         let b = ConductorBxdf::from_reflectance(TrowbridgeReitz::new(0.0, 0.0), r);
-        let s = b
-            .sample_f(
-                Vec3::Z,
-                0.5,
-                Vec2::splat(0.5),
-                TransportMode::Radiance,
-                ReflTransFlags::ALL,
-            )
-            .unwrap();
+        let s = b.sample_f(Vec3::Z, 0.5, Vec2::splat(0.5), TransportMode::Radiance, ReflTransFlags::ALL).unwrap();
         assert!((s.f - r).abs().max_element() < 1e-5, "{}", s.f);
     }
 
@@ -294,9 +227,7 @@ mod tests {
         let mut b = Bxdf::from(ConductorBxdf::new(TrowbridgeReitz::new(0.0, 0.0), eta, k));
         b.regularize();
         assert_eq!(b.flags(), BxdfFlags::GLOSSY_REFLECTION);
-        let Bxdf::Conductor(c) = &b else {
-            unreachable!()
-        };
+        let Bxdf::Conductor(c) = &b else { unreachable!() };
         assert_eq!(c.distribution().alpha_x(), 0.1);
         testing::check_all(&b, Vec3::new(0.3, 0.4, 0.85).normalize(), Check::default());
     }

@@ -83,8 +83,7 @@ impl DielectricBxdf {
             Rgb::splat(d.d(wm) * d.g(wo, wi) * fresnel / (4.0 * cos_i * cos_o).abs())
         } else {
             let denom = sqr(wi.dot(wm) + wo.dot(wm) / etap) * cos_i * cos_o;
-            let mut ft =
-                d.d(wm) * (1.0 - fresnel) * d.g(wo, wi) * (wi.dot(wm) * wo.dot(wm) / denom).abs();
+            let mut ft = d.d(wm) * (1.0 - fresnel) * d.g(wo, wi) * (wi.dot(wm) * wo.dot(wm) / denom).abs();
             if mode == TransportMode::Radiance {
                 ft /= sqr(etap);
             }
@@ -114,16 +113,8 @@ impl DielectricBxdf {
     #[inline]
     fn lobe_probabilities(r: f32, sample_flags: ReflTransFlags) -> Option<(f32, f32)> {
         let pr = if sample_flags.reflection() { r } else { 0.0 };
-        let pt = if sample_flags.transmission() {
-            1.0 - r
-        } else {
-            0.0
-        };
-        if pr == 0.0 && pt == 0.0 {
-            None
-        } else {
-            Some((pr, pt))
-        }
+        let pt = if sample_flags.transmission() { 1.0 - r } else { 0.0 };
+        if pr == 0.0 && pt == 0.0 { None } else { Some((pr, pt)) }
     }
 
     /// Perfect specular reflection or refraction (pbrt-v4 §9.5).
@@ -140,12 +131,7 @@ impl DielectricBxdf {
         if uc < pr / (pr + pt) {
             let wi = Vec3::new(-wo.x, -wo.y, wo.z);
             let f = Rgb::splat(r / abs_cos_theta(wi));
-            Some(BsdfSample::new(
-                f,
-                wi,
-                pr / (pr + pt),
-                BxdfFlags::SPECULAR_REFLECTION,
-            ))
+            Some(BsdfSample::new(f, wi, pr / (pr + pt), BxdfFlags::SPECULAR_REFLECTION))
         } else {
             let (wi, etap) = refract(wo, Vec3::Z, self.eta)?;
             let mut ft = t / abs_cos_theta(wi);
@@ -153,13 +139,7 @@ impl DielectricBxdf {
             if mode == TransportMode::Radiance {
                 ft /= sqr(etap);
             }
-            Some(BsdfSample::with_eta(
-                Rgb::splat(ft),
-                wi,
-                pt / (pr + pt),
-                BxdfFlags::SPECULAR_TRANSMISSION,
-                etap,
-            ))
+            Some(BsdfSample::with_eta(Rgb::splat(ft), wi, pt / (pr + pt), BxdfFlags::SPECULAR_TRANSMISSION, etap))
         }
     }
 
@@ -184,12 +164,7 @@ impl DielectricBxdf {
             }
             let pdf = d.pdf(wo, wm) / (4.0 * wo.dot(wm).abs()) * pr / (pr + pt);
             let f = d.d(wm) * d.g(wo, wi) * r / (4.0 * cos_theta(wi) * cos_theta(wo));
-            Some(BsdfSample::new(
-                Rgb::splat(f),
-                wi,
-                pdf,
-                BxdfFlags::GLOSSY_REFLECTION,
-            ))
+            Some(BsdfSample::new(Rgb::splat(f), wi, pdf, BxdfFlags::GLOSSY_REFLECTION))
         } else {
             let (wi, etap) = refract(wo, wm, self.eta)?;
             if same_hemisphere(wo, wi) || wi.z == 0.0 {
@@ -199,31 +174,17 @@ impl DielectricBxdf {
             let denom = sqr(wi.dot(wm) + wo.dot(wm) / etap);
             let dwm_dwi = wi.dot(wm).abs() / denom;
             let pdf = d.pdf(wo, wm) * dwm_dwi * pt / (pr + pt);
-            let mut ft = t
-                * d.d(wm)
-                * d.g(wo, wi)
-                * (wi.dot(wm) * wo.dot(wm) / (cos_theta(wi) * cos_theta(wo) * denom)).abs();
+            let mut ft =
+                t * d.d(wm) * d.g(wo, wi) * (wi.dot(wm) * wo.dot(wm) / (cos_theta(wi) * cos_theta(wo) * denom)).abs();
             if mode == TransportMode::Radiance {
                 ft /= sqr(etap);
             }
-            Some(BsdfSample::with_eta(
-                Rgb::splat(ft),
-                wi,
-                pdf,
-                BxdfFlags::GLOSSY_TRANSMISSION,
-                etap,
-            ))
+            Some(BsdfSample::with_eta(Rgb::splat(ft), wi, pdf, BxdfFlags::GLOSSY_TRANSMISSION, etap))
         }
     }
 
     /// Density of [`DielectricBxdf::sample_f`]; zero when specular.
-    pub fn pdf(
-        &self,
-        wo: Vec3,
-        wi: Vec3,
-        _mode: TransportMode,
-        sample_flags: ReflTransFlags,
-    ) -> f32 {
+    pub fn pdf(&self, wo: Vec3, wi: Vec3, _mode: TransportMode, sample_flags: ReflTransFlags) -> f32 {
         if self.is_specular() {
             return 0.0;
         }
@@ -246,17 +207,9 @@ impl DielectricBxdf {
 
     /// Reflection (unless η = 1) and transmission, specular or glossy.
     pub fn flags(&self) -> BxdfFlags {
-        let lobes = if self.eta == 1.0 {
-            BxdfFlags::TRANSMISSION
-        } else {
-            BxdfFlags::REFLECTION | BxdfFlags::TRANSMISSION
-        };
-        lobes
-            | if self.distrib.effectively_smooth() {
-                BxdfFlags::SPECULAR
-            } else {
-                BxdfFlags::GLOSSY
-            }
+        let lobes =
+            if self.eta == 1.0 { BxdfFlags::TRANSMISSION } else { BxdfFlags::REFLECTION | BxdfFlags::TRANSMISSION };
+        lobes | if self.distrib.effectively_smooth() { BxdfFlags::SPECULAR } else { BxdfFlags::GLOSSY }
     }
 
     /// Roughens the distribution (pbrt-v4's `Regularize`).
@@ -285,14 +238,7 @@ mod tests {
         for b in rough_dielectrics() {
             for wo in test_directions() {
                 for mode in [TransportMode::Radiance, TransportMode::Importance] {
-                    testing::check_all(
-                        &b,
-                        wo,
-                        Check {
-                            mode,
-                            ..Check::default()
-                        },
-                    );
+                    testing::check_all(&b, wo, Check { mode, ..Check::default() });
                 }
             }
         }
@@ -303,14 +249,7 @@ mod tests {
         for b in rough_dielectrics() {
             for wo in test_directions() {
                 for flags in [ReflTransFlags::REFLECTION, ReflTransFlags::TRANSMISSION] {
-                    testing::check_all(
-                        &b,
-                        wo,
-                        Check {
-                            flags,
-                            ..Check::default()
-                        },
-                    );
+                    testing::check_all(&b, wo, Check { flags, ..Check::default() });
                 }
             }
         }
@@ -320,15 +259,8 @@ mod tests {
     fn rough_dielectric_chi2() {
         for (i, b) in rough_dielectrics().iter().enumerate() {
             for (j, wo) in test_directions().into_iter().enumerate().skip(1) {
-                testing::chi2_test(
-                    b,
-                    wo,
-                    TransportMode::Radiance,
-                    ReflTransFlags::ALL,
-                    200_000,
-                    (10 * i + j) as u64,
-                )
-                .unwrap_or_else(|e| panic!("{b:?}: {e}"));
+                testing::chi2_test(b, wo, TransportMode::Radiance, ReflTransFlags::ALL, 200_000, (10 * i + j) as u64)
+                    .unwrap_or_else(|e| panic!("{b:?}: {e}"));
             }
         }
     }
@@ -337,28 +269,9 @@ mod tests {
     fn rough_dielectric_chi2_one_lobe() {
         let b = &rough_dielectrics()[0];
         let wo = Vec3::new(-0.7, 0.5, 0.3).normalize();
-        for (k, flags) in [ReflTransFlags::REFLECTION, ReflTransFlags::TRANSMISSION]
-            .into_iter()
-            .enumerate()
-        {
-            testing::chi2_test(
-                b,
-                wo,
-                TransportMode::Importance,
-                flags,
-                200_000,
-                100 + k as u64,
-            )
-            .unwrap();
-            testing::chi2_test(
-                b,
-                -wo,
-                TransportMode::Importance,
-                flags,
-                200_000,
-                200 + k as u64,
-            )
-            .unwrap();
+        for (k, flags) in [ReflTransFlags::REFLECTION, ReflTransFlags::TRANSMISSION].into_iter().enumerate() {
+            testing::chi2_test(b, wo, TransportMode::Importance, flags, 200_000, 100 + k as u64).unwrap();
+            testing::chi2_test(b, -wo, TransportMode::Importance, flags, 200_000, 200 + k as u64).unwrap();
         }
     }
 
@@ -367,36 +280,13 @@ mod tests {
         // (d) R + T = 1: every sample's weight is 1 once the 1/η'² radiance scaling is undone.
         for eta in [1.5f32, 1.0 / 1.5] {
             let b = Bxdf::from(DielectricBxdf::new(eta, TrowbridgeReitz::new(0.0, 0.0)));
-            assert_eq!(
-                b.flags(),
-                BxdfFlags::REFLECTION | BxdfFlags::TRANSMISSION | BxdfFlags::SPECULAR
-            );
+            assert_eq!(b.flags(), BxdfFlags::REFLECTION | BxdfFlags::TRANSMISSION | BxdfFlags::SPECULAR);
             for wo in test_directions() {
-                let s = testing::sample_statistics(
-                    &b,
-                    wo,
-                    TransportMode::Radiance,
-                    ReflTransFlags::ALL,
-                    64,
-                );
+                let s = testing::sample_statistics(&b, wo, TransportMode::Radiance, ReflTransFlags::ALL, 64);
                 assert_eq!(s.p_any, 1.0);
-                assert!(
-                    (s.energy - glam::DVec3::ONE).abs().max_element() < 1e-5,
-                    "{wo}: {:?}",
-                    s.energy
-                );
-                let s = testing::sample_statistics(
-                    &b,
-                    wo,
-                    TransportMode::Importance,
-                    ReflTransFlags::ALL,
-                    64,
-                );
-                assert!(
-                    (s.albedo - glam::DVec3::ONE).abs().max_element() < 1e-5,
-                    "{wo}: {:?}",
-                    s.albedo
-                );
+                assert!((s.energy - glam::DVec3::ONE).abs().max_element() < 1e-5, "{wo}: {:?}", s.energy);
+                let s = testing::sample_statistics(&b, wo, TransportMode::Importance, ReflTransFlags::ALL, 64);
+                assert!((s.albedo - glam::DVec3::ONE).abs().max_element() < 1e-5, "{wo}: {:?}", s.albedo);
                 testing::check_all(&b, wo, Check::default());
             }
         }
@@ -407,73 +297,24 @@ mod tests {
         let b = DielectricBxdf::new(1.5, TrowbridgeReitz::new(0.0, 0.0));
         let wo = Vec3::new(0.6, 0.0, 0.8);
         let r = fr_dielectric(0.8, 1.5);
-        let refl = b
-            .sample_f(
-                wo,
-                0.0,
-                Vec2::ZERO,
-                TransportMode::Radiance,
-                ReflTransFlags::ALL,
-            )
-            .unwrap();
+        let refl = b.sample_f(wo, 0.0, Vec2::ZERO, TransportMode::Radiance, ReflTransFlags::ALL).unwrap();
         assert_eq!(refl.wi, Vec3::new(-0.6, 0.0, 0.8));
         assert!((refl.pdf - r).abs() < 1e-6 && refl.flags == BxdfFlags::SPECULAR_REFLECTION);
-        let tr = b
-            .sample_f(
-                wo,
-                0.99,
-                Vec2::ZERO,
-                TransportMode::Radiance,
-                ReflTransFlags::ALL,
-            )
-            .unwrap();
+        let tr = b.sample_f(wo, 0.99, Vec2::ZERO, TransportMode::Radiance, ReflTransFlags::ALL).unwrap();
         // Snell: sin θt = 0.6/1.5 = 0.4.
         assert!((tr.wi - Vec3::new(-0.4, 0.0, -(1.0f32 - 0.16).sqrt())).length() < 1e-6);
         assert_eq!((tr.eta, tr.flags), (1.5, BxdfFlags::SPECULAR_TRANSMISSION));
         assert!((tr.f.x * tr.wi.z.abs() * 2.25 - (1.0 - r)).abs() < 1e-6);
-        let imp = b
-            .sample_f(
-                wo,
-                0.99,
-                Vec2::ZERO,
-                TransportMode::Importance,
-                ReflTransFlags::ALL,
-            )
-            .unwrap();
+        let imp = b.sample_f(wo, 0.99, Vec2::ZERO, TransportMode::Importance, ReflTransFlags::ALL).unwrap();
         assert!((imp.f.x * imp.wi.z.abs() - (1.0 - r)).abs() < 1e-6);
         // Only transmission requested: always transmits, with probability 1.
-        let t = b
-            .sample_f(
-                wo,
-                0.0,
-                Vec2::ZERO,
-                TransportMode::Radiance,
-                ReflTransFlags::TRANSMISSION,
-            )
-            .unwrap();
+        let t = b.sample_f(wo, 0.0, Vec2::ZERO, TransportMode::Radiance, ReflTransFlags::TRANSMISSION).unwrap();
         assert!(t.is_transmission() && t.pdf == 1.0);
         // Total internal reflection from inside beyond the critical angle.
         let inside = Vec3::new(0.9, 0.0, -(1.0f32 - 0.81).sqrt());
-        let s = b
-            .sample_f(
-                inside,
-                0.999,
-                Vec2::ZERO,
-                TransportMode::Radiance,
-                ReflTransFlags::ALL,
-            )
-            .unwrap();
+        let s = b.sample_f(inside, 0.999, Vec2::ZERO, TransportMode::Radiance, ReflTransFlags::ALL).unwrap();
         assert!(s.is_reflection() && s.pdf == 1.0);
-        assert!(
-            b.sample_f(
-                inside,
-                0.5,
-                Vec2::ZERO,
-                TransportMode::Radiance,
-                ReflTransFlags::TRANSMISSION
-            )
-            .is_none()
-        );
+        assert!(b.sample_f(inside, 0.5, Vec2::ZERO, TransportMode::Radiance, ReflTransFlags::TRANSMISSION).is_none());
         // Exiting: η' = 1/1.5 and radiance grows by 2.25.
         let out = b
             .sample_f(
@@ -493,32 +334,15 @@ mod tests {
             let b = Bxdf::from(DielectricBxdf::new(1.0, TrowbridgeReitz::new(alpha, alpha)));
             assert!(b.flags().is_transmissive() && !b.flags().is_reflective());
             for wo in test_directions() {
-                let s = b
-                    .sample_f(
-                        wo,
-                        0.2,
-                        Vec2::new(0.3, 0.7),
-                        TransportMode::Radiance,
-                        ReflTransFlags::ALL,
-                    )
-                    .unwrap();
+                let s = b.sample_f(wo, 0.2, Vec2::new(0.3, 0.7), TransportMode::Radiance, ReflTransFlags::ALL).unwrap();
                 assert!((s.wi + wo).length() < 1e-6, "{} vs {}", s.wi, -wo);
                 assert!(s.is_specular() && s.is_transmission() && s.pdf == 1.0 && s.eta == 1.0);
                 assert!((s.f.x * wo.z.abs() - 1.0).abs() < 1e-6);
                 assert_eq!(b.f(wo, -wo, TransportMode::Radiance), Rgb::ZERO);
-                assert_eq!(
-                    b.pdf(wo, -wo, TransportMode::Radiance, ReflTransFlags::ALL),
-                    0.0
-                );
+                assert_eq!(b.pdf(wo, -wo, TransportMode::Radiance, ReflTransFlags::ALL), 0.0);
                 // Reflection only: the Fresnel term is zero up to rounding (pbrt-v4 computes it
                 // the same way), so at most a negligible reflection is sampled.
-                let r = b.sample_f(
-                    wo,
-                    0.2,
-                    Vec2::ZERO,
-                    TransportMode::Radiance,
-                    ReflTransFlags::REFLECTION,
-                );
+                let r = b.sample_f(wo, 0.2, Vec2::ZERO, TransportMode::Radiance, ReflTransFlags::REFLECTION);
                 assert!(r.is_none_or(|r| r.f.x * wo.z.abs() < 1e-6), "{r:?}");
             }
         }
@@ -529,17 +353,7 @@ mod tests {
         // Single-scattering microfacet models lose a little energy; at α = 0.12 and normal
         // incidence the loss is small.
         let b = &rough_dielectrics()[1];
-        let s = testing::sample_statistics(
-            b,
-            Vec3::Z,
-            TransportMode::Importance,
-            ReflTransFlags::ALL,
-            256,
-        );
-        assert!(
-            s.energy.x > 0.97 && s.energy.x <= 1.0 + 1e-6,
-            "{:?}",
-            s.energy
-        );
+        let s = testing::sample_statistics(b, Vec3::Z, TransportMode::Importance, ReflTransFlags::ALL, 256);
+        assert!(s.energy.x > 0.97 && s.energy.x <= 1.0 + 1e-6, "{:?}", s.energy);
     }
 }

@@ -54,23 +54,12 @@ impl DiffuseBxdf {
             wi.z = -wi.z;
         }
         let pdf = cosine_hemisphere_pdf(abs_cos_theta(wi));
-        Some(BsdfSample::new(
-            self.r * FRAC_1_PI,
-            wi,
-            pdf,
-            BxdfFlags::DIFFUSE_REFLECTION,
-        ))
+        Some(BsdfSample::new(self.r * FRAC_1_PI, wi, pdf, BxdfFlags::DIFFUSE_REFLECTION))
     }
 
     /// Density of [`DiffuseBxdf::sample_f`]: |cos θi|/π in the hemisphere of `wo`.
     #[inline]
-    pub fn pdf(
-        &self,
-        wo: Vec3,
-        wi: Vec3,
-        _mode: TransportMode,
-        sample_flags: ReflTransFlags,
-    ) -> f32 {
+    pub fn pdf(&self, wo: Vec3, wi: Vec3, _mode: TransportMode, sample_flags: ReflTransFlags) -> f32 {
         if !sample_flags.reflection() || !same_hemisphere(wo, wi) {
             return 0.0;
         }
@@ -80,11 +69,7 @@ impl DiffuseBxdf {
     /// Diffuse reflection, or nothing when R = 0.
     #[inline]
     pub fn flags(&self) -> BxdfFlags {
-        if nonzero(self.r) {
-            BxdfFlags::DIFFUSE_REFLECTION
-        } else {
-            BxdfFlags::UNSET
-        }
+        if nonzero(self.r) { BxdfFlags::DIFFUSE_REFLECTION } else { BxdfFlags::UNSET }
     }
 }
 
@@ -106,53 +91,15 @@ mod tests {
     fn white_diffuse_has_unit_albedo_and_the_cosine_density() {
         let b = Bxdf::from(DiffuseBxdf::new(Rgb::ONE));
         for wo in test_directions() {
-            let s = testing::sample_statistics(
-                &b,
-                wo,
-                TransportMode::Radiance,
-                ReflTransFlags::ALL,
-                256,
-            );
-            assert!(
-                (s.albedo - glam::DVec3::ONE).abs().max_element() < 1e-6,
-                "{wo}: {:?}",
-                s.albedo
-            );
-            testing::chi2_test(
-                &b,
-                wo,
-                TransportMode::Radiance,
-                ReflTransFlags::ALL,
-                200_000,
-                1,
-            )
-            .unwrap();
+            let s = testing::sample_statistics(&b, wo, TransportMode::Radiance, ReflTransFlags::ALL, 256);
+            assert!((s.albedo - glam::DVec3::ONE).abs().max_element() < 1e-6, "{wo}: {:?}", s.albedo);
+            testing::chi2_test(&b, wo, TransportMode::Radiance, ReflTransFlags::ALL, 200_000, 1).unwrap();
         }
         assert_eq!(b.flags(), BxdfFlags::DIFFUSE_REFLECTION);
-        assert_eq!(
-            Bxdf::from(DiffuseBxdf::new(Rgb::ZERO)).flags(),
-            BxdfFlags::UNSET
-        );
+        assert_eq!(Bxdf::from(DiffuseBxdf::new(Rgb::ZERO)).flags(), BxdfFlags::UNSET);
         let wo = Vec3::new(0.3, 0.2, 0.9).normalize();
-        assert!(
-            b.sample_f(
-                wo,
-                0.5,
-                Vec2::splat(0.5),
-                TransportMode::Radiance,
-                ReflTransFlags::TRANSMISSION
-            )
-            .is_none()
-        );
-        assert_eq!(
-            b.pdf(
-                wo,
-                Vec3::Z,
-                TransportMode::Radiance,
-                ReflTransFlags::TRANSMISSION
-            ),
-            0.0
-        );
+        assert!(b.sample_f(wo, 0.5, Vec2::splat(0.5), TransportMode::Radiance, ReflTransFlags::TRANSMISSION).is_none());
+        assert_eq!(b.pdf(wo, Vec3::Z, TransportMode::Radiance, ReflTransFlags::TRANSMISSION), 0.0);
         assert_eq!(b.f(wo, -Vec3::Z, TransportMode::Radiance), Rgb::ZERO);
     }
 }

@@ -61,10 +61,7 @@ impl Complex {
 
     #[inline]
     fn mul(self, o: Complex) -> Complex {
-        Complex::new(
-            self.re * o.re - self.im * o.im,
-            self.re * o.im + self.im * o.re,
-        )
+        Complex::new(self.re * o.re - self.im * o.im, self.re * o.im + self.im * o.re)
     }
 
     #[inline]
@@ -75,10 +72,7 @@ impl Complex {
     #[inline]
     fn div(self, o: Complex) -> Complex {
         let scale = 1.0 / (o.re * o.re + o.im * o.im);
-        Complex::new(
-            scale * (self.re * o.re + self.im * o.im),
-            scale * (self.im * o.re - self.re * o.im),
-        )
+        Complex::new(scale * (self.re * o.re + self.im * o.im), scale * (self.im * o.re - self.re * o.im))
     }
 
     /// |z|².
@@ -96,11 +90,7 @@ impl Complex {
         }
         let t1 = (0.5 * (n + self.re.abs())).sqrt();
         let t2 = 0.5 * self.im / t1;
-        if self.re >= 0.0 {
-            Complex::new(t1, t2)
-        } else {
-            Complex::new(t2.abs(), t1.copysign(self.im))
-        }
+        if self.re >= 0.0 { Complex::new(t1, t2) } else { Complex::new(t2.abs(), t1.copysign(self.im)) }
     }
 }
 

@@ -13,9 +13,7 @@ use std::f32::consts::PI;
 
 use glam::{Vec2, Vec3};
 
-use super::{
-    BsdfSample, BxdfFlags, DielectricBxdf, DiffuseBxdf, ReflTransFlags, TransportMode, nonzero,
-};
+use super::{BsdfSample, BxdfFlags, DielectricBxdf, DiffuseBxdf, ReflTransFlags, TransportMode, nonzero};
 use crate::color::Rgb;
 use crate::math::{abs_cos_theta, same_hemisphere};
 use crate::media::phase::HenyeyGreenstein;
@@ -58,14 +56,7 @@ impl Interface<'_> {
     }
 
     #[inline]
-    fn sample_f(
-        self,
-        wo: Vec3,
-        uc: f32,
-        u: Vec2,
-        mode: TransportMode,
-        flags: ReflTransFlags,
-    ) -> Option<BsdfSample> {
+    fn sample_f(self, wo: Vec3, uc: f32, u: Vec2, mode: TransportMode, flags: ReflTransFlags) -> Option<BsdfSample> {
         match self {
             Interface::Top(b) => b.sample_f(wo, uc, u, mode, flags),
             Interface::Bottom(b) => b.sample_f(wo, uc, u, mode, flags),
@@ -139,15 +130,7 @@ impl CoatedDiffuseBxdf {
         max_depth: u32,
         n_samples: u32,
     ) -> CoatedDiffuseBxdf {
-        CoatedDiffuseBxdf {
-            top,
-            bottom,
-            thickness: thickness.max(f32::MIN_POSITIVE),
-            albedo,
-            g,
-            max_depth,
-            n_samples,
-        }
+        CoatedDiffuseBxdf { top, bottom, thickness: thickness.max(f32::MIN_POSITIVE), albedo, g, max_depth, n_samples }
     }
 
     /// The coating.
@@ -193,22 +176,14 @@ impl CoatedDiffuseBxdf {
         }
         // The interface that wo enters, the one wi leaves through, and the exit's height.
         let entered_top = TWO_SIDED || wo.z > 0.0;
-        let enter = if entered_top {
-            Interface::Top(&self.top)
-        } else {
-            Interface::Bottom(&self.bottom)
-        };
+        let enter = if entered_top { Interface::Top(&self.top) } else { Interface::Bottom(&self.bottom) };
         let same = same_hemisphere(wo, wi);
         let (exit, non_exit) = if same ^ entered_top {
             (Interface::Bottom(&self.bottom), Interface::Top(&self.top))
         } else {
             (Interface::Top(&self.top), Interface::Bottom(&self.bottom))
         };
-        let exit_z = if same ^ entered_top {
-            0.0
-        } else {
-            self.thickness
-        };
+        let exit_z = if same ^ entered_top { 0.0 } else { self.thickness };
         let n_samples = self.n_samples as f32;
 
         // Reflection at the entrance interface.
@@ -252,11 +227,7 @@ impl CoatedDiffuseBxdf {
 
                 if !nonzero(self.albedo) {
                     // No scattering: cross to the other interface.
-                    z = if z == self.thickness {
-                        0.0
-                    } else {
-                        self.thickness
-                    };
+                    z = if z == self.thickness { 0.0 } else { self.thickness };
                     beta *= tr(self.thickness, w);
                 } else {
                     // Sample a scattering distance in the unit-extinction medium.
@@ -267,33 +238,18 @@ impl CoatedDiffuseBxdf {
                     }
                     if 0.0 < zp && zp < self.thickness {
                         // Scattering inside: NEE through the exit along the presampled wis.
-                        let wt = if exit_specular {
-                            1.0
-                        } else {
-                            power_heuristic(wis.pdf, phase.pdf(-w, -wis.wi))
-                        };
-                        f += beta
-                            * self.albedo
-                            * phase.p(-w, -wis.wi)
-                            * wt
-                            * tr(zp - exit_z, wis.wi)
-                            * wis.f
-                            / wis.pdf;
+                        let wt = if exit_specular { 1.0 } else { power_heuristic(wis.pdf, phase.pdf(-w, -wis.wi)) };
+                        f += beta * self.albedo * phase.p(-w, -wis.wi) * wt * tr(zp - exit_z, wis.wi) * wis.f / wis.pdf;
                         // Continue the walk with a phase-function sample.
                         let u = r.next_2d();
-                        let Some(ps) = phase
-                            .sample_p(-w, u)
-                            .filter(|ps| ps.pdf != 0.0 && ps.wi.z != 0.0)
-                        else {
+                        let Some(ps) = phase.sample_p(-w, u).filter(|ps| ps.pdf != 0.0 && ps.wi.z != 0.0) else {
                             continue;
                         };
                         beta *= self.albedo * ps.p / ps.pdf;
                         w = ps.wi;
                         z = zp;
                         // MIS companion: the phase sample may leave through the exit.
-                        if ((z < exit_z && w.z > 0.0) || (z > exit_z && w.z < 0.0))
-                            && !exit_specular
-                        {
+                        if ((z < exit_z && w.z > 0.0) || (z > exit_z && w.z < 0.0)) && !exit_specular {
                             let f_exit = exit.f(-w, wi, mode);
                             if nonzero(f_exit) {
                                 let wt = power_heuristic(ps.pdf, exit_pdf(exit, w, wi));
@@ -309,10 +265,7 @@ impl CoatedDiffuseBxdf {
                     // Internal reflection at the exit interface.
                     let uc = r.next();
                     let u = r.next_2d();
-                    let Some(bs) = exit
-                        .sample_f(-w, uc, u, mode, ReflTransFlags::REFLECTION)
-                        .filter(usable)
-                    else {
+                    let Some(bs) = exit.sample_f(-w, uc, u, mode, ReflTransFlags::REFLECTION).filter(usable) else {
                         break;
                     };
                     beta *= bs.f * abs_cos_theta(bs.wi) / bs.pdf;
@@ -323,10 +276,7 @@ impl CoatedDiffuseBxdf {
                         let wt = if exit_specular {
                             1.0
                         } else {
-                            power_heuristic(
-                                wis.pdf,
-                                non_exit.pdf(-w, -wis.wi, mode, ReflTransFlags::ALL),
-                            )
+                            power_heuristic(wis.pdf, non_exit.pdf(-w, -wis.wi, mode, ReflTransFlags::ALL))
                         };
                         f += beta
                             * non_exit.f(-w, -wis.wi, mode)
@@ -339,10 +289,7 @@ impl CoatedDiffuseBxdf {
                     // Then sample the next direction.
                     let uc = r.next();
                     let u = r.next_2d();
-                    let Some(bs) = non_exit
-                        .sample_f(-w, uc, u, mode, ReflTransFlags::REFLECTION)
-                        .filter(usable)
-                    else {
+                    let Some(bs) = non_exit.sample_f(-w, uc, u, mode, ReflTransFlags::REFLECTION).filter(usable) else {
                         break;
                     };
                     beta *= bs.f * abs_cos_theta(bs.wi) / bs.pdf;
@@ -351,11 +298,8 @@ impl CoatedDiffuseBxdf {
                     if !exit_specular {
                         let f_exit = exit.f(-w, wi, mode);
                         if nonzero(f_exit) {
-                            let wt = if non_exit_specular {
-                                1.0
-                            } else {
-                                power_heuristic(bs.pdf, exit_pdf(exit, w, wi))
-                            };
+                            let wt =
+                                if non_exit_specular { 1.0 } else { power_heuristic(bs.pdf, exit_pdf(exit, w, wi)) };
                             f += beta * tr(self.thickness, bs.wi) * f_exit * wt;
                         }
                     }
@@ -407,10 +351,7 @@ impl CoatedDiffuseBxdf {
         let mut w = bs.wi;
         let mut specular_path = bs.is_specular();
 
-        let mut r = Stream(Pcg32::new(
-            hash_seed_vec3(PBRT_SEED, wo),
-            hash_sample(uc, u),
-        ));
+        let mut r = Stream(Pcg32::new(hash_seed_vec3(PBRT_SEED, wo), hash_sample(uc, u)));
         let mut f = bs.f * abs_cos_theta(bs.wi);
         let mut pdf = bs.pdf;
         let mut z = if entered_top { self.thickness } else { 0.0 };
@@ -438,9 +379,7 @@ impl CoatedDiffuseBxdf {
                     return None;
                 }
                 if 0.0 < zp && zp < self.thickness {
-                    let ps = phase
-                        .sample_p(-w, r.next_2d())
-                        .filter(|ps| ps.pdf != 0.0 && ps.wi.z != 0.0)?;
+                    let ps = phase.sample_p(-w, r.next_2d()).filter(|ps| ps.pdf != 0.0 && ps.wi.z != 0.0)?;
                     f *= self.albedo * ps.p;
                     pdf *= ps.pdf;
                     specular_path = false;
@@ -450,24 +389,14 @@ impl CoatedDiffuseBxdf {
                 }
                 z = zp.clamp(0.0, self.thickness);
             } else {
-                z = if z == self.thickness {
-                    0.0
-                } else {
-                    self.thickness
-                };
+                z = if z == self.thickness { 0.0 } else { self.thickness };
                 f *= tr(self.thickness, w);
             }
 
-            let interface = if z == 0.0 {
-                Interface::Bottom(&self.bottom)
-            } else {
-                Interface::Top(&self.top)
-            };
+            let interface = if z == 0.0 { Interface::Bottom(&self.bottom) } else { Interface::Top(&self.top) };
             let uc = r.next();
             let u = r.next_2d();
-            let bs = interface
-                .sample_f(-w, uc, u, mode, ReflTransFlags::ALL)
-                .filter(usable)?;
+            let bs = interface.sample_f(-w, uc, u, mode, ReflTransFlags::ALL).filter(usable)?;
             f *= bs.f;
             pdf *= bs.pdf;
             specular_path &= bs.is_specular();
@@ -475,27 +404,12 @@ impl CoatedDiffuseBxdf {
 
             // Transmission through an interface leaves the layers.
             if bs.is_transmission() {
-                let mut flags = if same_hemisphere(wo, w) {
-                    BxdfFlags::REFLECTION
-                } else {
-                    BxdfFlags::TRANSMISSION
-                };
-                flags |= if specular_path {
-                    BxdfFlags::SPECULAR
-                } else {
-                    BxdfFlags::GLOSSY
-                };
+                let mut flags = if same_hemisphere(wo, w) { BxdfFlags::REFLECTION } else { BxdfFlags::TRANSMISSION };
+                flags |= if specular_path { BxdfFlags::SPECULAR } else { BxdfFlags::GLOSSY };
                 if flip_wi {
                     w = -w;
                 }
-                return Some(BsdfSample {
-                    f,
-                    wi: w,
-                    pdf,
-                    flags,
-                    eta: 1.0,
-                    pdf_is_proportional: true,
-                });
+                return Some(BsdfSample { f, wi: w, pdf, flags, eta: 1.0, pdf_is_proportional: true });
             }
             f *= abs_cos_theta(bs.wi);
         }
@@ -505,13 +419,7 @@ impl CoatedDiffuseBxdf {
     /// An approximate density of [`CoatedDiffuseBxdf::sample_f`] for MIS: the entrance
     /// reflection plus a stochastic estimate of the TRT (or TT) term, mixed with a uniform
     /// density as 0.9·estimate + 0.1/(4π) (pbrt-v4 §14.3, `LayeredBxDF::PDF`).
-    pub fn pdf(
-        &self,
-        wo: Vec3,
-        wi: Vec3,
-        mode: TransportMode,
-        sample_flags: ReflTransFlags,
-    ) -> f32 {
+    pub fn pdf(&self, wo: Vec3, wi: Vec3, mode: TransportMode, sample_flags: ReflTransFlags) -> f32 {
         if !sample_flags.reflection() {
             return 0.0;
         }
@@ -532,11 +440,7 @@ impl CoatedDiffuseBxdf {
         let mut pdf_sum = 0.0;
         if same {
             pdf_sum += n_samples
-                * if entered_top {
-                    self.top.pdf(wo, wi, mode, refl)
-                } else {
-                    self.bottom.pdf(wo, wi, mode, refl)
-                };
+                * if entered_top { self.top.pdf(wo, wi, mode, refl) } else { self.bottom.pdf(wo, wi, mode, refl) };
         }
 
         for _ in 0..self.n_samples {
@@ -581,17 +485,13 @@ impl CoatedDiffuseBxdf {
                 };
                 let uc = r.next();
                 let u = r.next_2d();
-                let Some(wos) = to_iface
-                    .sample_f(wo, uc, u, mode, all)
-                    .filter(|s| usable(s) && !s.is_reflection())
+                let Some(wos) = to_iface.sample_f(wo, uc, u, mode, all).filter(|s| usable(s) && !s.is_reflection())
                 else {
                     continue;
                 };
                 let uc = r.next();
                 let u = r.next_2d();
-                let Some(wis) = ti_iface
-                    .sample_f(wi, uc, u, !mode, all)
-                    .filter(|s| usable(s) && !s.is_reflection())
+                let Some(wis) = ti_iface.sample_f(wi, uc, u, !mode, all).filter(|s| usable(s) && !s.is_reflection())
                 else {
                     continue;
                 };
@@ -600,8 +500,7 @@ impl CoatedDiffuseBxdf {
                 } else if ti_iface.flags().is_specular() {
                     to_iface.pdf(wo, -wis.wi, mode, all)
                 } else {
-                    (to_iface.pdf(wo, -wis.wi, mode, all) + ti_iface.pdf(-wos.wi, wi, mode, all))
-                        / 2.0
+                    (to_iface.pdf(wo, -wis.wi, mode, all) + ti_iface.pdf(-wos.wi, wi, mode, all)) / 2.0
                 };
             }
         }

@@ -40,12 +40,7 @@ fn mean_and_error(xs: &[DVec3]) -> (DVec3, DVec3) {
 /// Directional albedo from `sample_f` weights, with its standard error (stratified samples
 /// treated as independent, which overestimates the error). With `non_specular_only`, the
 /// specular reflection off a smooth coating is left out, as it is from `f`.
-fn albedo_by_sampling(
-    b: &CoatedDiffuseBxdf,
-    wo: Vec3,
-    mode: TransportMode,
-    non_specular_only: bool,
-) -> (DVec3, DVec3) {
+fn albedo_by_sampling(b: &CoatedDiffuseBxdf, wo: Vec3, mode: TransportMode, non_specular_only: bool) -> (DVec3, DVec3) {
     let n = 200;
     let weights: Vec<DVec3> = stratified_2d(n)
         .enumerate()
@@ -68,12 +63,7 @@ fn albedo_by_sampling(
 /// Directional albedo ∫ f |cos θi| dωi from the stochastic `f` (with pbrt-v4's or with
 /// consistent MIS weights), by stratified uniform hemisphere sampling, with its standard
 /// error.
-fn albedo_by_evaluation(
-    b: &CoatedDiffuseBxdf,
-    wo: Vec3,
-    mode: TransportMode,
-    consistent_mis: bool,
-) -> (DVec3, DVec3) {
+fn albedo_by_evaluation(b: &CoatedDiffuseBxdf, wo: Vec3, mode: TransportMode, consistent_mis: bool) -> (DVec3, DVec3) {
     let n = 100;
     let xs: Vec<DVec3> = stratified_2d(n)
         .map(|u| {
@@ -91,63 +81,32 @@ fn albedo_by_evaluation(
 #[test]
 fn layered_flags_follow_the_layers() {
     let smooth = coated(0.0, Rgb::splat(0.5), 0.01, Rgb::ZERO, 0.0, 10, 1);
-    assert_eq!(
-        smooth.flags(),
-        BxdfFlags::REFLECTION | BxdfFlags::SPECULAR | BxdfFlags::DIFFUSE
-    );
+    assert_eq!(smooth.flags(), BxdfFlags::REFLECTION | BxdfFlags::SPECULAR | BxdfFlags::DIFFUSE);
     let black = coated(0.3, Rgb::ZERO, 0.01, Rgb::ZERO, 0.0, 10, 1);
     assert_eq!(black.flags(), BxdfFlags::GLOSSY_REFLECTION);
     let mut b = Bxdf::from(smooth);
     b.regularize();
     assert_eq!(b.flags(), BxdfFlags::DIFFUSE_REFLECTION);
-    let Bxdf::CoatedDiffuse(c) = &b else {
-        unreachable!()
-    };
+    let Bxdf::CoatedDiffuse(c) = &b else { unreachable!() };
     assert_eq!(c.top().distribution().alpha_x(), 0.1);
 }
 
 #[test]
 fn layered_estimates_are_deterministic_and_two_sided() {
-    let b = coated(
-        0.3,
-        Rgb::new(0.8, 0.4, 0.1),
-        0.1,
-        Rgb::splat(0.5),
-        0.3,
-        10,
-        2,
-    );
-    let (wo, wi) = (
-        Vec3::new(0.3, 0.4, 0.85).normalize(),
-        Vec3::new(-0.5, 0.1, 0.6).normalize(),
-    );
+    let b = coated(0.3, Rgb::new(0.8, 0.4, 0.1), 0.1, Rgb::splat(0.5), 0.3, 10, 2);
+    let (wo, wi) = (Vec3::new(0.3, 0.4, 0.85).normalize(), Vec3::new(-0.5, 0.1, 0.6).normalize());
     let m = TransportMode::Radiance;
     assert_eq!(b.f(wo, wi, m), b.f(wo, wi, m));
     assert_eq!(b.f(wo, wi, m), b.f(-wo, -wi, m));
-    assert_eq!(
-        b.pdf(wo, wi, m, ReflTransFlags::ALL),
-        b.pdf(-wo, -wi, m, ReflTransFlags::ALL)
-    );
+    assert_eq!(b.pdf(wo, wi, m, ReflTransFlags::ALL), b.pdf(-wo, -wi, m, ReflTransFlags::ALL));
     assert!(b.f(wo, wi, m).min_element() > 0.0);
     // A coated diffuse surface does not transmit.
     assert_eq!(b.f(wo, -wi, m), Rgb::ZERO);
     let s = b.sample_f(wo, 0.7, Vec2::new(0.2, 0.6), m, ReflTransFlags::ALL);
-    assert_eq!(
-        s,
-        b.sample_f(wo, 0.7, Vec2::new(0.2, 0.6), m, ReflTransFlags::ALL)
-    );
+    assert_eq!(s, b.sample_f(wo, 0.7, Vec2::new(0.2, 0.6), m, ReflTransFlags::ALL));
     let flipped = b.sample_f(-wo, 0.7, Vec2::new(0.2, 0.6), m, ReflTransFlags::ALL);
     assert_eq!(s.map(|s| -s.wi), flipped.map(|s| s.wi));
-    assert!(
-        b.sample_f(
-            wo,
-            0.7,
-            Vec2::new(0.2, 0.6),
-            m,
-            ReflTransFlags::TRANSMISSION
-        )
-        .is_none()
-    );
+    assert!(b.sample_f(wo, 0.7, Vec2::new(0.2, 0.6), m, ReflTransFlags::TRANSMISSION).is_none());
     assert_eq!(b.pdf(wo, wi, m, ReflTransFlags::TRANSMISSION), 0.0);
 }
 
@@ -178,11 +137,7 @@ fn coated_black_base_without_medium_is_the_bare_coating_reflection() {
                     let bare = top
                         .sample_f(wo * s, uc, u, mode, ReflTransFlags::ALL)
                         .filter(|t| t.is_reflection())
-                        .map(|t| BsdfSample {
-                            wi: t.wi * s,
-                            pdf_is_proportional: true,
-                            ..t
-                        });
+                        .map(|t| BsdfSample { wi: t.wi * s, pdf_is_proportional: true, ..t });
                     assert_eq!(b.sample_f(wo, uc, u, mode, ReflTransFlags::ALL), bare);
                 }
             }
@@ -199,10 +154,7 @@ fn white_coated_diffuse_without_absorption_reflects_everything() {
     for wo in test_directions() {
         for mode in [TransportMode::Radiance, TransportMode::Importance] {
             let (a, _) = albedo_by_sampling(&b, wo, mode, false);
-            assert!(
-                a.min_element() > 0.999 && a.max_element() < 1.0 + 1e-4,
-                "{wo}: {a}"
-            );
+            assert!(a.min_element() > 0.999 && a.max_element() < 1.0 + 1e-4, "{wo}: {a}");
         }
     }
 }
@@ -214,22 +166,11 @@ fn layered_albedo_is_at_most_one() {
     for b in [
         coated(0.3, Rgb::ONE, 0.01, Rgb::ZERO, 0.0, 10, 1),
         coated(0.0, Rgb::ONE, 0.2, Rgb::ONE, 0.6, 32, 1),
-        coated(
-            0.5,
-            Rgb::new(0.9, 0.5, 0.1),
-            0.5,
-            Rgb::splat(0.7),
-            -0.4,
-            10,
-            1,
-        ),
+        coated(0.5, Rgb::new(0.9, 0.5, 0.1), 0.5, Rgb::splat(0.7), -0.4, 10, 1),
     ] {
         for wo in test_directions() {
             let (a, err) = albedo_by_sampling(&b, wo, TransportMode::Radiance, false);
-            assert!(
-                (a - 5.0 * err).max_element() <= 1.0,
-                "albedo {a} ± {err} > 1 for {b:?}, wo {wo}"
-            );
+            assert!((a - 5.0 * err).max_element() <= 1.0, "albedo {a} ± {err} > 1 for {b:?}, wo {wo}");
         }
     }
 }
@@ -242,22 +183,11 @@ fn layered_evaluation_agrees_with_sampling() {
     let configs = [
         coated(0.0, Rgb::new(0.8, 0.5, 0.2), 0.01, Rgb::ZERO, 0.0, 64, 2),
         coated(0.3, Rgb::new(0.8, 0.5, 0.2), 0.01, Rgb::ZERO, 0.0, 64, 2),
-        coated(
-            0.2,
-            Rgb::splat(0.6),
-            0.3,
-            Rgb::new(0.9, 0.6, 0.3),
-            0.5,
-            64,
-            2,
-        ),
+        coated(0.2, Rgb::splat(0.6), 0.3, Rgb::new(0.9, 0.6, 0.3), 0.5, 64, 2),
         coated(0.0, Rgb::splat(0.6), 0.3, Rgb::splat(0.8), -0.3, 64, 2),
     ];
     for b in configs {
-        for wo in [
-            Vec3::new(0.3, 0.4, 0.85).normalize(),
-            Vec3::new(-0.7, 0.5, -0.3).normalize(),
-        ] {
+        for wo in [Vec3::new(0.3, 0.4, 0.85).normalize(), Vec3::new(-0.7, 0.5, -0.3).normalize()] {
             for mode in [TransportMode::Radiance, TransportMode::Importance] {
                 let (s, es) = albedo_by_sampling(&b, wo, mode, true);
                 let (e, ee) = albedo_by_evaluation(&b, wo, mode, true);
@@ -277,32 +207,18 @@ fn pbrt_mis_weights_bias_only_rough_coatings() {
     // is specular and no MIS happens; a bounded overestimate for rough coatings.
     let wo = Vec3::new(0.3, 0.4, 0.85).normalize();
     let mode = TransportMode::Radiance;
-    let smooth = coated(
-        0.0,
-        Rgb::new(0.8, 0.5, 0.2),
-        0.3,
-        Rgb::splat(0.5),
-        0.3,
-        64,
-        2,
-    );
+    let smooth = coated(0.0, Rgb::new(0.8, 0.5, 0.2), 0.3, Rgb::splat(0.5), 0.3, 64, 2);
     let (s, es) = albedo_by_sampling(&smooth, wo, mode, true);
     let (e, ee) = albedo_by_evaluation(&smooth, wo, mode, false);
     let sigma = (es * es + ee * ee).powf(0.5);
-    assert!(
-        ((s - e).abs() - 5.0 * sigma).max_element() <= 1e-3,
-        "{s} ± {es} vs {e} ± {ee}"
-    );
+    assert!(((s - e).abs() - 5.0 * sigma).max_element() <= 1e-3, "{s} ± {es} vs {e} ± {ee}");
     for alpha in [0.1f32, 0.3, 0.6] {
         let rough = coated(alpha, Rgb::new(0.8, 0.5, 0.2), 0.01, Rgb::ZERO, 0.0, 64, 2);
         let (s, _) = albedo_by_sampling(&rough, wo, mode, true);
         let (e, _) = albedo_by_evaluation(&rough, wo, mode, false);
         let relative = (e - s) / s;
         eprintln!("α = {alpha}: pbrt-v4 MIS overestimates the albedo by {relative:.3}");
-        assert!(
-            relative.abs().max_element() < 0.15,
-            "α = {alpha}: {s} vs {e}"
-        );
+        assert!(relative.abs().max_element() < 0.15, "α = {alpha}: {s} vs {e}");
     }
 }
 
@@ -310,15 +226,7 @@ fn pbrt_mis_weights_bias_only_rough_coatings() {
 fn layered_f_is_reciprocal_in_expectation() {
     // (e) f(wo, wi) = f(wi, wo) for the exact layered BRDF; the estimates are compared with
     // independent replicates (tiny direction jitters reseed the generator).
-    let b = coated(
-        0.3,
-        Rgb::new(0.8, 0.5, 0.2),
-        0.2,
-        Rgb::splat(0.5),
-        0.3,
-        64,
-        16,
-    );
+    let b = coated(0.3, Rgb::new(0.8, 0.5, 0.2), 0.2, Rgb::splat(0.5), 0.3, 64, 16);
     let pairs = [
         (Vec3::new(0.3, 0.4, 0.85), Vec3::new(-0.7, 0.5, 0.3)),
         (Vec3::new(0.9, -0.2, 0.1), Vec3::new(0.1, 0.1, 0.95)),
@@ -328,8 +236,7 @@ fn layered_f_is_reciprocal_in_expectation() {
         let (wo, wi) = (a.normalize(), c.normalize());
         let replicate = |x: Vec3, y: Vec3, k: usize| {
             let jitter = Vec3::new(1e-6 * k as f32, -1e-6 * k as f32, 0.0);
-            b.f((x + jitter).normalize(), y, TransportMode::Radiance)
-                .as_dvec3()
+            b.f((x + jitter).normalize(), y, TransportMode::Radiance).as_dvec3()
         };
         let fwd: Vec<DVec3> = (0..48).map(|k| replicate(wo, wi, k)).collect();
         let bwd: Vec<DVec3> = (0..48).map(|k| replicate(wi, wo, k)).collect();
@@ -358,17 +265,9 @@ fn layered_pdf_is_a_positive_mixture() {
             let integral = testing::integrate_sphere(32, 64, |wi| {
                 let p = b.pdf(wo, wi, TransportMode::Radiance, ReflTransFlags::ALL);
                 let s = wo.z.signum();
-                let refl = b.top().pdf(
-                    wo * s,
-                    wi * s,
-                    TransportMode::Radiance,
-                    ReflTransFlags::REFLECTION,
-                );
+                let refl = b.top().pdf(wo * s, wi * s, TransportMode::Radiance, ReflTransFlags::REFLECTION);
                 assert!(p.is_finite() && p >= floor * 0.999, "pdf {p} at wi {wi}");
-                assert!(
-                    p >= floor + 0.9 * refl * 0.999,
-                    "pdf {p} < 0.9 · {refl} at wi {wi}"
-                );
+                assert!(p >= floor + 0.9 * refl * 0.999, "pdf {p} < 0.9 · {refl} at wi {wi}");
                 p as f64
             });
             assert!(integral > 0.1 && integral.is_finite(), "∫pdf = {integral}");

@@ -29,22 +29,14 @@ pub(super) fn tan2_theta(w: Vec3) -> f32 {
 #[inline]
 pub(super) fn cos_phi(w: Vec3) -> f32 {
     let sin_theta = sin2_theta(w).sqrt();
-    if sin_theta == 0.0 {
-        1.0
-    } else {
-        (w.x / sin_theta).clamp(-1.0, 1.0)
-    }
+    if sin_theta == 0.0 { 1.0 } else { (w.x / sin_theta).clamp(-1.0, 1.0) }
 }
 
 /// sin φ of a local direction (0 along the normal).
 #[inline]
 pub(super) fn sin_phi(w: Vec3) -> f32 {
     let sin_theta = sin2_theta(w).sqrt();
-    if sin_theta == 0.0 {
-        0.0
-    } else {
-        (w.y / sin_theta).clamp(-1.0, 1.0)
-    }
+    if sin_theta == 0.0 { 0.0 } else { (w.y / sin_theta).clamp(-1.0, 1.0) }
 }
 
 /// `v` flipped, if needed, into the hemisphere of `reference` (pbrt-v4's `FaceForward`).
@@ -85,10 +77,7 @@ impl TrowbridgeReitz {
     /// [`TrowbridgeReitz::roughness_to_alpha`] when `remap` (pbrt-v4's `remaproughness`).
     pub fn from_roughness(u_roughness: f32, v_roughness: f32, remap: bool) -> TrowbridgeReitz {
         if remap {
-            TrowbridgeReitz::new(
-                Self::roughness_to_alpha(u_roughness),
-                Self::roughness_to_alpha(v_roughness),
-            )
+            TrowbridgeReitz::new(Self::roughness_to_alpha(u_roughness), Self::roughness_to_alpha(v_roughness))
         } else {
             TrowbridgeReitz::new(u_roughness, v_roughness)
         }
@@ -182,11 +171,7 @@ impl TrowbridgeReitz {
             wh = -wh;
         }
         // Orthonormal basis around wh.
-        let t1 = if wh.z < 0.99999 {
-            Vec3::Z.cross(wh).normalize()
-        } else {
-            Vec3::X
-        };
+        let t1 = if wh.z < 0.99999 { Vec3::Z.cross(wh).normalize() } else { Vec3::X };
         let t2 = wh.cross(t1);
         // Uniform disk point, warped to the projection of the visible hemisphere.
         let mut p = uniform_disk_polar(u);
@@ -229,13 +214,7 @@ mod tests {
     fn projected_normal_density_integrates_to_one() {
         // ∫ D(ωm) cos θm dωm = 1: the projected microfacet area is the macro surface's.
         for d in distributions() {
-            let v = integrate_sphere(1024, 512, |wm| {
-                if wm.z > 0.0 {
-                    (d.d(wm) * wm.z) as f64
-                } else {
-                    0.0
-                }
-            });
+            let v = integrate_sphere(1024, 512, |wm| if wm.z > 0.0 { (d.d(wm) * wm.z) as f64 } else { 0.0 });
             assert!((v - 1.0).abs() < 2e-3, "{d:?}: {v}");
         }
     }
@@ -251,11 +230,7 @@ mod tests {
                 Vec3::new(0.3, -0.6, -0.5).normalize(),
             ] {
                 let v = integrate_sphere(1024, 512, |wm| {
-                    if wm.z > 0.0 && wm.dot(w) * w.z > 0.0 {
-                        d.d_visible(w, wm) as f64
-                    } else {
-                        0.0
-                    }
+                    if wm.z > 0.0 && wm.dot(w) * w.z > 0.0 { d.d_visible(w, wm) as f64 } else { 0.0 }
                 });
                 assert!((v - 1.0).abs() < 3e-3, "{d:?} {w}: {v}");
             }
@@ -281,19 +256,12 @@ mod tests {
                 integrate_sphere(512, 512, |m| vis(&d, w, m) * m.y as f64),
                 integrate_sphere(512, 512, |m| vis(&d, w, m) * m.z as f64),
             );
-            assert!(
-                (mean - expected).abs().max_element() < 2e-3,
-                "{d:?}: {mean} vs {expected}"
-            );
+            assert!((mean - expected).abs().max_element() < 2e-3, "{d:?}: {mean} vs {expected}");
         }
     }
 
     fn vis(d: &TrowbridgeReitz, w: Vec3, m: Vec3) -> f64 {
-        if m.z > 0.0 && m.dot(w) > 0.0 {
-            d.d_visible(w, m) as f64
-        } else {
-            0.0
-        }
+        if m.z > 0.0 && m.dot(w) > 0.0 { d.d_visible(w, m) as f64 } else { 0.0 }
     }
 
     #[test]
@@ -319,10 +287,7 @@ mod tests {
     fn masking_is_one_at_normal_incidence_and_g_is_symmetric() {
         let d = TrowbridgeReitz::new(0.3, 0.7);
         assert_eq!(d.g1(Vec3::Z), 1.0);
-        let (a, b) = (
-            Vec3::new(0.3, 0.4, 0.5).normalize(),
-            Vec3::new(-0.7, 0.1, 0.2).normalize(),
-        );
+        let (a, b) = (Vec3::new(0.3, 0.4, 0.5).normalize(), Vec3::new(-0.7, 0.1, 0.2).normalize());
         assert_eq!(d.g(a, b), d.g(b, a));
         assert!(d.g(a, b) <= d.g1(a).min(d.g1(b)));
     }

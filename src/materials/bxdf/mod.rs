@@ -280,23 +280,13 @@ impl BsdfSample {
     /// A sample with η = 1 and an exact pdf.
     #[inline]
     pub fn new(f: Rgb, wi: Vec3, pdf: f32, flags: BxdfFlags) -> BsdfSample {
-        BsdfSample {
-            f,
-            wi,
-            pdf,
-            flags,
-            eta: 1.0,
-            pdf_is_proportional: false,
-        }
+        BsdfSample { f, wi, pdf, flags, eta: 1.0, pdf_is_proportional: false }
     }
 
     /// A transmission sample that records the relative index of refraction.
     #[inline]
     pub fn with_eta(f: Rgb, wi: Vec3, pdf: f32, flags: BxdfFlags, eta: f32) -> BsdfSample {
-        BsdfSample {
-            eta,
-            ..BsdfSample::new(f, wi, pdf, flags)
-        }
+        BsdfSample { eta, ..BsdfSample::new(f, wi, pdf, flags) }
     }
 
     /// True for reflection samples.
@@ -387,13 +377,7 @@ impl Bxdf {
 
     /// Density with which [`Bxdf::sample_f`] returns `wi` (zero for specular lobes).
     #[inline]
-    pub fn pdf(
-        &self,
-        wo: Vec3,
-        wi: Vec3,
-        mode: TransportMode,
-        sample_flags: ReflTransFlags,
-    ) -> f32 {
+    pub fn pdf(&self, wo: Vec3, wi: Vec3, mode: TransportMode, sample_flags: ReflTransFlags) -> f32 {
         if wo.z == 0.0 {
             return 0.0;
         }
@@ -472,17 +456,11 @@ mod tests {
         assert!(f.is_reflective() && f.is_glossy() && f.is_non_specular());
         assert!(!f.is_transmissive() && !f.is_specular() && !f.is_diffuse());
         assert!(BxdfFlags::ALL.contains(BxdfFlags::SPECULAR_TRANSMISSION));
-        assert_eq!(
-            format!("{:?}", BxdfFlags::SPECULAR_TRANSMISSION),
-            "TRANSMISSION | SPECULAR"
-        );
+        assert_eq!(format!("{:?}", BxdfFlags::SPECULAR_TRANSMISSION), "TRANSMISSION | SPECULAR");
         assert_eq!(format!("{:?}", BxdfFlags::UNSET), "UNSET");
         assert!(ReflTransFlags::ALL.reflection() && ReflTransFlags::ALL.transmission());
         assert!(!ReflTransFlags::REFLECTION.transmission());
-        assert_eq!(
-            ReflTransFlags::REFLECTION | ReflTransFlags::TRANSMISSION,
-            ReflTransFlags::ALL
-        );
+        assert_eq!(ReflTransFlags::REFLECTION | ReflTransFlags::TRANSMISSION, ReflTransFlags::ALL);
         assert_eq!(!TransportMode::Radiance, TransportMode::Importance);
     }
 
@@ -491,54 +469,15 @@ mod tests {
         let d = Bxdf::from(DiffuseBxdf::new(Rgb::splat(0.5)));
         let grazing = Vec3::X;
         assert_eq!(d.f(grazing, Vec3::Z, TransportMode::Radiance), Rgb::ZERO);
-        assert_eq!(
-            d.pdf(
-                grazing,
-                Vec3::Z,
-                TransportMode::Radiance,
-                ReflTransFlags::ALL
-            ),
-            0.0
-        );
+        assert_eq!(d.pdf(grazing, Vec3::Z, TransportMode::Radiance, ReflTransFlags::ALL), 0.0);
         let u = Vec2::splat(0.5);
-        assert!(
-            d.sample_f(
-                grazing,
-                0.5,
-                u,
-                TransportMode::Radiance,
-                ReflTransFlags::ALL
-            )
-            .is_none()
-        );
-        assert!(
-            d.sample_f(
-                Vec3::Z,
-                0.5,
-                u,
-                TransportMode::Radiance,
-                ReflTransFlags::ALL
-            )
-            .is_some()
-        );
+        assert!(d.sample_f(grazing, 0.5, u, TransportMode::Radiance, ReflTransFlags::ALL).is_none());
+        assert!(d.sample_f(Vec3::Z, 0.5, u, TransportMode::Radiance, ReflTransFlags::ALL).is_some());
         // No lobe of the requested kind, or nothing at all.
         let t = ReflTransFlags::TRANSMISSION;
-        assert!(
-            d.sample_f(Vec3::Z, 0.5, u, TransportMode::Radiance, t)
-                .is_none()
-        );
+        assert!(d.sample_f(Vec3::Z, 0.5, u, TransportMode::Radiance, t).is_none());
         let black = Bxdf::from(DiffuseBxdf::new(Rgb::ZERO));
-        assert!(
-            black
-                .sample_f(
-                    Vec3::Z,
-                    0.5,
-                    u,
-                    TransportMode::Radiance,
-                    ReflTransFlags::ALL
-                )
-                .is_none()
-        );
+        assert!(black.sample_f(Vec3::Z, 0.5, u, TransportMode::Radiance, ReflTransFlags::ALL).is_none());
         // A rough dielectric's sample through a grazing microfacet has D = 0: dropped here,
         // returned (with f = 0 and pdf = 0) by the model itself, as by pbrt-v4's BxDF.
         let glass = DielectricBxdf::new(1.0 / 1.33, TrowbridgeReitz::new(0.4, 0.4));
@@ -551,10 +490,7 @@ mod tests {
         });
         let u = found.expect("some microfacet sample is grazing");
         let b = Bxdf::from(glass);
-        assert!(
-            b.sample_f(wo, 0.99, u, TransportMode::Radiance, ReflTransFlags::ALL)
-                .is_none()
-        );
+        assert!(b.sample_f(wo, 0.99, u, TransportMode::Radiance, ReflTransFlags::ALL).is_none());
     }
 
     fn stratified_cells(n: usize) -> impl Iterator<Item = Vec2> {

@@ -32,12 +32,7 @@ pub(crate) fn test_directions() -> [Vec3; 6] {
 
 /// The centres of an n × n grid over [0, 1)².
 pub(crate) fn stratified_2d(n: usize) -> impl Iterator<Item = Vec2> {
-    (0..n * n).map(move |k| {
-        Vec2::new(
-            ((k % n) as f32 + 0.5) / n as f32,
-            ((k / n) as f32 + 0.5) / n as f32,
-        )
-    })
+    (0..n * n).map(move |k| Vec2::new(((k % n) as f32 + 0.5) / n as f32, ((k / n) as f32 + 0.5) / n as f32))
 }
 
 /// The unit vector with polar angle θ and azimuth φ.
@@ -48,11 +43,7 @@ fn spherical(theta: f64, phi: f64) -> Vec3 {
 }
 
 /// ∫ f(ω) dω over the sphere by the midpoint rule on an n_theta × n_phi grid in (θ, φ).
-pub(crate) fn integrate_sphere(
-    n_theta: usize,
-    n_phi: usize,
-    mut f: impl FnMut(Vec3) -> f64,
-) -> f64 {
+pub(crate) fn integrate_sphere(n_theta: usize, n_phi: usize, mut f: impl FnMut(Vec3) -> f64) -> f64 {
     let (dt, dp) = (PI / n_theta as f64, 2.0 * PI / n_phi as f64);
     let mut sum = 0.0;
     for i in 0..n_theta {
@@ -98,13 +89,8 @@ pub(crate) fn sample_statistics(
         let j = (rng.next_u32() as usize) % (i + 1);
         perm.swap(i, j);
     }
-    let mut stats = SampleStatistics {
-        p_non_specular: 0.0,
-        p_any: 0.0,
-        albedo: DVec3::ZERO,
-        energy: DVec3::ZERO,
-        max_weight: 0.0,
-    };
+    let mut stats =
+        SampleStatistics { p_non_specular: 0.0, p_any: 0.0, albedo: DVec3::ZERO, energy: DVec3::ZERO, max_weight: 0.0 };
     for (k, cell) in stratified_2d(n).enumerate() {
         // Jittered within the cell: a regular grid would quantize the success probability.
         let jitter = Vec2::new(rng.uniform(), rng.uniform()) - Vec2::splat(0.5);
@@ -119,15 +105,8 @@ pub(crate) fn sample_statistics(
         }
         assert!(s.pdf > 0.0, "sample with pdf {}: {s:?}", s.pdf);
         assert!(s.f.is_finite() && s.f.min_element() >= 0.0, "bad f: {s:?}");
-        assert!(
-            (s.wi.length() - 1.0).abs() < 1e-4,
-            "wi not normalized: {s:?}"
-        );
-        assert_eq!(
-            s.is_reflection(),
-            same_hemisphere(wo, s.wi),
-            "flags disagree with the hemisphere: {s:?}"
-        );
+        assert!((s.wi.length() - 1.0).abs() < 1e-4, "wi not normalized: {s:?}");
+        assert_eq!(s.is_reflection(), same_hemisphere(wo, s.wi), "flags disagree with the hemisphere: {s:?}");
         let weight = (s.f * s.wi.z.abs() / s.pdf).as_dvec3();
         let unscaled = if s.is_transmission() && mode == TransportMode::Radiance {
             weight * (s.eta as f64).powi(2)
@@ -147,16 +126,9 @@ pub(crate) fn sample_statistics(
 }
 
 /// ∫ pdf(wo, ω) dω over the sphere, by adaptive quadrature over the χ² bins.
-pub(crate) fn pdf_integral(
-    bxdf: &Bxdf,
-    wo: Vec3,
-    mode: TransportMode,
-    flags: ReflTransFlags,
-) -> f64 {
+pub(crate) fn pdf_integral(bxdf: &Bxdf, wo: Vec3, mode: TransportMode, flags: ReflTransFlags) -> f64 {
     let pdf = |wi: Vec3| bxdf.pdf(wo, wi, mode, flags) as f64;
-    adaptive_bin_integrals(&pdf, |v| 1e-7 + 1e-5 * v)
-        .iter()
-        .sum()
+    adaptive_bin_integrals(&pdf, |v| 1e-7 + 1e-5 * v).iter().sum()
 }
 
 /// Regularized upper incomplete gamma function Q(a, x) = Γ(a, x)/Γ(a): the χ² tail
@@ -237,24 +209,11 @@ const CHI2_SIGNIFICANCE: f64 = 1e-4;
 
 /// ∫ pdf over the (θ, φ) rectangle [t0, t0 + dt] × [p0, p0 + dp] by 4-point Gauss-Legendre
 /// on a `sub` × `sub` subdivision.
-fn integrate_bin(
-    pdf: &impl Fn(Vec3) -> f64,
-    (t0, dt): (f64, f64),
-    (p0, dp): (f64, f64),
-    sub: usize,
-) -> f64 {
-    const X: [f64; 4] = [
-        -0.861_136_311_594_052_6,
-        -0.339_981_043_584_856_3,
-        0.339_981_043_584_856_3,
-        0.861_136_311_594_052_6,
-    ];
-    const W: [f64; 4] = [
-        0.347_854_845_137_453_8,
-        0.652_145_154_862_546_1,
-        0.652_145_154_862_546_1,
-        0.347_854_845_137_453_8,
-    ];
+fn integrate_bin(pdf: &impl Fn(Vec3) -> f64, (t0, dt): (f64, f64), (p0, dp): (f64, f64), sub: usize) -> f64 {
+    const X: [f64; 4] =
+        [-0.861_136_311_594_052_6, -0.339_981_043_584_856_3, 0.339_981_043_584_856_3, 0.861_136_311_594_052_6];
+    const W: [f64; 4] =
+        [0.347_854_845_137_453_8, 0.652_145_154_862_546_1, 0.652_145_154_862_546_1, 0.347_854_845_137_453_8];
     let (ht, hp) = (dt / (2 * sub) as f64, dp / (2 * sub) as f64);
     let mut sum = 0.0;
     for si in 0..sub {
@@ -300,13 +259,7 @@ fn adaptive_bin_integrals(f: &impl Fn(Vec3) -> f64, tolerance: impl Fn(f64) -> f
 /// Expected bin counts: `n` times ∫ pdf over each (θ, φ) bin, refined until a count changes
 /// by less than a twentieth of its Poisson deviation, so that quadrature error cannot
 /// masquerade as a sampling error at sharp lobe features.
-fn expected_frequencies(
-    bxdf: &Bxdf,
-    wo: Vec3,
-    mode: TransportMode,
-    flags: ReflTransFlags,
-    n: usize,
-) -> Vec<f64> {
+fn expected_frequencies(bxdf: &Bxdf, wo: Vec3, mode: TransportMode, flags: ReflTransFlags, n: usize) -> Vec<f64> {
     let pdf = |wi: Vec3| bxdf.pdf(wo, wi, mode, flags) as f64;
     let n = n as f64;
     let mut counts = adaptive_bin_integrals(&pdf, |v| 0.05 * (v * n).max(1.0).sqrt() / n);
@@ -357,9 +310,7 @@ pub(crate) fn chi2_test(
         let (o, e) = (observed[c], expected[c]);
         if e == 0.0 {
             if o > n as f64 * 1e-5 {
-                return Err(format!(
-                    "{o} samples in a cell with expected count 0 (wo {wo})"
-                ));
+                return Err(format!("{o} samples in a cell with expected count 0 (wo {wo})"));
             }
         } else if e < CHI2_MIN_EXPECTED || (pooled_exp > 0.0 && pooled_exp < CHI2_MIN_EXPECTED) {
             pooled_obs += o;
@@ -379,9 +330,7 @@ pub(crate) fn chi2_test(
     }
     let p = gamma_q(dof as f64 / 2.0, chi2 / 2.0);
     if p < CHI2_SIGNIFICANCE || !p.is_finite() {
-        return Err(format!(
-            "χ² test rejected sampling for wo {wo}: χ² = {chi2:.1}, dof = {dof}, p = {p:.3e}"
-        ));
+        return Err(format!("χ² test rejected sampling for wo {wo}: χ² = {chi2:.1}, dof = {dof}, p = {p:.3e}"));
     }
     Ok(())
 }
@@ -397,10 +346,7 @@ pub(crate) struct Check {
 
 impl Default for Check {
     fn default() -> Check {
-        Check {
-            mode: TransportMode::Radiance,
-            flags: ReflTransFlags::ALL,
-        }
+        Check { mode: TransportMode::Radiance, flags: ReflTransFlags::ALL }
     }
 }
 
@@ -450,26 +396,14 @@ pub(crate) fn check_all(bxdf: &Bxdf, wo: Vec3, check: Check) -> SampleStatistics
             "sample f {} but f() {f} (wo {wo}, {s:?})",
             s.f
         );
-        assert!(
-            (s.pdf - pdf).abs() <= tol(s.pdf),
-            "sample pdf {} but pdf() {pdf} (wo {wo}, {s:?})",
-            s.pdf
-        );
+        assert!((s.pdf - pdf).abs() <= tol(s.pdf), "sample pdf {} but pdf() {pdf} (wo {wo}, {s:?})", s.pdf);
     }
 
     // (d)
-    assert!(
-        stats.energy.max_element() <= 1.0 + 1e-3,
-        "energy {} > 1 (wo {wo}, {bxdf:?})",
-        stats.energy
-    );
+    assert!(stats.energy.max_element() <= 1.0 + 1e-3, "energy {} > 1 (wo {wo}, {bxdf:?})", stats.energy);
     // Every model checked here has single-sample weights of at most 1 (F·G/G1 for the
     // microfacet models, Fresnel-weighted lobe choices for the specular ones).
-    assert!(
-        stats.max_weight <= 1.0 + 1e-3,
-        "weight {} > 1 (wo {wo})",
-        stats.max_weight
-    );
+    assert!(stats.max_weight <= 1.0 + 1e-3, "weight {} > 1 (wo {wo})", stats.max_weight);
 
     // (e)
     let mut n = 0;

@@ -55,21 +55,11 @@ impl ThinDielectricBxdf {
         if uc < pr / (pr + pt) {
             let wi = Vec3::new(-wo.x, -wo.y, wo.z);
             let f = Rgb::splat(r / abs_cos_theta(wi));
-            Some(BsdfSample::new(
-                f,
-                wi,
-                pr / (pr + pt),
-                BxdfFlags::SPECULAR_REFLECTION,
-            ))
+            Some(BsdfSample::new(f, wi, pr / (pr + pt), BxdfFlags::SPECULAR_REFLECTION))
         } else {
             let wi = -wo;
             let f = Rgb::splat(t / abs_cos_theta(wi));
-            Some(BsdfSample::new(
-                f,
-                wi,
-                pt / (pr + pt),
-                BxdfFlags::SPECULAR_TRANSMISSION,
-            ))
+            Some(BsdfSample::new(f, wi, pt / (pr + pt), BxdfFlags::SPECULAR_TRANSMISSION))
         }
     }
 
@@ -95,27 +85,9 @@ mod tests {
         let b = Bxdf::from(ThinDielectricBxdf::new(1.5));
         for wo in test_directions() {
             testing::check_all(&b, wo, Check::default());
-            let s = testing::sample_statistics(
-                &b,
-                wo,
-                TransportMode::Radiance,
-                ReflTransFlags::ALL,
-                64,
-            );
-            assert!(
-                (s.albedo - glam::DVec3::ONE).abs().max_element() < 1e-5,
-                "{:?}",
-                s.albedo
-            );
-            let t = b
-                .sample_f(
-                    wo,
-                    0.999_99,
-                    Vec2::ZERO,
-                    TransportMode::Radiance,
-                    ReflTransFlags::ALL,
-                )
-                .unwrap();
+            let s = testing::sample_statistics(&b, wo, TransportMode::Radiance, ReflTransFlags::ALL, 64);
+            assert!((s.albedo - glam::DVec3::ONE).abs().max_element() < 1e-5, "{:?}", s.albedo);
+            let t = b.sample_f(wo, 0.999_99, Vec2::ZERO, TransportMode::Radiance, ReflTransFlags::ALL).unwrap();
             assert_eq!(t.wi, -wo);
             assert_eq!(t.eta, 1.0, "no net refraction through a thin slab");
         }
@@ -125,30 +97,11 @@ mod tests {
     fn thin_slab_reflects_more_than_one_interface() {
         // Normal incidence at η = 1.5: R = 0.04, R' = R + T²R/(1 − R²) = 2R/(1 + R).
         let b = ThinDielectricBxdf::new(1.5);
-        let s = b
-            .sample_f(
-                Vec3::Z,
-                0.0,
-                Vec2::ZERO,
-                TransportMode::Radiance,
-                ReflTransFlags::ALL,
-            )
-            .unwrap();
+        let s = b.sample_f(Vec3::Z, 0.0, Vec2::ZERO, TransportMode::Radiance, ReflTransFlags::ALL).unwrap();
         let expected = 2.0 * 0.04 / 1.04;
-        assert!(
-            s.is_reflection() && (s.pdf - expected).abs() < 1e-6,
-            "{}",
-            s.pdf
-        );
-        let only_t = b
-            .sample_f(
-                Vec3::Z,
-                0.0,
-                Vec2::ZERO,
-                TransportMode::Radiance,
-                ReflTransFlags::TRANSMISSION,
-            )
-            .unwrap();
+        assert!(s.is_reflection() && (s.pdf - expected).abs() < 1e-6, "{}", s.pdf);
+        let only_t =
+            b.sample_f(Vec3::Z, 0.0, Vec2::ZERO, TransportMode::Radiance, ReflTransFlags::TRANSMISSION).unwrap();
         assert!(only_t.is_transmission() && only_t.pdf == 1.0);
         assert!((only_t.f.x - (1.0 - expected)).abs() < 1e-6);
     }

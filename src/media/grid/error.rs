@@ -116,11 +116,7 @@ pub enum GridError {
 }
 
 fn list_grids(available: &[String]) -> String {
-    if available.is_empty() {
-        "no grids".to_string()
-    } else {
-        available.join(", ")
-    }
+    if available.is_empty() { "no grids".to_string() } else { available.join(", ") }
 }
 
 fn hint_for(value_type: &str) -> &'static str {

@@ -79,9 +79,7 @@ fn type_name(t: u32) -> String {
         "vec3u16",
         "uint8",
     ];
-    NAMES
-        .get(t as usize)
-        .map_or_else(|| format!("type #{t}"), |s| s.to_string())
+    NAMES.get(t as usize).map_or_else(|| format!("type #{t}"), |s| s.to_string())
 }
 
 /// Name of a NanoVDB `GridClass`.
@@ -98,9 +96,7 @@ fn class_name(c: u32) -> String {
         "IndexGrid",
         "TensorGrid",
     ];
-    NAMES
-        .get(c as usize)
-        .map_or_else(|| format!("class #{c}"), |s| s.to_string())
+    NAMES.get(c as usize).map_or_else(|| format!("class #{c}"), |s| s.to_string())
 }
 
 /// How a grid's buffer is stored in the file.
@@ -144,13 +140,7 @@ impl Bytes<'_> {
         at.checked_add(N)
             .and_then(|end| self.data.get(at..end))
             .map(|s| s.try_into().expect("slice of length N"))
-            .ok_or_else(|| {
-                format!(
-                    "truncated: needs bytes {at}..{} of {}",
-                    at + N,
-                    self.data.len()
-                )
-            })
+            .ok_or_else(|| format!("truncated: needs bytes {at}..{} of {}", at + N, self.data.len()))
     }
     fn u16(&self, at: usize) -> Result<u16, String> {
         self.array(at).map(u16::from_le_bytes)
@@ -174,18 +164,10 @@ impl Bytes<'_> {
         self.array(at).map(f64::from_le_bytes)
     }
     fn dvec3(&self, at: usize) -> Result<DVec3, String> {
-        Ok(DVec3::new(
-            self.f64(at)?,
-            self.f64(at + 8)?,
-            self.f64(at + 16)?,
-        ))
+        Ok(DVec3::new(self.f64(at)?, self.f64(at + 8)?, self.f64(at + 16)?))
     }
     fn ivec3(&self, at: usize) -> Result<IVec3, String> {
-        Ok(IVec3::new(
-            self.i32(at)?,
-            self.i32(at + 4)?,
-            self.i32(at + 8)?,
-        ))
+        Ok(IVec3::new(self.i32(at)?, self.i32(at + 4)?, self.i32(at + 8)?))
     }
     fn bit(&self, mask_at: usize, n: usize) -> Result<bool, String> {
         Ok(self.u64(mask_at + (n >> 6) * 8)? >> (n & 63) & 1 == 1)
@@ -201,9 +183,7 @@ impl Bytes<'_> {
     fn child(&self, base: usize, offset: i64) -> Result<usize, String> {
         let at = base as i64 + offset;
         if offset == 0 || at < 0 || at as usize >= self.data.len() {
-            return Err(format!(
-                "child offset {offset} from byte {base} leaves the grid"
-            ));
+            return Err(format!("child offset {offset} from byte {base} leaves the grid"));
         }
         Ok(at as usize)
     }
@@ -221,14 +201,8 @@ impl NanoVdbFile {
     /// Reads the grid list of the file at `path` (headers only).
     pub fn open(path: impl AsRef<Path>) -> Result<NanoVdbFile, GridError> {
         let path = path.as_ref().to_path_buf();
-        let io = |source| GridError::Io {
-            path: path.clone(),
-            source,
-        };
-        let malformed = |message: String| GridError::Malformed {
-            path: path.clone(),
-            message,
-        };
+        let io = |source| GridError::Io { path: path.clone(), source };
+        let malformed = |message: String| GridError::Malformed { path: path.clone(), message };
         let mut file = File::open(&path).map_err(io)?;
         let len = file.metadata().map_err(io)?.len();
         let mut grids = Vec::new();
@@ -254,25 +228,16 @@ impl NanoVdbFile {
                     )));
                 }
                 _ if &header[..8] == b" BDV\0\0\0\0" => {
-                    return Err(malformed(
-                        "this is an OpenVDB file; use the \"vdb\" medium for .vdb files".into(),
-                    ));
+                    return Err(malformed("this is an OpenVDB file; use the \"vdb\" medium for .vdb files".into()));
                 }
                 _ => {
-                    return Err(malformed(format!(
-                        "not a NanoVDB file (no NanoVDB magic at byte {pos})"
-                    )));
+                    return Err(malformed(format!("not a NanoVDB file (no NanoVDB magic at byte {pos})")));
                 }
             };
             if raw_grid {
-                let entry = read_raw_entry(&mut file, pos)
-                    .map_err(io)?
-                    .map_err(malformed)?;
+                let entry = read_raw_entry(&mut file, pos).map_err(io)?.map_err(malformed)?;
                 if entry.grid_size > len - pos {
-                    return Err(malformed(format!(
-                        "grid \"{}\" runs past the end of the file",
-                        entry.name
-                    )));
+                    return Err(malformed(format!("grid \"{}\" runs past the end of the file", entry.name)));
                 }
                 pos += entry.grid_size;
                 grids.push(entry);
@@ -291,20 +256,15 @@ impl NanoVdbFile {
             for _ in 0..count {
                 let mut meta = [0u8; FILE_METADATA_BYTES];
                 file.seek(SeekFrom::Start(pos)).map_err(io)?;
-                file.read_exact(&mut meta)
-                    .map_err(|_| malformed(format!("truncated grid metadata at byte {pos}")))?;
+                file.read_exact(&mut meta).map_err(|_| malformed(format!("truncated grid metadata at byte {pos}")))?;
                 let m = Bytes { data: &meta };
                 let name_size = m.u32(136).map_err(malformed)? as usize;
                 if name_size > 1 << 16 {
-                    return Err(malformed(format!(
-                        "grid name of {name_size} bytes at byte {pos}"
-                    )));
+                    return Err(malformed(format!("grid name of {name_size} bytes at byte {pos}")));
                 }
                 let mut name = vec![0u8; name_size];
-                file.read_exact(&mut name)
-                    .map_err(|_| malformed("truncated grid name".into()))?;
-                let name = String::from_utf8_lossy(name.split(|&b| b == 0).next().unwrap_or(&[]))
-                    .into_owned();
+                file.read_exact(&mut name).map_err(|_| malformed("truncated grid name".into()))?;
+                let name = String::from_utf8_lossy(name.split(|&b| b == 0).next().unwrap_or(&[])).into_owned();
                 pos += (FILE_METADATA_BYTES + name_size) as u64;
                 sizes.push(m.u64(8).map_err(malformed)?);
                 grids.push(Entry {
@@ -323,12 +283,7 @@ impl NanoVdbFile {
                 pos = pos
                     .checked_add(file_size)
                     .filter(|&end| end <= len)
-                    .ok_or_else(|| {
-                        malformed(format!(
-                            "grid \"{}\" runs past the end of the file",
-                            entry.name
-                        ))
-                    })?;
+                    .ok_or_else(|| malformed(format!("grid \"{}\" runs past the end of the file", entry.name)))?;
             }
         }
         Ok(NanoVdbFile { path, grids })
@@ -357,11 +312,7 @@ impl NanoVdbFile {
             return Err(GridError::GridNotFound {
                 path: self.path.clone(),
                 name: name.to_string(),
-                available: self
-                    .grids
-                    .iter()
-                    .map(|g| format!("{} ({})", g.name, type_name(g.grid_type)))
-                    .collect(),
+                available: self.grids.iter().map(|g| format!("{} ({})", g.name, type_name(g.grid_type))).collect(),
             });
         };
         if entry.grid_class != CLASS_FOG_VOLUME && entry.grid_class != CLASS_UNKNOWN {
@@ -371,10 +322,7 @@ impl NanoVdbFile {
                 class: class_name(entry.grid_class),
             });
         }
-        if !matches!(
-            entry.grid_type,
-            TYPE_FLOAT | TYPE_FP4 | TYPE_FP8 | TYPE_FP16 | TYPE_FPN
-        ) {
+        if !matches!(entry.grid_type, TYPE_FLOAT | TYPE_FP4 | TYPE_FP8 | TYPE_FP16 | TYPE_FPN) {
             return Err(GridError::UnsupportedValueType {
                 path: self.path.clone(),
                 grid: name.to_string(),
@@ -389,15 +337,10 @@ impl NanoVdbFile {
         let (builder, map, world_bbox) = parse_grid(&buffer, entry.grid_type).map_err(malformed)?;
         drop(buffer);
         let mut grid = builder.build().map_err(|issue| match issue {
-            BuildIssue::NoActiveVoxels => GridError::EmptyGrid {
-                path: self.path.clone(),
-                grid: name.to_string(),
-            },
-            BuildIssue::TooLarge { cells } => GridError::TooLarge {
-                path: self.path.clone(),
-                grid: name.to_string(),
-                cells,
-            },
+            BuildIssue::NoActiveVoxels => GridError::EmptyGrid { path: self.path.clone(), grid: name.to_string() },
+            BuildIssue::TooLarge { cells } => {
+                GridError::TooLarge { path: self.path.clone(), grid: name.to_string(), cells }
+            }
         })?;
         grid.set_transform(map);
         // pbrt-v4 bounds the medium with the file's world box; keep it when it is sane.
@@ -409,10 +352,7 @@ impl NanoVdbFile {
 
     /// The uncompressed grid buffer of `entry`.
     fn load(&self, entry: &Entry) -> Result<Vec<u8>, GridError> {
-        let io = |source| GridError::Io {
-            path: self.path.clone(),
-            source,
-        };
+        let io = |source| GridError::Io { path: self.path.clone(), source };
         let mut file = File::open(&self.path).map_err(io)?;
         file.seek(SeekFrom::Start(entry.offset)).map_err(io)?;
         let size = usize::try_from(entry.grid_size).map_err(|_| GridError::Malformed {
@@ -441,15 +381,11 @@ impl NanoVdbFile {
                 // A corrupt size must not reserve memory up front; the buffer grows as
                 // the data inflates and is checked against the size after.
                 let mut buffer = Vec::with_capacity(size.min(1 << 30));
-                let decoder =
-                    flate2::read::ZlibDecoder::new(std::io::BufReader::new(file.take(zipped)));
-                decoder
-                    .take(entry.grid_size + 1)
-                    .read_to_end(&mut buffer)
-                    .map_err(|e| GridError::Malformed {
-                        path: self.path.clone(),
-                        message: format!("grid \"{}\": zip data: {e}", entry.name),
-                    })?;
+                let decoder = flate2::read::ZlibDecoder::new(std::io::BufReader::new(file.take(zipped)));
+                decoder.take(entry.grid_size + 1).read_to_end(&mut buffer).map_err(|e| GridError::Malformed {
+                    path: self.path.clone(),
+                    message: format!("grid \"{}\": zip data: {e}", entry.name),
+                })?;
                 if buffer.len() != size {
                     return Err(GridError::Malformed {
                         path: self.path.clone(),
@@ -523,10 +459,7 @@ enum LeafCodec {
 
 /// Walks a grid buffer into a builder; returns it with the world-from-index map and the
 /// file's world bounding box.
-fn parse_grid(
-    data: &[u8],
-    expected_type: u32,
-) -> Result<(SparseGridBuilder, DAffine3, Bounds3), String> {
+fn parse_grid(data: &[u8], expected_type: u32) -> Result<(SparseGridBuilder, DAffine3, Bounds3), String> {
     let b = Bytes { data };
     let magic = b.u64(0)?;
     if magic != MAGIC_LEGACY && magic != MAGIC_GRID {
@@ -541,11 +474,7 @@ fn parse_grid(
     }
     let grid_type = b.u32(636)?;
     if grid_type != expected_type {
-        return Err(format!(
-            "metadata says {} but the grid holds {}",
-            type_name(expected_type),
-            type_name(grid_type)
-        ));
+        return Err(format!("metadata says {} but the grid holds {}", type_name(expected_type), type_name(grid_type)));
     }
     // Map (at 296): float matrices first (88 bytes), then the doubles pbrt-v4's float map
     // was rounded from: row-major matrix (world = M * index + t), its inverse, translation.
@@ -579,9 +508,7 @@ fn parse_grid(
     let table_size = b.u32(root + 24)? as usize;
     let background = b.f32(root + 28)?;
     if table_size > (data.len() - root) / ROOT_TILE_BYTES {
-        return Err(format!(
-            "root table of {table_size} tiles does not fit the grid"
-        ));
+        return Err(format!("root table of {table_size} tiles does not fit the grid"));
     }
 
     let mut walk = Walk {
@@ -601,8 +528,7 @@ fn parse_grid(
         let child = b.i64(tile + 8)?;
         if child == 0 {
             let active = b.u32(tile + 16)? != 0;
-            walk.builder
-                .add_tile(origin, 4096, b.f32(tile + 20)?, active);
+            walk.builder.add_tile(origin, 4096, b.f32(tile + 20)?, active);
         } else {
             walk.upper(b.child(root, child)?, origin)?;
         }
@@ -626,10 +552,7 @@ impl Walk<'_> {
     fn visit(&mut self, level: usize) -> Result<(), String> {
         self.visited[level] += 1;
         if self.visited[level] > self.counts[level] {
-            return Err(format!(
-                "more level-{level} nodes than the {} the tree declares",
-                self.counts[level]
-            ));
+            return Err(format!("more level-{level} nodes than the {} the tree declares", self.counts[level]));
         }
         Ok(())
     }
@@ -663,8 +586,7 @@ impl Walk<'_> {
             } else {
                 let value = self.b.f32(entry)?;
                 let active = self.b.bit(value_mask, n)?;
-                self.builder
-                    .add_tile(child_origin, 1 << child_total, value, active);
+                self.builder.add_tile(child_origin, 1 << child_total, value, active);
             }
         }
         Ok(())
@@ -681,19 +603,13 @@ impl Walk<'_> {
         self.visit(0)?;
         let stored = self.b.ivec3(at)?;
         if stored & !7 != origin {
-            return Err(format!(
-                "leaf at byte {at} says origin {stored}, its parent places it at {origin}"
-            ));
+            return Err(format!("leaf at byte {at} says origin {stored}, its parent places it at {origin}"));
         }
         let mask: [u64; 8] = self.b.words(at + 16)?;
         let codes = at + 96;
         let bits = match self.codec {
             LeafCodec::Float => {
-                let bytes = self
-                    .b
-                    .data
-                    .get(codes..codes + 4 * BRICK_VOXELS)
-                    .ok_or("truncated leaf")?;
+                let bytes = self.b.data.get(codes..codes + 4 * BRICK_VOXELS).ok_or("truncated leaf")?;
                 for (v, c) in self.values.iter_mut().zip(bytes.chunks_exact(4)) {
                     *v = f32::from_le_bytes(c.try_into().expect("4 bytes"));
                 }
@@ -712,11 +628,7 @@ impl Walk<'_> {
         if let Some(bits) = bits {
             let minimum = self.b.f32(at + 80)?;
             let quantum = self.b.f32(at + 84)?;
-            let bytes = self
-                .b
-                .data
-                .get(codes..codes + (BRICK_VOXELS * bits as usize) / 8)
-                .ok_or("truncated leaf")?;
+            let bytes = self.b.data.get(codes..codes + (BRICK_VOXELS * bits as usize) / 8).ok_or("truncated leaf")?;
             let code_mask = (1u32 << bits) - 1;
             for (n, v) in self.values.iter_mut().enumerate() {
                 // Codes are packed lowest bits first (NanoVDB reads them from little-endian

@@ -78,17 +78,11 @@ fn pieces_with_gaps(range: (u64, u64), gaps: &[u64]) -> Vec<Piece> {
     let mut pieces = Vec::with_capacity(2 * gaps.len() + 1);
     let mut at = range.0;
     for &gap in gaps {
-        pieces.push(Piece::File {
-            start: at,
-            len: gap - at,
-        });
+        pieces.push(Piece::File { start: at, len: gap - at });
         pieces.push(Piece::Bytes(vec![0; 8]));
         at = gap;
     }
-    pieces.push(Piece::File {
-        start: at,
-        len: range.1 - at,
-    });
+    pieces.push(Piece::File { start: at, len: range.1 - at });
     pieces
 }
 
@@ -111,21 +105,9 @@ impl OpenVdbFile {
     /// Reads the header and grid descriptors of the file at `path`.
     pub fn open(path: impl AsRef<Path>) -> Result<OpenVdbFile, GridError> {
         let path = path.as_ref().to_path_buf();
-        let malformed = |message: String| GridError::Malformed {
-            path: path.clone(),
-            message,
-        };
-        let mut file = File::open(&path).map_err(|source| GridError::Io {
-            path: path.clone(),
-            source,
-        })?;
-        let len = file
-            .metadata()
-            .map_err(|source| GridError::Io {
-                path: path.clone(),
-                source,
-            })?
-            .len();
+        let malformed = |message: String| GridError::Malformed { path: path.clone(), message };
+        let mut file = File::open(&path).map_err(|source| GridError::Io { path: path.clone(), source })?;
+        let len = file.metadata().map_err(|source| GridError::Io { path: path.clone(), source })?.len();
         let mut head = [0u8; 12];
         if file.read_exact(&mut head).is_err() {
             return Err(malformed("too short for an OpenVDB file".into()));
@@ -146,12 +128,7 @@ impl OpenVdbFile {
         }
         let stream = SplicedStream::new(file, vec![Piece::File { start: 0, len }]);
         let reader = catch_unwind(AssertUnwindSafe(|| VdbReader::new(stream)))
-            .map_err(|p| {
-                malformed(format!(
-                    "vdb-rs failed reading the header: {}",
-                    panic_message(p)
-                ))
-            })?
+            .map_err(|p| malformed(format!("vdb-rs failed reading the header: {}", panic_message(p))))?
             .map_err(|e| malformed(format!("vdb-rs could not read the header: {e}")))?;
         let mut grids: Vec<GridDescriptor> = reader.grid_descriptors.into_values().collect();
         grids.sort_by_key(|g| g.grid_pos);
@@ -180,30 +157,19 @@ impl OpenVdbFile {
     /// Maps a layout walk's error for grid `grid`.
     fn layout_error(&self, grid: &str, e: LayoutError) -> GridError {
         match e {
-            LayoutError::Io(source) => GridError::Io {
-                path: self.path.clone(),
-                source,
-            },
-            LayoutError::Malformed(message) => GridError::Malformed {
-                path: self.path.clone(),
-                message: format!("grid \"{grid}\": {message}"),
-            },
-            LayoutError::UnsupportedMap(map, reason) => GridError::UnsupportedTransform {
-                path: self.path.clone(),
-                grid: grid.to_string(),
-                map,
-                reason,
-            },
+            LayoutError::Io(source) => GridError::Io { path: self.path.clone(), source },
+            LayoutError::Malformed(message) => {
+                GridError::Malformed { path: self.path.clone(), message: format!("grid \"{grid}\": {message}") }
+            }
+            LayoutError::UnsupportedMap(map, reason) => {
+                GridError::UnsupportedTransform { path: self.path.clone(), grid: grid.to_string(), map, reason }
+            }
             LayoutError::Unsupported(message) => self.unsupported(grid, message),
         }
     }
 
     fn unsupported(&self, grid: &str, message: String) -> GridError {
-        GridError::Unsupported {
-            path: self.path.clone(),
-            grid: grid.to_string(),
-            message,
-        }
+        GridError::Unsupported { path: self.path.clone(), grid: grid.to_string(), message }
     }
 
     /// Reads grid `name` into a [`SparseGrid`]. Only float grids (stored as float or half)
@@ -213,11 +179,7 @@ impl OpenVdbFile {
             return Err(GridError::GridNotFound {
                 path: self.path.clone(),
                 name: name.to_string(),
-                available: self
-                    .grids
-                    .iter()
-                    .map(|g| format!("{} ({})", g.name, value_type(&g.grid_type).0))
-                    .collect(),
+                available: self.grids.iter().map(|g| format!("{} ({})", g.name, value_type(&g.grid_type).0)).collect(),
             });
         };
         match grid_class(gd) {
@@ -239,34 +201,21 @@ impl OpenVdbFile {
             });
         }
         if !standard_shape {
-            return Err(self.unsupported(
-                name,
-                format!(
-                    "tree type {} is not the standard 5-4-3 tree vdb-rs reads",
-                    gd.grid_type
-                ),
-            ));
+            return Err(self
+                .unsupported(name, format!("tree type {} is not the standard 5-4-3 tree vdb-rs reads", gd.grid_type)));
         }
 
-        let io = |source| GridError::Io {
-            path: self.path.clone(),
-            source,
-        };
+        let io = |source| GridError::Io { path: self.path.clone(), source };
         let file = File::open(&self.path).map_err(io)?;
-        let header =
-            read_grid_header(&file, gd.grid_pos).map_err(|e| self.layout_error(name, e))?;
+        let header = read_grid_header(&file, gd.grid_pos).map_err(|e| self.layout_error(name, e))?;
         // An instance grid shares its parent's tree and has a transform of its own.
         let tree_gd = if gd.instance_parent.is_empty() {
             gd
         } else {
-            self.descriptor(&gd.instance_parent)
-                .ok_or_else(|| GridError::Malformed {
-                    path: self.path.clone(),
-                    message: format!(
-                        "grid \"{name}\" is an instance of \"{}\", which the file lacks",
-                        gd.instance_parent
-                    ),
-                })?
+            self.descriptor(&gd.instance_parent).ok_or_else(|| GridError::Malformed {
+                path: self.path.clone(),
+                message: format!("grid \"{name}\" is an instance of \"{}\", which the file lacks", gd.instance_parent),
+            })?
         };
         let tree_header = if std::ptr::eq(tree_gd, gd) {
             header.clone()
@@ -274,15 +223,9 @@ impl OpenVdbFile {
             read_grid_header(&file, tree_gd.grid_pos).map_err(|e| self.layout_error(name, e))?
         };
         let half = tree_gd.meta_data.is_half_float();
-        let layout = read_tree_layout(
-            &file,
-            tree_header.end,
-            tree_gd.block_pos,
-            tree_gd.end_pos,
-            tree_header.compression,
-            half,
-        )
-        .map_err(|e| self.layout_error(name, e))?;
+        let layout =
+            read_tree_layout(&file, tree_header.end, tree_gd.block_pos, tree_gd.end_pos, tree_header.compression, half)
+                .map_err(|e| self.layout_error(name, e))?;
         if layout.background != 0.0 {
             return Err(self.unsupported(
                 name,
@@ -299,15 +242,10 @@ impl OpenVdbFile {
             message: format!("grid \"{name}\": {message}"),
         })?;
         let mut grid = builder.build().map_err(|issue| match issue {
-            BuildIssue::NoActiveVoxels => GridError::EmptyGrid {
-                path: self.path.clone(),
-                grid: name.to_string(),
-            },
-            BuildIssue::TooLarge { cells } => GridError::TooLarge {
-                path: self.path.clone(),
-                grid: name.to_string(),
-                cells,
-            },
+            BuildIssue::NoActiveVoxels => GridError::EmptyGrid { path: self.path.clone(), grid: name.to_string() },
+            BuildIssue::TooLarge { cells } => {
+                GridError::TooLarge { path: self.path.clone(), grid: name.to_string(), cells }
+            }
         })?;
         grid.set_transform(header.world_from_index);
         Ok(grid)
@@ -323,17 +261,8 @@ impl OpenVdbFile {
         tree_header: &GridHeader,
         layout: &TreeLayout,
     ) -> Result<vdb_rs::Grid<f32>, GridError> {
-        let len = file
-            .metadata()
-            .map_err(|source| GridError::Io {
-                path: self.path.clone(),
-                source,
-            })?
-            .len();
-        let mut pieces = vec![
-            Piece::File { start: 0, len },
-            Piece::Bytes(substitute_header(tree_header.compression)),
-        ];
+        let len = file.metadata().map_err(|source| GridError::Io { path: self.path.clone(), source })?.len();
+        let mut pieces = vec![Piece::File { start: 0, len }, Piece::Bytes(substitute_header(tree_header.compression))];
         pieces.extend(pieces_with_gaps(layout.topology, &layout.topology_gaps));
         let buffers_piece = pieces.len();
         pieces.extend(pieces_with_gaps(layout.buffers, &layout.buffer_gaps));
@@ -341,9 +270,7 @@ impl OpenVdbFile {
         let grid_pos = stream.piece_start(1);
         let block_pos = stream.piece_start(buffers_piece);
 
-        let vdb_rs_failed = |what: String| {
-            self.unsupported(name, format!("vdb-rs could not read the grid: {what}"))
-        };
+        let vdb_rs_failed = |what: String| self.unsupported(name, format!("vdb-rs could not read the grid: {what}"));
         let read = catch_unwind(AssertUnwindSafe(|| {
             let mut reader = VdbReader::new(stream)?;
             let mut descriptor = tree_gd.clone();
@@ -367,19 +294,12 @@ impl OpenVdbFile {
 /// `1 << child_log2` voxels.
 fn child_origin(origin: IVec3, n: usize, log2: u32, child_log2: u32) -> IVec3 {
     let m = (1usize << log2) - 1;
-    let local = IVec3::new(
-        (n >> (2 * log2)) as i32,
-        ((n >> log2) & m) as i32,
-        (n & m) as i32,
-    );
+    let local = IVec3::new((n >> (2 * log2)) as i32, ((n >> log2) & m) as i32, (n & m) as i32);
     origin + (local << child_log2)
 }
 
 /// Copies vdb-rs's tree and the walk's root tiles into a builder.
-fn convert_tree(
-    grid: &vdb_rs::Grid<f32>,
-    layout: &TreeLayout,
-) -> Result<SparseGridBuilder, String> {
+fn convert_tree(grid: &vdb_rs::Grid<f32>, layout: &TreeLayout) -> Result<SparseGridBuilder, String> {
     let mut builder = SparseGridBuilder::new(layout.background);
     for &(origin, value, active) in &layout.root_tiles {
         builder.add_tile(origin, 4096, value, active);
@@ -396,10 +316,7 @@ fn convert_tree(
                 builder.add_tile(at, 128, upper.data[n], upper.value_mask[n]);
                 continue;
             }
-            let lower: &vdb_rs::Node4<f32> = upper
-                .nodes
-                .get(&(n as u32))
-                .ok_or("vdb-rs lost a lower node")?;
+            let lower: &vdb_rs::Node4<f32> = upper.nodes.get(&(n as u32)).ok_or("vdb-rs lost a lower node")?;
             if lower.data.len() != 1 << 12 || lower.child_mask.len() != 1 << 12 {
                 return Err("vdb-rs returned a lower node of the wrong size".into());
             }
@@ -424,10 +341,7 @@ fn convert_tree(
         }
     }
     if leaves != layout.leaf_count {
-        return Err(format!(
-            "vdb-rs decoded {leaves} leaves where the file has {}",
-            layout.leaf_count
-        ));
+        return Err(format!("vdb-rs decoded {leaves} leaves where the file has {}", layout.leaf_count));
     }
     Ok(builder)
 }

@@ -150,10 +150,7 @@ impl Scan {
 
 /// Opens `file` for a walk.
 fn scan(file: &File) -> Result<Scan, LayoutError> {
-    Ok(Scan {
-        r: BufReader::with_capacity(1 << 16, file.try_clone()?),
-        pos: 0,
-    })
+    Ok(Scan { r: BufReader::with_capacity(1 << 16, file.try_clone()?), pos: 0 })
 }
 
 /// Reads the grid header at `grid_pos`: compression flags, metadata (skipped) and transform.
@@ -192,10 +189,7 @@ pub(crate) fn read_grid_header(file: &File, grid_pos: u64) -> Result<GridHeader,
             }
             let row = |r: usize| DVec3::new(m[4 * r], m[4 * r + 1], m[4 * r + 2]);
             if m[3] != 0.0 || m[7] != 0.0 || m[11] != 0.0 || m[15] != 1.0 {
-                return Err(LayoutError::UnsupportedMap(
-                    map_name,
-                    "its matrix is projective, not affine".into(),
-                ));
+                return Err(LayoutError::UnsupportedMap(map_name, "its matrix is projective, not affine".into()));
             }
             (DMat3::from_cols(row(0), row(1), row(2)), row(3))
         }
@@ -206,23 +200,13 @@ pub(crate) fn read_grid_header(file: &File, grid_pos: u64) -> Result<GridHeader,
             ));
         }
         _ => {
-            return Err(LayoutError::UnsupportedMap(
-                map_name,
-                "unknown transform type".into(),
-            ));
+            return Err(LayoutError::UnsupportedMap(map_name, "unknown transform type".into()));
         }
     };
     if !(matrix.is_finite() && translation.is_finite()) || matrix.determinant() == 0.0 {
-        return Err(LayoutError::UnsupportedMap(
-            map_name,
-            "its matrix is not invertible".into(),
-        ));
+        return Err(LayoutError::UnsupportedMap(map_name, "its matrix is not invertible".into()));
     }
-    Ok(GridHeader {
-        compression,
-        world_from_index: DAffine3::from_mat3_translation(matrix, translation),
-        end: s.pos,
-    })
+    Ok(GridHeader { compression, world_from_index: DAffine3::from_mat3_translation(matrix, translation), end: s.pos })
 }
 
 /// How a grid's value arrays are stored.
@@ -234,19 +218,10 @@ struct Values {
 impl Values {
     /// Skips one `io::readCompressedValues` array of `num_values` values of which `active`
     /// are active; records where an empty half-float array was left out.
-    fn skip(
-        &self,
-        s: &mut Scan,
-        num_values: usize,
-        active: usize,
-        gaps: &mut Vec<u64>,
-    ) -> Result<(), LayoutError> {
+    fn skip(&self, s: &mut Scan, num_values: usize, active: usize, gaps: &mut Vec<u64>) -> Result<(), LayoutError> {
         let flag = s.u8()?;
         if flag > 6 {
-            return Err(LayoutError::Malformed(format!(
-                "per-node compression flag {flag} at byte {}",
-                s.pos - 1
-            )));
+            return Err(LayoutError::Malformed(format!("per-node compression flag {flag} at byte {}", s.pos - 1)));
         }
         // Flags 2, 4, 5 store one inactive value (always full float), 5 a second one.
         if matches!(flag, 2 | 4 | 5) {
@@ -260,11 +235,7 @@ impl Values {
             s.skip(num_values as u64 / 8)?;
         }
         // Flag 6 (no mask, all values) stores every value; otherwise only the active ones.
-        let count = if self.compression & COMPRESS_ACTIVE_MASK != 0 && flag != 6 {
-            active
-        } else {
-            num_values
-        };
+        let count = if self.compression & COMPRESS_ACTIVE_MASK != 0 && flag != 6 { active } else { num_values };
         let compressed = self.compression & (COMPRESS_ZIP | COMPRESS_BLOSC) != 0;
         if self.half && count == 0 {
             if compressed {
@@ -295,10 +266,7 @@ pub(crate) fn read_tree_layout(
     let mut s = scan(file)?;
     s.seek(topology_start)?;
     let values = Values { compression, half };
-    let mut layout = TreeLayout {
-        topology: (topology_start, 0),
-        ..TreeLayout::default()
-    };
+    let mut layout = TreeLayout { topology: (topology_start, 0), ..TreeLayout::default() };
     let buffer_count = s.u32()?;
     if buffer_count != 1 {
         return Err(LayoutError::Unsupported(format!(
@@ -343,10 +311,7 @@ pub(crate) fn read_tree_layout(
     }
     layout.buffers = (block_pos, s.pos);
     if s.pos != end_pos {
-        return Err(LayoutError::Malformed(format!(
-            "the leaf data ends at byte {} but the grid at {end_pos}",
-            s.pos
-        )));
+        return Err(LayoutError::Malformed(format!("the leaf data ends at byte {} but the grid at {end_pos}", s.pos)));
     }
     Ok(layout)
 }

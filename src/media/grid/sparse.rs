@@ -67,16 +67,9 @@ impl SparseGrid {
     /// # Panics
     /// If a dimension is zero or `values` does not hold `nx * ny * nz` values.
     pub fn from_dense(origin: IVec3, dims: UVec3, values: &[f32], background: f32) -> SparseGrid {
-        assert!(
-            dims.min_element() > 0,
-            "dense grid dimensions {dims} must be positive"
-        );
+        assert!(dims.min_element() > 0, "dense grid dimensions {dims} must be positive");
         let (nx, ny, nz) = (dims.x as usize, dims.y as usize, dims.z as usize);
-        assert_eq!(
-            values.len(),
-            nx * ny * nz,
-            "dense grid of {dims} needs nx*ny*nz values"
-        );
+        assert_eq!(values.len(), nx * ny * nz, "dense grid of {dims} needs nx*ny*nz values");
         let max = origin + dims.as_ivec3() - 1;
         let mut builder = SparseGridBuilder::new(background);
         let mut brick = [background; BRICK_VOXELS];
@@ -86,8 +79,7 @@ impl SparseGrid {
                     let brick_origin = IVec3::new(bx, by, bz) << BRICK_LOG2;
                     let mut mask = [0u64; 8];
                     for (n, v) in brick.iter_mut().enumerate() {
-                        let ijk = brick_origin
-                            + IVec3::new((n >> 6) as i32, ((n >> 3) & 7) as i32, (n & 7) as i32);
+                        let ijk = brick_origin + IVec3::new((n >> 6) as i32, ((n >> 3) & 7) as i32, (n & 7) as i32);
                         let local = ijk - origin;
                         *v = if local.cmpge(IVec3::ZERO).all() && ijk.cmple(max).all() {
                             mask[n >> 6] |= 1 << (n & 63);
@@ -101,9 +93,7 @@ impl SparseGrid {
                 }
             }
         }
-        builder
-            .build()
-            .expect("a dense grid has active voxels and a table of its own size")
+        builder.build().expect("a dense grid has active voxels and a table of its own size")
     }
 
     /// This grid with `world_from_index` as its transform (and world bounds recomputed).
@@ -117,10 +107,8 @@ impl SparseGrid {
     pub(crate) fn set_transform(&mut self, world_from_index: DAffine3) {
         self.world_from_index = world_from_index;
         self.index_from_world = world_from_index.inverse();
-        self.world_from_index_f32 = Affine3A::from_mat3_translation(
-            world_from_index.matrix3.as_mat3(),
-            world_from_index.translation.as_vec3(),
-        );
+        self.world_from_index_f32 =
+            Affine3A::from_mat3_translation(world_from_index.matrix3.as_mat3(), world_from_index.translation.as_vec3());
         self.index_from_world_f32 = Affine3A::from_mat3_translation(
             self.index_from_world.matrix3.as_mat3(),
             self.index_from_world.translation.as_vec3(),
@@ -200,8 +188,7 @@ impl SparseGrid {
         // Negative offsets wrap to huge unsigned values, so one compare per axis suffices.
         if b.x < self.brick_dims.x && b.y < self.brick_dims.y && b.z < self.brick_dims.z {
             Some(
-                ((b.x as usize * self.brick_dims.y as usize) + b.y as usize)
-                    * self.brick_dims.z as usize
+                ((b.x as usize * self.brick_dims.y as usize) + b.y as usize) * self.brick_dims.z as usize
                     + b.z as usize,
             )
         } else {
@@ -268,11 +255,7 @@ impl SparseGrid {
         let lo = min.max(table_lo);
         let hi = max.min(table_hi);
         // Voxels of the box outside the table hold the background.
-        let mut best = if lo != min || hi != max {
-            self.background
-        } else {
-            f32::NEG_INFINITY
-        };
+        let mut best = if lo != min || hi != max { self.background } else { f32::NEG_INFINITY };
         if lo.cmpgt(hi).any() {
             return best;
         }
@@ -321,10 +304,7 @@ fn mask_bounds(active: &[u64; 8]) -> Option<(IVec3, IVec3)> {
     let (y_lo, y_hi) = (rows.clone().min()?, rows.max()?);
     let columns = (0..8).fold(0u8, |a, y| a | (union >> (8 * y)) as u8);
     let (z_lo, z_hi) = (columns.trailing_zeros(), 7 - columns.leading_zeros());
-    Some((
-        IVec3::new(x_lo as i32, y_lo, z_lo as i32),
-        IVec3::new(x_hi as i32, y_hi, z_hi as i32),
-    ))
+    Some((IVec3::new(x_lo as i32, y_lo, z_lo as i32), IVec3::new(x_hi as i32, y_hi, z_hi as i32)))
 }
 
 /// Why a builder could not make a grid.
@@ -385,11 +365,7 @@ impl SparseGridBuilder {
     /// Adds a leaf: `origin` a multiple of 8, `values` in VDB order (index `x*64 + y*8 + z`),
     /// `active` the 512-bit value mask (bit n in word n / 64).
     pub(crate) fn add_leaf(&mut self, origin: IVec3, values: &[f32], active: &[u64; 8]) {
-        debug_assert_eq!(
-            origin & 7,
-            IVec3::ZERO,
-            "leaf origin {origin} not brick aligned"
-        );
+        debug_assert_eq!(origin & 7, IVec3::ZERO, "leaf origin {origin} not brick aligned");
         assert_eq!(values.len(), BRICK_VOXELS, "a leaf holds 512 values");
         if let Some((lo, hi)) = mask_bounds(active) {
             self.active_min = self.active_min.min(origin + lo);
@@ -420,8 +396,7 @@ impl SparseGridBuilder {
         }
         let brick = self.constant_brick(value);
         let first = origin >> BRICK_LOG2;
-        self.tiles
-            .push((first, first + (size >> BRICK_LOG2) - 1, brick));
+        self.tiles.push((first, first + (size >> BRICK_LOG2) - 1, brick));
     }
 
     /// Lays out the grid over the active bounding box (identity transform).
@@ -458,9 +433,7 @@ impl SparseGridBuilder {
             for bx in lo.x..=hi.x {
                 for by in lo.y..=hi.y {
                     for bz in lo.z..=hi.z {
-                        let c = grid
-                            .cell(IVec3::new(bx, by, bz))
-                            .expect("clipped to the table");
+                        let c = grid.cell(IVec3::new(bx, by, bz)).expect("clipped to the table");
                         grid.table[c] = brick;
                     }
                 }
@@ -517,11 +490,7 @@ mod tests {
                 }
             }
         }
-        (
-            SparseGrid::from_dense(origin, dims, &values, 0.0),
-            origin,
-            dims,
-        )
+        (SparseGrid::from_dense(origin, dims, &values, 0.0), origin, dims)
     }
 
     fn bumpy(p: IVec3) -> f32 {
@@ -566,28 +535,18 @@ mod tests {
     fn grid_sample_is_trilinear_with_voxel_centres_at_integers() {
         let (g, origin, _) = dense(bumpy);
         // At voxel centres the sample is the voxel.
-        for p in [
-            origin,
-            origin + IVec3::new(7, 2, 3),
-            IVec3::new(0, 0, 8),
-            IVec3::new(-8, -1, 15),
-        ] {
+        for p in [origin, origin + IVec3::new(7, 2, 3), IVec3::new(0, 0, 8), IVec3::new(-8, -1, 15)] {
             assert_eq!(g.sample(p.as_vec3()), g.value(p), "{p}");
         }
         // Elsewhere it matches trilinear weights, across brick edges and outside the box.
         let mut n = Numbers(7);
         for _ in 0..5000 {
-            let p = Vec3::new(
-                -14.0 + 28.0 * n.float(),
-                -5.0 + 14.0 * n.float(),
-                3.0 + 22.0 * n.float(),
-            );
+            let p = Vec3::new(-14.0 + 28.0 * n.float(), -5.0 + 14.0 * n.float(), 3.0 + 22.0 * n.float());
             let (s, r) = (g.sample(p), reference_sample(&g, p));
             assert!((s - r).abs() <= 1e-5 * r.abs().max(1.0), "{p}: {s} vs {r}");
         }
         // A linear field is reproduced exactly (up to rounding) between voxel centres.
-        let (lin, _, _) =
-            dense(|p| 0.5 + 0.25 * p.x as f32 - 0.125 * p.y as f32 + 0.0625 * p.z as f32);
+        let (lin, _, _) = dense(|p| 0.5 + 0.25 * p.x as f32 - 0.125 * p.y as f32 + 0.0625 * p.z as f32);
         let p = Vec3::new(-7.3, 0.6, 9.9);
         let expected = 0.5 + 0.25 * p.x - 0.125 * p.y + 0.0625 * p.z;
         assert!((lin.sample(p) - expected).abs() < 1e-5);
@@ -648,21 +607,12 @@ mod tests {
         let g = b.build().unwrap();
         // Background brick + one shared brick of ones.
         assert_eq!(g.brick_count(), 2);
-        assert_eq!(
-            g.index_bounds(),
-            (IVec3::new(-128, 0, 0), IVec3::new(23, 127, 127))
-        );
+        assert_eq!(g.index_bounds(), (IVec3::new(-128, 0, 0), IVec3::new(23, 127, 127)));
         assert_eq!(g.value(IVec3::new(20, 3, 3)), 1.0);
         assert_eq!(g.value(IVec3::new(-5, 3, 3)), 0.0);
-        assert_eq!(
-            g.max_over(IVec3::new(-100, 0, 0), IVec3::new(-1, 50, 50)),
-            0.0
-        );
+        assert_eq!(g.max_over(IVec3::new(-100, 0, 0), IVec3::new(-1, 50, 50)), 0.0);
         assert_eq!(g.max_over(IVec3::new(-100, 0, 0), IVec3::new(0, 0, 0)), 1.0);
-        assert_eq!(
-            SparseGridBuilder::new(0.0).build().unwrap_err(),
-            BuildIssue::NoActiveVoxels
-        );
+        assert_eq!(SparseGridBuilder::new(0.0).build().unwrap_err(), BuildIssue::NoActiveVoxels);
     }
 
     #[test]
@@ -678,10 +628,7 @@ mod tests {
         let voxels = (hi - lo + 1).as_i64vec3();
         assert!(voxels.x * voxels.y * voxels.z > 6_000_000_000);
         assert!(g.memory_bytes() < 60 << 20, "{} bytes", g.memory_bytes());
-        assert_eq!(
-            g.value(IVec3::new(992, 664, 1216) + IVec3::new(0, 0, 1)),
-            1.0
-        );
+        assert_eq!(g.value(IVec3::new(992, 664, 1216) + IVec3::new(0, 0, 1)), 1.0);
         assert_eq!(g.max_over(lo, hi), 511.0);
     }
 
@@ -701,10 +648,7 @@ mod tests {
         let b = g.world_bounds();
         for c in [origin, origin + dims.as_ivec3()] {
             let w = m.transform_point3(c.as_dvec3()).as_vec3();
-            assert!(
-                w.cmpge(b.min - 1e-5).all() && w.cmple(b.max + 1e-5).all(),
-                "{w} in {b:?}"
-            );
+            assert!(w.cmpge(b.min - 1e-5).all() && w.cmple(b.max + 1e-5).all(), "{w} in {b:?}");
         }
     }
 }

@@ -74,9 +74,8 @@ impl SplicedStream {
 
     /// The piece holding stream offset `pos` (the stream ends before `pieces.len()`).
     fn piece_at(&mut self, pos: u64) -> usize {
-        let in_piece = |s: &Self, i: usize| {
-            i < s.pieces.len() && s.starts[i] <= pos && pos < s.starts[i] + s.pieces[i].len()
-        };
+        let in_piece =
+            |s: &Self, i: usize| i < s.pieces.len() && s.starts[i] <= pos && pos < s.starts[i] + s.pieces[i].len();
         if !in_piece(self, self.current) {
             // Last piece starting at or before pos; empty pieces are skipped by the loop.
             let mut i = self.starts.partition_point(|&s| s <= pos).saturating_sub(1);
@@ -130,10 +129,7 @@ impl Seek for SplicedStream {
                 self.pos = p;
                 Ok(p)
             }
-            None => Err(std::io::Error::new(
-                std::io::ErrorKind::InvalidInput,
-                "seek before the start of the stream",
-            )),
+            None => Err(std::io::Error::new(std::io::ErrorKind::InvalidInput, "seek before the start of the stream")),
         }
     }
 }

@@ -29,7 +29,7 @@ pub enum Field {
     /// `uniformgrid`: a dense grid over the medium's box (looked up in [0, 1]³).
     Dense(DenseGrid<f32>),
     /// `nanovdb`/`vdb`: a sparse grid, looked up through its index-from-medium transform.
-    Sparse(SparseGrid),
+    Sparse(Box<SparseGrid>),
 }
 
 impl Field {
@@ -105,7 +105,7 @@ pub enum Emission {
         /// VDB media, which pbrt-v4 scales by a constant.
         scale_grid: Option<DenseGrid<f32>>,
         /// RGB of the peak-normalised blackbody by temperature.
-        table: BlackbodyRgbTable,
+        table: Box<BlackbodyRgbTable>,
     },
 }
 

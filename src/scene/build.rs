@@ -597,7 +597,7 @@ fn build_medium(
                     scale: t.scale,
                     le_scale: settings.le_scale,
                     scale_grid: Some(scale_grid()?),
-                    table: BlackbodyRgbTable::new(film_cs),
+                    table: Box::new(BlackbodyRgbTable::new(film_cs)),
                 },
                 None if le != Rgb::ZERO => Emission::Radiance { le, scale: scale_grid()? },
                 None => Emission::None,
@@ -649,12 +649,12 @@ fn build_medium(
             let emission = if file.has_grid(temperature_name) {
                 let t = file.read_grid(temperature_name).map_err(|x| err(loc, x.to_string()))?;
                 Emission::Temperature {
-                    grid: Field::Sparse(t),
+                    grid: Field::Sparse(Box::new(t)),
                     offset: temperature.offset,
                     scale: temperature.scale,
                     le_scale: settings.le_scale,
                     scale_grid: None,
-                    table: BlackbodyRgbTable::new(film_cs),
+                    table: Box::new(BlackbodyRgbTable::new(film_cs)),
                 }
             } else {
                 Emission::None
@@ -664,7 +664,7 @@ fn build_medium(
                 m.name.clone(),
                 world,
                 b,
-                Density::Field(Field::Sparse(density)),
+                Density::Field(Field::Sparse(Box::new(density))),
                 sigma_a,
                 sigma_s,
                 emission,

@@ -2,5 +2,6 @@
 
 mod check;
 mod common;
+mod media;
 mod render;
 mod render_cli;

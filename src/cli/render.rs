@@ -161,6 +161,14 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
             if scene.surfaces.top.is_some() { "BVH built" } else { "no surfaces, no BVH" }
         );
         println!("lights      {}", scene.lights.len());
+        for m in &scene.media {
+            println!(
+                "medium      \"{}\": {}, {:.2} MiB",
+                m.name,
+                m.representation(),
+                m.memory_bytes() as f64 / (1 << 20) as f64
+            );
+        }
     }
     Ok(ExitCode::SUCCESS)
 }

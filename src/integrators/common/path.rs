@@ -151,9 +151,13 @@ pub fn trace_path<O: PathObserver>(
                         return false;
                     }
                     depth += 1;
-                    let pdf = t_maj[hero] * mp.sigma_s[hero];
-                    st.beta *= t_maj * mp.sigma_s / pdf;
-                    st.r_u *= t_maj * mp.sigma_s / pdf;
+                    // In a gray medium these ratios are 1: only chromatic media pay for
+                    // spectral MIS.
+                    if m.chromatic {
+                        let pdf = t_maj[hero] * mp.sigma_s[hero];
+                        st.beta *= t_maj * mp.sigma_s / pdf;
+                        st.r_u *= t_maj * mp.sigma_s / pdf;
+                    }
                     scattered = true;
                     scatter_p = p;
                     false
@@ -162,10 +166,12 @@ pub fn trace_path<O: PathObserver>(
                     let pdf = t_maj[hero] * sigma_n[hero];
                     if pdf == 0.0 {
                         st.beta = Rgb::ZERO;
-                    } else {
+                    } else if m.chromatic {
                         st.beta *= t_maj * sigma_n / pdf;
                         st.r_u *= t_maj * sigma_n / pdf;
                         st.r_l *= t_maj * sigma_maj / pdf;
+                    } else {
+                        st.r_l *= sigma_maj[hero] / sigma_n[hero];
                     }
                     st.beta != Rgb::ZERO && st.r_u != Rgb::ZERO
                 }
@@ -227,10 +233,12 @@ pub fn trace_path<O: PathObserver>(
                 }
                 continue;
             }
-            let h = t_maj[hero];
-            st.beta *= t_maj / h;
-            st.r_u *= t_maj / h;
-            st.r_l *= t_maj / h;
+            if m.chromatic {
+                let h = t_maj[hero];
+                st.beta *= t_maj / h;
+                st.r_u *= t_maj / h;
+                st.r_l *= t_maj / h;
+            }
         }
 
         let Some(hit) = hit else {

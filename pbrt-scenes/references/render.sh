@@ -1,0 +1,13 @@
+#!/usr/bin/env bash
+# Renders the volpath references of the scene suite (run from the repository root):
+#   bash pbrt-scenes/references/render.sh [SPP]
+# Each EXR records its spp, time, integrator and seed in its metadata.
+set -euo pipefail
+spp=${1:-2048}
+for scene in pbrt-scenes/*.pbrt; do
+  name=$(basename "$scene" .pbrt)
+  [ "$name" = default ] && continue
+  cargo run --release --quiet -- render "$scene" --integrator volpath --spp "$spp" --seed 7 --quiet \
+    --outfile "pbrt-scenes/references/$name.exr"
+  echo "$name done"
+done

@@ -30,6 +30,6 @@ pub use convert::{
     spectrum_illuminant_rgb, spectrum_reflectance_rgb, spectrum_to_photometric,
 };
 pub use error::SpectrumError;
-pub use named::{NAMED_SPECTRA, is_named_spectrum, named_spectrum};
+pub use named::{is_named_spectrum, named_spectrum, named_spectrum_names};
 pub use piecewise::PiecewiseLinearSpectrum;
 pub use spectrum::{ResolvedSpectrum, Spectrum, resolve, resolve_spectral};

@@ -91,7 +91,7 @@ mod tests {
         let samples = SpectrumSpec::Samples(vec![[400.0, 1.0], [700.0, 2.0]]);
         let s = resolve_spectral(&samples).unwrap().unwrap();
         assert_eq!(s.eval(550.0), 1.5);
-        for name in super::super::NAMED_SPECTRA {
+        for name in super::super::named_spectrum_names() {
             let s = resolve_spectral(&SpectrumSpec::Named(name.to_string()));
             assert!(matches!(s, Ok(Some(_))), "{name}");
         }

@@ -42,11 +42,9 @@ const SAMPLERS: [&str; 4] = [
     r#"Sampler "zsobol" "integer pixelsamples" 16"#,
 ];
 
-/// pbrt-v4's analytic test: inside a unit sphere with diffuse albedo 0.5 lit by a point light
-/// of intensity π at its centre, every point receives E = π (direct) and the interreflections
-/// sum to L = 0.5 / (1 − 0.5) = 1 (up to 0.5^maxdepth).
-#[test]
-fn point_light_in_reversed_sphere_gives_one_for_every_sampler() {
+/// Renders the inside of a reversed unit sphere with diffuse albedo 0.5 and `light` with every
+/// sampler, and checks each image's mean against `expected`.
+fn reversed_sphere_gives(light: &str, expected: f64) {
     for sampler in SAMPLERS {
         let text = format!(
             r#"LookAt 0 0 0  0 0 1  0 1 0
@@ -55,40 +53,30 @@ Camera "perspective" "float fov" 45
 Film "rgb" "integer xresolution" 32 "integer yresolution" 32
 Integrator "volpath" "integer maxdepth" 30
 WorldBegin
-LightSource "point" "rgb I" [3.14159265 3.14159265 3.14159265]
+{light}
 Material "diffuse" "rgb reflectance" [0.5 0.5 0.5]
 ReverseOrientation
 Shape "sphere" "float radius" 1"#
         );
         let img = render_scene(&scene(&text, &BuildOptions::default()));
         let (mean, se) = mean_and_stderr(&img);
-        let expected = 1.0 - 0.5f64.powi(30);
         assert!((mean - expected).abs() < 4.0 * se + 1e-3, "{sampler}: mean {mean} ± {se}, expected {expected}");
     }
+}
+
+/// pbrt-v4's analytic test: inside a unit sphere with diffuse albedo 0.5 lit by a point light
+/// of intensity π at its centre, every point receives E = π (direct) and the interreflections
+/// sum to L = 0.5 / (1 − 0.5) = 1 (up to 0.5^maxdepth).
+#[test]
+fn point_light_in_reversed_sphere_gives_one_for_every_sampler() {
+    reversed_sphere_gives(r#"LightSource "point" "rgb I" [3.14159265 3.14159265 3.14159265]"#, 1.0 - 0.5f64.powi(30));
 }
 
 /// pbrt-v4's second analytic test: an emitting sphere (Le = 0.5) with albedo 0.5 seen from
 /// inside: L = 0.5 + 0.5 L, so L = 1.
 #[test]
 fn emissive_sphere_gives_one_for_every_sampler() {
-    for sampler in SAMPLERS {
-        let text = format!(
-            r#"LookAt 0 0 0  0 0 1  0 1 0
-Camera "perspective" "float fov" 45
-{sampler}
-Film "rgb" "integer xresolution" 32 "integer yresolution" 32
-Integrator "volpath" "integer maxdepth" 30
-WorldBegin
-AreaLightSource "diffuse" "rgb L" [0.5 0.5 0.5]
-Material "diffuse" "rgb reflectance" [0.5 0.5 0.5]
-ReverseOrientation
-Shape "sphere" "float radius" 1"#
-        );
-        let img = render_scene(&scene(&text, &BuildOptions::default()));
-        let (mean, se) = mean_and_stderr(&img);
-        let expected = 1.0 - 0.5f64.powi(31);
-        assert!((mean - expected).abs() < 4.0 * se + 1e-3, "{sampler}: mean {mean} ± {se}, expected {expected}");
-    }
+    reversed_sphere_gives(r#"AreaLightSource "diffuse" "rgb L" [0.5 0.5 0.5]"#, 1.0 - 0.5f64.powi(31));
 }
 
 /// A Lambertian plane of albedo R under a distant light of radiance L at angle θ reflects

@@ -35,7 +35,12 @@ fn every_scene_matches_its_reference() {
         let desc = nimbus::parser::load_file(&path).unwrap();
         for integrator in integrators {
             let render_seed = |seed| {
-                let opts = BuildOptions { integrator: Some(integrator.clone()), spp: Some(16), seed: Some(seed), ..Default::default() };
+                let opts = BuildOptions {
+                    integrator: Some(integrator.clone()),
+                    spp: Some(16),
+                    seed: Some(seed),
+                    ..Default::default()
+                };
                 let scene = build_scene(&desc, &opts).unwrap_or_else(|e| panic!("{name}/{integrator}: {e}"));
                 let i = scene.integrator.create();
                 render(&scene, i.as_ref(), &RenderOptions { time_budget: None, quiet: true }).image
@@ -48,14 +53,23 @@ fn every_scene_matches_its_reference() {
             for c in 0..3 {
                 let m: f64 = a.pixels.iter().zip(&b.pixels).map(|(x, y)| 0.5 * (x[c] + y[c]) as f64).sum::<f64>() / n;
                 let r: f64 = reference.pixels.iter().map(|x| x[c] as f64).sum::<f64>() / n;
-                let var: f64 = a.pixels.iter().zip(&b.pixels).map(|(x, y)| (0.5 * (x[c] - y[c]) as f64).powi(2)).sum::<f64>() / n;
+                let var: f64 =
+                    a.pixels.iter().zip(&b.pixels).map(|(x, y)| (0.5 * (x[c] - y[c]) as f64).powi(2)).sum::<f64>() / n;
                 let se = (var / n * (1.0 + 1.0 / 64.0)).sqrt();
-                assert!((m - r).abs() < 4.0 * se + 0.005 * r, "{name}/{integrator}: channel {c} mean {m} vs reference {r} (se {se})");
+                assert!(
+                    (m - r).abs() < 4.0 * se + 0.005 * r,
+                    "{name}/{integrator}: channel {c} mean {m} vs reference {r} (se {se})"
+                );
             }
             // No region biased: block z-scores (per-pixel noise) of at most 5 in 99 % of blocks.
             let z = nimbus::metrics::block_z_scores(&a, &b, &reference);
             let outliers = z.iter().filter(|b| b.z.abs() > 5.0).count();
-            assert!(outliers * 100 <= z.len(), "{name}/{integrator}: {outliers} of {} blocks beyond 5σ, worst {:?}", z.len(), z.first());
+            assert!(
+                outliers * 100 <= z.len(),
+                "{name}/{integrator}: {outliers} of {} blocks beyond 5σ, worst {:?}",
+                z.len(),
+                z.first()
+            );
             checked += 1;
         }
     }

@@ -160,8 +160,8 @@ impl Pass<'_> {
 }
 
 /// Renders `scene` with `integrator`: to the scene's spp, or progressively for the time
-/// budget (passes of 1, 1, 2, 4, ... up to 64 samples until the budget is spent, or a ZSobol
-/// sampler reaches 65536 spp).
+/// budget (passes of 1, 1, 2, 4, ... up to 64 samples, the last ones cut to what the rest of
+/// the budget holds, until the budget is spent or a ZSobol sampler reaches 65536 spp).
 pub fn render(scene: &Scene, integrator: &dyn Integrator, options: &RenderOptions) -> RenderResult {
     render_with_passes(scene, integrator, options, &[], &mut |_| {})
 }
@@ -220,12 +220,13 @@ pub fn render_with_passes(
     let mut pass = 0u32;
     loop {
         let count = match options.time_budget {
-            Some(_) => {
-                if pass == 0 {
-                    1
-                } else {
-                    spp_done.clamp(1, 64)
-                }
+            Some(_) if pass == 0 => 1,
+            Some(t) => {
+                // No more samples than the rest of the budget holds at the pace so far, so the
+                // render overshoots the budget by about one sample's time, not one pass's.
+                let seconds = (start.elapsed() - paused).as_secs_f64();
+                let fit = ((t - seconds) * spp_done as f64 / seconds.max(1e-9)).max(1.0);
+                spp_done.clamp(1, 64).min(fit as u32)
             }
             None => target_spp - spp_done,
         }

@@ -25,8 +25,8 @@ use run::{Mode, Run};
 pub struct CompareArgs {
     /// Scene file (`.pbrt` or `.pbrt.gz`).
     scene: PathBuf,
-    /// Integrators to compare, comma-separated (any of nimbus's: see `nimbus render
-    /// --integrator`).
+    /// Integrators to compare, comma-separated (any of nimbus's; an unknown name is answered
+    /// with the list).
     #[arg(long, value_delimiter = ',', default_value = "volpath")]
     integrators: Vec<String>,
     /// Reference image (.exr) of the film's pixel bounds.

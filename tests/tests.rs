@@ -2,6 +2,7 @@
 
 mod check;
 mod common;
+mod compare;
 mod media;
 mod render;
 mod render_cli;

@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use anyhow::Result;
+use anyhow::{Context, Result};
 
 /// Arguments of `nimbus diff`.
 #[derive(clap::Args)]
@@ -33,8 +33,20 @@ fn parse_pixel(s: &str) -> Result<(usize, usize), String> {
 
 /// Prints the metrics; writes the error image if asked.
 pub fn run(args: &DiffArgs) -> Result<ExitCode> {
-    let read = |p: &PathBuf| nimbus::imageio::read_image(p).map_err(anyhow::Error::msg);
-    let (mut t, mut r) = (read(&args.test)?, read(&args.reference)?);
+    let read = |p: &PathBuf, what: &str| {
+        nimbus::imageio::read_image(p).map_err(anyhow::Error::msg).with_context(|| format!("cannot read the {what}"))
+    };
+    let (mut t, mut r) = (read(&args.test, "test image")?, read(&args.reference, "reference")?);
+    anyhow::ensure!(
+        (t.width, t.height) == (r.width, r.height),
+        "the images differ in size: {} is {}x{}, the reference {} is {}x{}",
+        args.test.display(),
+        t.width,
+        t.height,
+        args.reference.display(),
+        r.width,
+        r.height
+    );
     if let Some(reg) = &args.region {
         let crop = |img: &nimbus::imageio::Image| -> Result<nimbus::imageio::Image> {
             let (x0, x1, y0, y1) = (reg[0], reg[1].min(img.width), reg[2], reg[3].min(img.height));

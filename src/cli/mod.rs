@@ -2,6 +2,7 @@
 
 mod bench;
 mod check;
+mod compare;
 mod convert;
 mod diff;
 mod parity;
@@ -29,6 +30,9 @@ enum Command {
     Bench(bench::BenchArgs),
     /// Convert an image between EXR (linear float) and PNG (8-bit sRGB).
     Convert(convert::ConvertArgs),
+    /// Render a scene with several integrators at equal time and/or equal spp and measure each
+    /// against a VolPath reference: tables, charts, final and error images.
+    Compare(compare::CompareArgs),
     /// Compare an image with a reference: MSE, relMSE, MAE, MPE/MNE, means, error image.
     Diff(diff::DiffArgs),
     /// Judge two renders (different seeds) against a reference as the pbrt-v4 parity suite
@@ -45,6 +49,7 @@ pub fn run() -> ExitCode {
         Command::Render(args) => render::run(&args),
         Command::Parity(args) => parity::run(&args),
         Command::Diff(args) => diff::run(&args),
+        Command::Compare(args) => compare::run(&args),
         Command::Convert(args) => convert::run(&args),
         Command::Bench(args) => bench::run(&args),
     };

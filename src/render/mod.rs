@@ -14,9 +14,13 @@ use crate::integrators::Integrator;
 use crate::integrators::common::RayStats;
 use crate::samplers::{Sampler, get_camera_sample};
 use crate::scene::Scene;
+use crate::scene::sampler::SamplerSettings;
 
 /// Side of a square tile in pixels.
 const TILE: u32 = 16;
+
+/// Samples per pixel a ZSobol sampler is made for when rendering to a time budget.
+const PROGRESSIVE_SPP: u32 = 1 << 16;
 
 /// How to run a render.
 #[derive(Clone, Copy, Debug, Default)]
@@ -136,16 +140,66 @@ fn tiles(bounds: [u32; 4]) -> Vec<[u32; 4]> {
     v
 }
 
+/// The film after one pass of a render, handed to [`render_with_passes`]'s callback.
+pub struct Pass<'a> {
+    /// Samples per pixel so far.
+    pub spp: u32,
+    /// Seconds spent rendering so far; time spent in the callback is not counted.
+    pub seconds: f64,
+    /// Whether this is the last pass.
+    pub last: bool,
+    acc: &'a Accumulator,
+    imaging_ratio: f32,
+}
+
+impl Pass<'_> {
+    /// The image so far (what [`render`] would return if it stopped here).
+    pub fn image(&self) -> Image {
+        self.acc.image(self.imaging_ratio)
+    }
+}
+
 /// Renders `scene` with `integrator`: to the scene's spp, or progressively for the time
-/// budget (passes of 1, 1, 2, 4, ... samples until the budget is spent).
+/// budget (passes of 1, 1, 2, 4, ... up to 64 samples, the last ones cut to what the rest of
+/// the budget holds, until the budget is spent or a ZSobol sampler reaches 65536 spp).
 pub fn render(scene: &Scene, integrator: &dyn Integrator, options: &RenderOptions) -> RenderResult {
+    render_with_passes(scene, integrator, options, &[], &mut |_| {})
+}
+
+/// [`render`], calling `on_pass` after every pass: checkpoints of a progressive render at no
+/// extra rendering. Passes also end at each sample count in `pass_ends` (ascending), so a
+/// caller can look at the image at chosen spp. The time `on_pass` takes is excluded from the
+/// budget and from [`RenderResult::seconds`]. The image at a given spp is the same whatever
+/// `pass_ends` is, up to the order of floating-point sums.
+pub fn render_with_passes(
+    scene: &Scene,
+    integrator: &dyn Integrator,
+    options: &RenderOptions,
+    pass_ends: &[u32],
+    on_pass: &mut dyn FnMut(&Pass<'_>),
+) -> RenderResult {
     let start = Instant::now();
+    // Time spent in `on_pass`, not counted as rendering.
+    let mut paused = std::time::Duration::ZERO;
     let bounds = scene.pixel_bounds;
     let mut acc = Accumulator::new(bounds);
     let tiles = tiles(bounds);
     let full = UVec2::new(scene.film.resolution[0], scene.film.resolution[1]);
-    let base_sampler = Sampler::new(&scene.sampler, full);
+    let base_sampler = match options.time_budget {
+        // A budget may take more samples than the scene asks for. ZSobol's sample index shares
+        // its bits with the pixel's Morton code, so it gets room for PROGRESSIVE_SPP samples
+        // (the render stops there); the other samplers continue their sequences.
+        Some(_) => {
+            let pixel_samples = scene.sampler.pixel_samples.max(PROGRESSIVE_SPP);
+            Sampler::new(&SamplerSettings { pixel_samples, ..scene.sampler.clone() }, full)
+        }
+        None => Sampler::new(&scene.sampler, full),
+    };
     let target_spp = base_sampler.samples_per_pixel();
+    let max_spp = match (&base_sampler, options.time_budget) {
+        (Sampler::ZSobol(_), _) | (_, None) => target_spp,
+        (_, Some(_)) => u32::MAX,
+    };
     let rays = AtomicU64::new(0);
     let mut total_stats = RayStats::default();
     let progress = (!options.quiet).then(|| {
@@ -166,14 +220,20 @@ pub fn render(scene: &Scene, integrator: &dyn Integrator, options: &RenderOption
     let mut pass = 0u32;
     loop {
         let count = match options.time_budget {
-            Some(_) => {
-                if pass == 0 {
-                    1
-                } else {
-                    spp_done.clamp(1, 64)
-                }
+            Some(_) if pass == 0 => 1,
+            Some(t) => {
+                // No more samples than the rest of the budget holds at the pace so far, so the
+                // render overshoots the budget by about one sample's time, not one pass's.
+                let seconds = (start.elapsed() - paused).as_secs_f64();
+                let fit = ((t - seconds) * spp_done as f64 / seconds.max(1e-9)).max(1.0);
+                spp_done.clamp(1, 64).min(fit as u32)
             }
             None => target_spp - spp_done,
+        }
+        .min(max_spp - spp_done);
+        let count = match pass_ends.iter().find(|&&e| e > spp_done) {
+            Some(&end) => count.min(end - spp_done),
+            None => count,
         };
         if count == 0 {
             break;
@@ -215,10 +275,16 @@ pub fn render(scene: &Scene, integrator: &dyn Integrator, options: &RenderOption
         }
         spp_done += count;
         pass += 1;
-        match options.time_budget {
-            Some(t) if start.elapsed().as_secs_f64() >= t => break,
-            Some(_) => {}
-            None => break,
+        let seconds = (start.elapsed() - paused).as_secs_f64();
+        let last = match options.time_budget {
+            Some(t) => seconds >= t || spp_done >= max_spp,
+            None => spp_done >= target_spp,
+        };
+        let before = Instant::now();
+        on_pass(&Pass { spp: spp_done, seconds, last, acc: &acc, imaging_ratio: scene.imaging_ratio });
+        paused += before.elapsed();
+        if last {
+            break;
         }
     }
     if let Some(pb) = progress {
@@ -227,7 +293,7 @@ pub fn render(scene: &Scene, integrator: &dyn Integrator, options: &RenderOption
     RenderResult {
         image: acc.image(scene.imaging_ratio),
         spp: spp_done,
-        seconds: start.elapsed().as_secs_f64(),
+        seconds: (start.elapsed() - paused).as_secs_f64(),
         rays: total_stats,
     }
 }

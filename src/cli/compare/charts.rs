@@ -1,0 +1,288 @@
+//! Charts of a comparison with `plotters`, each as SVG and PNG. Text uses a subset of DejaVu
+//! Sans embedded in the binary (`assets/fonts/`), so no system font is needed.
+
+use std::path::Path;
+
+use anyhow::{Context, Result, anyhow};
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
+
+use super::run::Mode;
+use super::{Comparison, Run};
+
+const FONT: &[u8] = include_bytes!("../../../assets/fonts/DejaVuSans-subset.ttf");
+const FAMILY: &str = "sans-serif";
+const SIZE: (u32, u32) = (800, 500);
+
+/// Tableau 10: one color per integrator, in the order given on the command line.
+const COLORS: [RGBColor; 10] = [
+    RGBColor(31, 119, 180),
+    RGBColor(255, 127, 14),
+    RGBColor(44, 160, 44),
+    RGBColor(214, 39, 40),
+    RGBColor(148, 103, 189),
+    RGBColor(140, 86, 75),
+    RGBColor(227, 119, 194),
+    RGBColor(127, 127, 127),
+    RGBColor(188, 189, 34),
+    RGBColor(23, 190, 207),
+];
+
+fn color_of(cmp: &Comparison, integrator: &str) -> RGBColor {
+    let mut names: Vec<&str> = Vec::new();
+    for r in &cmp.runs {
+        if !names.contains(&r.integrator.as_str()) {
+            names.push(&r.integrator);
+        }
+    }
+    let i = names.iter().position(|n| *n == integrator).unwrap_or(0);
+    COLORS[i % COLORS.len()]
+}
+
+/// A number with about three significant digits and no trailing zeros: 0.25, 3, 120.
+pub fn short(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() {
+        return format!("{v}");
+    }
+    if !(1e-3..1e5).contains(&v.abs()) {
+        return format!("{v:.0e}");
+    }
+    let decimals = (2 - v.abs().log10().floor() as i32).max(0) as usize;
+    let s = format!("{v:.decimals$}");
+    if s.contains('.') { s.trim_end_matches('0').trim_end_matches('.').to_string() } else { s }
+}
+
+fn mode_title(cmp: &Comparison, mode: Mode) -> String {
+    match mode {
+        Mode::EqualTime => format!("equal time, {} s", short(cmp.time_budget.unwrap_or(0.0))),
+        Mode::EqualSpp => format!("equal spp, {} spp", cmp.spp.unwrap_or(0)),
+    }
+}
+
+type Svg<'a> = DrawingArea<SVGBackend<'a>, Shift>;
+type Bitmap<'a> = DrawingArea<BitMapBackend<'a>, Shift>;
+
+/// Writes `<base>.svg` and `<base>.png`, drawn by `svg` and `png` (the same generic drawing
+/// function on each backend).
+fn write_both(
+    base: &Path,
+    svg: impl FnOnce(Svg<'_>) -> Result<()>,
+    png: impl FnOnce(Bitmap<'_>) -> Result<()>,
+) -> Result<()> {
+    plotters::style::register_font(FAMILY, FontStyle::Normal, FONT)
+        .map_err(|_| anyhow!("the embedded chart font cannot be read"))?;
+    let mut text = String::new();
+    svg(SVGBackend::with_string(&mut text, SIZE).into_drawing_area())?;
+    let path = base.with_extension("svg");
+    std::fs::write(&path, text).with_context(|| format!("writing {}", path.display()))?;
+
+    let mut rgb = vec![255u8; (SIZE.0 * SIZE.1 * 3) as usize];
+    png(BitMapBackend::with_buffer(&mut rgb, SIZE).into_drawing_area())?;
+    let path = base.with_extension("png");
+    let mut bytes = Vec::new();
+    let mut enc = png::Encoder::new(&mut bytes, SIZE.0, SIZE.1);
+    enc.set_color(png::ColorType::Rgb);
+    enc.set_depth(png::BitDepth::Eight);
+    let mut writer = enc.write_header().context("encoding a chart")?;
+    writer.write_image_data(&rgb).context("encoding a chart")?;
+    writer.finish().context("encoding a chart")?;
+    std::fs::write(&path, bytes).with_context(|| format!("writing {}", path.display()))
+}
+
+fn plot_err<E: std::fmt::Display>(e: E) -> anyhow::Error {
+    anyhow!("drawing a chart: {e}")
+}
+
+/// Lower and upper ends of a log axis around the positive values.
+fn log_range(values: impl Iterator<Item = f64>) -> (f64, f64) {
+    let (lo, hi) = values
+        .filter(|v| *v > 0.0 && v.is_finite())
+        .fold((f64::INFINITY, 0.0f64), |(lo, hi), v| (lo.min(v), hi.max(v)));
+    if lo > hi { (1e-3, 1.0) } else { (lo / 1.5, hi * 1.5) }
+}
+
+/// relMSE against time since the scene was built, log-log, a line per integrator through its
+/// checkpoints: equal-time runs if there are any, else equal-spp runs.
+pub fn error_vs_time(cmp: &Comparison, base: &Path) -> Result<()> {
+    write_both(base, |root| draw_error_vs_time(cmp, root), |root| draw_error_vs_time(cmp, root))
+}
+
+fn draw_error_vs_time<DB: DrawingBackend>(cmp: &Comparison, root: DrawingArea<DB, Shift>) -> Result<()>
+where
+    DB::ErrorType: 'static,
+{
+    let mode = cmp.headline_mode();
+    let runs: Vec<&Run> = cmp.runs_of(mode).collect();
+    let points = |r: &Run| -> Vec<(f64, f64)> {
+        r.checkpoints
+            .iter()
+            .map(|c| (c.seconds, c.metrics.rel_mse))
+            .filter(|(t, e)| *t > 0.0 && *e > 0.0 && e.is_finite())
+            .collect()
+    };
+    let x = log_range(runs.iter().flat_map(|r| r.checkpoints.iter().map(|c| c.seconds)));
+    let y = log_range(runs.iter().flat_map(|r| r.checkpoints.iter().map(|c| c.metrics.rel_mse)));
+    let title = format!("relMSE vs time ({})", mode_title(cmp, mode));
+    root.fill(&WHITE).map_err(plot_err)?;
+    let mut chart = ChartBuilder::on(&root)
+        .caption(&title, (FAMILY, 22))
+        .margin(16)
+        .x_label_area_size(44)
+        .y_label_area_size(64)
+        .build_cartesian_2d((x.0..x.1).log_scale(), (y.0..y.1).log_scale())
+        .map_err(plot_err)?;
+    chart
+        .configure_mesh()
+        .x_desc("time since scene build (s)")
+        .y_desc("relMSE")
+        .x_label_formatter(&|v| short(*v))
+        .y_label_formatter(&|v| format!("{v:.0e}"))
+        .label_style((FAMILY, 14))
+        .axis_desc_style((FAMILY, 16))
+        .light_line_style(RGBColor(235, 235, 235))
+        .draw()
+        .map_err(plot_err)?;
+    for r in &runs {
+        let color = color_of(cmp, &r.integrator);
+        let pts = points(r);
+        chart
+            .draw_series(LineSeries::new(pts.clone(), color.stroke_width(2)))
+            .map_err(plot_err)?
+            .label(r.integrator.as_str())
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 24, y)], color.stroke_width(2)));
+        chart.draw_series(pts.iter().map(|p| Circle::new(*p, 3, color.filled()))).map_err(plot_err)?;
+    }
+    chart
+        .configure_series_labels()
+        .position(SeriesLabelPosition::UpperRight)
+        .label_font((FAMILY, 15))
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .draw()
+        .map_err(plot_err)?;
+    root.present().map_err(plot_err)?;
+    Ok(())
+}
+
+/// The final relMSE of each integrator as bars: equal time if it was asked for, else equal
+/// spp. Each bar is labelled with its value and spp.
+pub fn final_error_bars(cmp: &Comparison, base: &Path) -> Result<()> {
+    write_both(base, |root| draw_bars(cmp, root), |root| draw_bars(cmp, root))
+}
+
+fn draw_bars<DB: DrawingBackend>(cmp: &Comparison, root: DrawingArea<DB, Shift>) -> Result<()>
+where
+    DB::ErrorType: 'static,
+{
+    let mode = cmp.headline_mode();
+    let runs: Vec<&Run> = cmp.runs_of(mode).collect();
+    let n = runs.len();
+    let top = runs.iter().map(|r| r.last().metrics.rel_mse).filter(|v| v.is_finite()).fold(0.0, f64::max);
+    let top = if top > 0.0 { top * 1.2 } else { 1.0 };
+    root.fill(&WHITE).map_err(plot_err)?;
+    let mut chart = ChartBuilder::on(&root)
+        .caption(format!("final relMSE ({})", mode_title(cmp, mode)), (FAMILY, 22))
+        .margin(16)
+        .x_label_area_size(44)
+        .y_label_area_size(80)
+        .build_cartesian_2d(0.0..n as f64, 0.0..top)
+        .map_err(plot_err)?;
+    chart
+        .configure_mesh()
+        .disable_x_mesh()
+        .x_labels(0)
+        .y_desc("relMSE")
+        .y_label_formatter(&|v| if *v == 0.0 { "0".into() } else { format!("{v:.1e}") })
+        .label_style((FAMILY, 14))
+        .axis_desc_style((FAMILY, 16))
+        .light_line_style(WHITE)
+        .draw()
+        .map_err(plot_err)?;
+    let label_style = TextStyle::from((FAMILY, 14).into_font()).pos(Pos::new(HPos::Center, VPos::Bottom));
+    for (i, r) in runs.iter().enumerate() {
+        let c = r.last();
+        let v = c.metrics.rel_mse;
+        let x = i as f64;
+        let bar = Rectangle::new([(x + 0.2, 0.0), (x + 0.8, v)], color_of(cmp, &r.integrator).filled());
+        chart.draw_series(std::iter::once(bar)).map_err(plot_err)?;
+        let text = format!("{v:.3e} ({} spp, {} s)", c.spp, short(c.seconds));
+        chart.draw_series(std::iter::once(Text::new(text, (x + 0.5, v), label_style.clone()))).map_err(plot_err)?;
+        // The integrator's name under its bar (the x axis has no ticks of its own).
+        let (px, py) = chart.backend_coord(&(x + 0.5, 0.0));
+        let name_style = TextStyle::from((FAMILY, 15).into_font()).pos(Pos::new(HPos::Center, VPos::Top));
+        root.draw(&Text::new(r.integrator.clone(), (px, py + 8), name_style)).map_err(plot_err)?;
+    }
+    root.present().map_err(plot_err)?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cli::compare::run::{Checkpoint, Reference, ReferenceSource};
+    use nimbus::imageio::Image;
+    use nimbus::metrics::ErrorMetrics;
+
+    fn run(name: &str, mode: Mode, scale: f64) -> Run {
+        let checkpoints = (0..12)
+            .map(|i| {
+                let spp = 1u32 << i;
+                let e = scale / spp as f64 + 1e-5;
+                let metrics = ErrorMetrics {
+                    mse: e,
+                    rmse: e.sqrt(),
+                    rel_mse: e,
+                    mae: e,
+                    mpe: e,
+                    mne: e,
+                    mean_test: 0.5,
+                    mean_reference: 0.5,
+                };
+                Checkpoint { seconds: 0.01 * spp as f64 * scale, spp, metrics, last: i == 11 }
+            })
+            .collect();
+        Run { integrator: name.into(), mode, setup_seconds: 0.01, checkpoints, image: Image::new(2, 2) }
+    }
+
+    /// Dark pixels in a box of the PNG: text and lines were drawn there.
+    fn ink(png: &Path, x: std::ops::Range<usize>, y: std::ops::Range<usize>) -> usize {
+        let img = nimbus::imageio::read_image(png).unwrap();
+        y.flat_map(|y| x.clone().map(move |x| (x, y))).filter(|&(x, y)| img.get(x, y).max_element() < 0.2).count()
+    }
+
+    #[test]
+    fn charts_draw_text_with_the_embedded_font() {
+        let dir = std::env::temp_dir().join(format!("nimbus-charts-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let cmp = Comparison {
+            scene: "s.pbrt".into(),
+            seed: 0,
+            checkpoints_per_doubling: 1,
+            time_budget: Some(10.0),
+            spp: None,
+            reference: Reference {
+                image: Image::new(2, 2),
+                path: "r.exr".into(),
+                source: ReferenceSource::File,
+                spp: None,
+                seed: None,
+            },
+            runs: vec![run("volpath", Mode::EqualTime, 1.0), run("othermethod", Mode::EqualTime, 0.3)],
+            diff_scale: Vec::new(),
+        };
+        error_vs_time(&cmp, &dir.join("t")).unwrap();
+        final_error_bars(&cmp, &dir.join("b")).unwrap();
+        for base in ["t", "b"] {
+            let png = dir.join(base).with_extension("png");
+            // The title is text: centred at the top.
+            assert!(ink(&png, 250..550, 5..35) > 100, "{base}: no title drawn");
+            let svg = std::fs::read_to_string(dir.join(base).with_extension("svg")).unwrap();
+            assert!(svg.contains("othermethod"), "{base}");
+        }
+        assert_eq!(short(0.25), "0.25");
+        assert_eq!(short(3.0), "3");
+        assert_eq!(short(120.0), "120");
+        assert_eq!(short(0.00012), "1e-4");
+    }
+}

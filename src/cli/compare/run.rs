@@ -1,0 +1,302 @@
+//! The reference image and one integrator's timed render with checkpoints.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{Context, Result};
+use nimbus::imageio::Image;
+use nimbus::metrics::{ErrorMetrics, error_metrics};
+use nimbus::parser::SceneDescription;
+use nimbus::render::{RenderOptions, render, render_with_passes};
+use nimbus::scene::{BuildOptions, Scene, build_scene, unused_parameters};
+
+/// Equal time or equal spp.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Mode {
+    /// `--time T`: every integrator gets the same wall time, setup included.
+    EqualTime,
+    /// `--spp N`: every integrator renders N samples per pixel.
+    EqualSpp,
+}
+
+impl Mode {
+    /// Name in the outputs.
+    pub fn label(self) -> &'static str {
+        match self {
+            Mode::EqualTime => "equal-time",
+            Mode::EqualSpp => "equal-spp",
+        }
+    }
+}
+
+/// The error of a render against the reference at one point of its progress.
+#[derive(Clone, Debug)]
+pub struct Checkpoint {
+    /// Seconds since before the integrator's scene was built (time spent measuring the error
+    /// is excluded).
+    pub seconds: f64,
+    /// Samples per pixel so far.
+    pub spp: u32,
+    /// Error against the reference.
+    pub metrics: ErrorMetrics,
+    /// Whether this is the render's end.
+    pub last: bool,
+}
+
+/// One integrator's render in one mode.
+pub struct Run {
+    /// Integrator name.
+    pub integrator: String,
+    /// Equal time or equal spp.
+    pub mode: Mode,
+    /// Seconds to build the scene and create the integrator.
+    pub setup_seconds: f64,
+    /// Checkpoints in order; the last one is the final image.
+    pub checkpoints: Vec<Checkpoint>,
+    /// The final image.
+    pub image: Image,
+}
+
+impl Run {
+    /// The final checkpoint.
+    pub fn last(&self) -> &Checkpoint {
+        self.checkpoints.last().expect("a render has at least one pass")
+    }
+}
+
+/// Where the reference came from.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum ReferenceSource {
+    /// `--reference`
+    File,
+    /// `--reference-spp`, found in the cache.
+    Cached,
+    /// `--reference-spp`, rendered now.
+    Rendered,
+}
+
+/// The reference image.
+pub struct Reference {
+    /// Pixels.
+    pub image: Image,
+    /// Its file.
+    pub path: PathBuf,
+    /// How it was obtained.
+    pub source: ReferenceSource,
+    /// Its spp and seed, when known (from the metadata nimbus writes).
+    pub spp: Option<u32>,
+    /// Its seed, when known.
+    pub seed: Option<i32>,
+}
+
+/// FNV-1a, 64 bits: a stable fingerprint of the scene file for the reference cache.
+fn fnv1a(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, &b| (h ^ b as u64).wrapping_mul(0x0100_0000_01b3))
+}
+
+fn scene_error(e: nimbus::parser::Error) -> anyhow::Error {
+    anyhow::anyhow!("{e}")
+}
+
+impl Reference {
+    /// `--reference path`: any EXR (or PNG); its size is checked against the film later.
+    pub fn from_file(path: &Path) -> Result<Reference> {
+        let image = nimbus::imageio::read_image(path)
+            .map_err(anyhow::Error::msg)
+            .with_context(|| format!("reading the reference {}", path.display()))?;
+        let spp = image.metadata.get("nimbus:spp").and_then(|s| s.parse().ok());
+        let seed = image.metadata.get("nimbus:seed").and_then(|s| s.parse().ok());
+        Ok(Reference { image, path: path.to_path_buf(), source: ReferenceSource::File, spp, seed })
+    }
+
+    /// `--reference-spp n`: `<scene dir>/<stem>.volpath-<n>spp-seed<seed>.exr` if it is there
+    /// and its metadata (integrator, spp, seed, scene-file hash) and size match; otherwise a
+    /// VolPath render, written there.
+    pub fn cached_or_rendered(
+        scene_path: &Path,
+        stem: &str,
+        desc: &SceneDescription,
+        spp: u32,
+        seed: i32,
+        quiet: bool,
+        say: &dyn Fn(String),
+    ) -> Result<Reference> {
+        let dir = scene_path.parent().unwrap_or(Path::new("."));
+        let path = dir.join(format!("{stem}.volpath-{spp}spp-seed{seed}.exr"));
+        let bytes = std::fs::read(scene_path).with_context(|| format!("reading {}", scene_path.display()))?;
+        let hash = format!("{:016x}", fnv1a(&bytes));
+        let opts =
+            BuildOptions { integrator: Some("volpath".into()), spp: Some(spp), seed: Some(seed), ..Default::default() };
+        let scene = build_scene(desc, &opts).map_err(scene_error)?;
+        let (w, h) = film_size(&scene);
+        if path.exists() {
+            let why_not = match nimbus::imageio::read_exr(&path) {
+                Err(e) => Some(e),
+                Ok(image) => {
+                    let meta = |k: &str| image.metadata.get(k).map(String::as_str);
+                    let expected = [
+                        ("nimbus:integrator", "volpath".to_string()),
+                        ("nimbus:spp", spp.to_string()),
+                        ("nimbus:seed", seed.to_string()),
+                        ("nimbus:scene-hash", hash.clone()),
+                    ];
+                    let mismatch = expected.iter().find(|(k, v)| meta(k) != Some(v.as_str()));
+                    match mismatch {
+                        Some((k, v)) => Some(format!("its {k} is {:?}, not \"{v}\"", meta(k).unwrap_or("missing"))),
+                        None if (image.width, image.height) != (w, h) => {
+                            Some(format!("it is {}x{}, the film {w}x{h}", image.width, image.height))
+                        }
+                        None => {
+                            say(format!("reference: {} (cached)", path.display()));
+                            let source = ReferenceSource::Cached;
+                            return Ok(Reference { image, path, source, spp: Some(spp), seed: Some(seed) });
+                        }
+                    }
+                }
+            };
+            say(format!("reference: not reusing {}: {}", path.display(), why_not.unwrap_or_default()));
+        }
+        say(format!("reference: rendering volpath at {spp} spp, seed {seed} -> {}", path.display()));
+        let integrator = scene.integrator.create();
+        let result = render(&scene, integrator.as_ref(), &RenderOptions { time_budget: None, quiet });
+        let mut image = result.image;
+        image.metadata.insert("nimbus:integrator".into(), "volpath".into());
+        image.metadata.insert("nimbus:spp".into(), result.spp.to_string());
+        image.metadata.insert("nimbus:seed".into(), seed.to_string());
+        image.metadata.insert("nimbus:time".into(), format!("{:.3}", result.seconds));
+        image.metadata.insert("nimbus:scene".into(), scene_path.display().to_string());
+        image.metadata.insert("nimbus:scene-hash".into(), hash);
+        nimbus::imageio::write_image(&path, &image)
+            .map_err(anyhow::Error::msg)
+            .context("caching the reference next to the scene")?;
+        say(format!("reference: {} spp in {:.2} s", result.spp, result.seconds));
+        Ok(Reference { image, path, source: ReferenceSource::Rendered, spp: Some(spp), seed: Some(seed) })
+    }
+}
+
+fn film_size(scene: &Scene) -> (usize, usize) {
+    let b = scene.pixel_bounds;
+    ((b[2] - b[0]) as usize, (b[3] - b[1]) as usize)
+}
+
+/// Sample counts at which checkpoints are taken: `per_doubling` per doubling of the sample
+/// count, 2^(j / per_doubling) rounded, from 1 up to `max`.
+pub fn checkpoint_spp(per_doubling: u32, max: u32) -> Vec<u32> {
+    let mut v: Vec<u32> = Vec::new();
+    for j in 0.. {
+        let s = 2f64.powf(j as f64 / per_doubling.max(1) as f64).round();
+        if s > max as f64 {
+            break;
+        }
+        if v.last() != Some(&(s as u32)) {
+            v.push(s as u32);
+        }
+    }
+    v
+}
+
+/// Highest spp of the checkpoint schedule in an equal-time run (the last pass, where the
+/// budget runs out, is a checkpoint too).
+const MAX_CHECKPOINT_SPP: u32 = 1 << 24;
+
+/// What one integrator's render needs.
+pub struct RunSetup<'a> {
+    /// The parsed scene.
+    pub desc: &'a SceneDescription,
+    /// Integrator name.
+    pub integrator: &'a str,
+    /// Sampler seed.
+    pub seed: i32,
+    /// Equal time or equal spp.
+    pub mode: Mode,
+    /// `--time`
+    pub time: Option<f64>,
+    /// `--spp`
+    pub spp: Option<u32>,
+    /// Checkpoints per doubling of spp.
+    pub per_doubling: u32,
+    /// The reference.
+    pub reference: &'a Reference,
+    /// Print the scene's warnings.
+    pub print_warnings: bool,
+}
+
+/// Builds the scene for the integrator and renders it, measuring the error against the
+/// reference after every pass that ends on a checkpoint's spp and after the last pass. The
+/// clock starts before the scene is built, so building, the integrator's own preprocessing and
+/// rendering are all counted; measuring the error is not.
+pub fn run_integrator(s: &RunSetup<'_>) -> Result<Run> {
+    let t0 = Instant::now();
+    let spp = match s.mode {
+        Mode::EqualTime => None,
+        Mode::EqualSpp => s.spp,
+    };
+    let opts = BuildOptions { integrator: Some(s.integrator.into()), spp, seed: Some(s.seed), ..Default::default() };
+    let scene = build_scene(s.desc, &opts).map_err(scene_error)?;
+    let integrator = scene.integrator.create();
+    let setup_seconds = t0.elapsed().as_secs_f64();
+    let (w, h) = film_size(&scene);
+    let reference = &s.reference.image;
+    anyhow::ensure!(
+        (reference.width, reference.height) == (w, h),
+        "the reference {} is {}x{} but the scene's film renders {w}x{h} pixels",
+        s.reference.path.display(),
+        reference.width,
+        reference.height
+    );
+    if s.print_warnings {
+        let mut warnings = scene.warnings.clone();
+        warnings.extend(unused_parameters(s.desc));
+        for w in warnings {
+            match &w.loc {
+                Some(loc) => eprintln!("{loc}: warning: {}", w.message),
+                None => eprintln!("warning: {}", w.message),
+            }
+        }
+    }
+    let (budget, max_spp) = match s.mode {
+        Mode::EqualTime => {
+            let t = s.time.unwrap_or(0.0);
+            (Some((t - setup_seconds).max(0.0)), MAX_CHECKPOINT_SPP)
+        }
+        Mode::EqualSpp => (None, scene.sampler.pixel_samples),
+    };
+    let ends = checkpoint_spp(s.per_doubling, max_spp);
+    let mut checkpoints = Vec::new();
+    let result = render_with_passes(
+        &scene,
+        integrator.as_ref(),
+        &RenderOptions { time_budget: budget, quiet: true },
+        &ends,
+        &mut |pass| {
+            if pass.last || ends.binary_search(&pass.spp).is_ok() {
+                let image = pass.image();
+                if let Ok(metrics) = error_metrics(&image, reference) {
+                    let seconds = setup_seconds + pass.seconds;
+                    checkpoints.push(Checkpoint { seconds, spp: pass.spp, metrics, last: pass.last });
+                }
+            }
+        },
+    );
+    anyhow::ensure!(!checkpoints.is_empty(), "{}: the render ended before its first pass", s.integrator);
+    Ok(Run { integrator: s.integrator.to_string(), mode: s.mode, setup_seconds, checkpoints, image: result.image })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn checkpoints_are_log_spaced_in_spp() {
+        assert_eq!(checkpoint_spp(1, 64), [1, 2, 4, 8, 16, 32, 64]);
+        assert_eq!(checkpoint_spp(2, 16), [1, 2, 3, 4, 6, 8, 11, 16]);
+        assert_eq!(checkpoint_spp(1, 1), [1]);
+        assert_eq!(checkpoint_spp(3, 5), [1, 2, 3, 4, 5]);
+    }
+
+    #[test]
+    fn fnv1a_matches_the_published_vectors() {
+        assert_eq!(fnv1a(b""), 0xcbf2_9ce4_8422_2325);
+        assert_eq!(fnv1a(b"a"), 0xaf63_dc4c_8601_ec8c);
+    }
+}

@@ -42,8 +42,9 @@ impl IntegratorSettings {
         }
     }
 
-    /// Creates the integrator.
-    pub fn create(&self) -> Box<dyn Integrator> {
+    /// Creates the integrator for `scene` (as pbrt-v4's `Integrator::Create` receives the
+    /// scene's lights: methods may build per-scene tables here).
+    pub fn create(&self, _scene: &Scene) -> Box<dyn Integrator> {
         match self {
             IntegratorSettings::VolPath(s) => Box::new(volpath::VolPath::new(s)),
         }

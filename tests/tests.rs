@@ -5,3 +5,4 @@ mod common;
 mod media;
 mod render;
 mod render_cli;
+mod simplevolpath;

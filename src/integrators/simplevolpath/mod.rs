@@ -10,9 +10,9 @@
 //! paper (see README.md next to this file for the section and equation map and every
 //! deviation):
 //!
-//! - [`mixture`]: §3, the mixture density — sampling and evaluating p over its components;
-//! - [`intersection`]: §4, the probabilistic intersection — surfaces and media, one interface;
-//! - [`tracer`]: §2 and Eq. 2 and 5, the shading loop.
+//! - `mixture.rs`: §3, the mixture density — sampling and evaluating p over its components;
+//! - `intersection.rs`: §4, the probabilistic intersection — surfaces and media, one interface;
+//! - `tracer.rs`: §2 and Eq. 2 and 5, the shading loop.
 
 mod intersection;
 mod mixture;

@@ -236,6 +236,9 @@ pub fn trace(
                 path.depth += 1;
                 // Equation 5: the particle reflects the fraction Λ = σs/σt.
                 path.beta *= ratio(point.sigma_s, sigma_t);
+                if path.beta == Rgb::ZERO {
+                    break; // a purely absorbing particle
+                }
                 let phase = HenyeyGreenstein::new(scene.media[medium as usize].g);
                 (p, None, Scatterer::Medium { phase, wo })
             }

@@ -13,7 +13,7 @@ fn scene(text: &str) -> Scene {
 }
 
 fn render_scene(s: &Scene) -> Image {
-    let integrator = s.integrator.create();
+    let integrator = s.integrator.create(s);
     render(s, integrator.as_ref(), &RenderOptions { time_budget: None, quiet: true }).image
 }
 

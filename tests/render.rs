@@ -20,7 +20,7 @@ fn render_with(scene: &Scene, integrator: &dyn Integrator) -> Image {
 }
 
 fn render_scene(scene: &Scene) -> Image {
-    let integrator = scene.integrator.create();
+    let integrator = scene.integrator.create(scene);
     render_with(scene, integrator.as_ref())
 }
 

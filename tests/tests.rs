@@ -6,4 +6,5 @@ mod compare;
 mod media;
 mod render;
 mod render_cli;
+mod simplevolpath;
 mod suite;

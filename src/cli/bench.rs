@@ -82,7 +82,7 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode> {
                 let desc = nimbus::parser::load_file(&path).map_err(|e| e.to_string())?;
                 let scene = build_scene(&desc, &BuildOptions { spp: Some(args.spp), ..Default::default() })
                     .map_err(|e| e.to_string())?;
-                let integrator = scene.integrator.create();
+                let integrator = scene.integrator.create(&scene);
                 let r = nimbus::render::render(
                     &scene,
                     integrator.as_ref(),

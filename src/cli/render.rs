@@ -107,7 +107,7 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
         return Ok(ExitCode::FAILURE);
     }
     let t_built = Instant::now();
-    let integrator = scene.integrator.create();
+    let integrator = scene.integrator.create(&scene);
     let result = nimbus::render::render(
         &scene,
         integrator.as_ref(),

@@ -2,6 +2,7 @@
 //! scenes and `--integrator` use to settings readers and implementations.
 
 pub mod common;
+pub mod simplevolpath;
 pub mod volpath;
 
 use nimbus_parser::{Entity, Error};
@@ -17,10 +18,12 @@ use common::RayStats;
 pub enum IntegratorSettings {
     /// `volpath`
     VolPath(volpath::VolPathSettings),
+    /// `simplevolpath`
+    SimpleVolPath(simplevolpath::SimpleVolPathSettings),
 }
 
 /// Names of the integrators nimbus has.
-pub const INTEGRATOR_NAMES: &[&str] = &["volpath"];
+pub const INTEGRATOR_NAMES: &[&str] = &["volpath", "simplevolpath"];
 
 impl IntegratorSettings {
     /// Reads the integrator entity; `name_override` replaces the scene's choice (the
@@ -28,6 +31,9 @@ impl IntegratorSettings {
     pub fn from_entity(e: &Entity, name_override: Option<&str>) -> Result<IntegratorSettings, Error> {
         match name_override.unwrap_or(&e.name) {
             "volpath" => Ok(IntegratorSettings::VolPath(volpath::VolPathSettings::from_entity(e)?)),
+            "simplevolpath" => {
+                Ok(IntegratorSettings::SimpleVolPath(simplevolpath::SimpleVolPathSettings::from_entity(e)?))
+            }
             other => Err(Error::new(
                 &e.loc,
                 format!("integrator \"{other}\" is not available in nimbus (it has: {})", INTEGRATOR_NAMES.join(", ")),
@@ -39,13 +45,16 @@ impl IntegratorSettings {
     pub fn name(&self) -> &'static str {
         match self {
             IntegratorSettings::VolPath(_) => "volpath",
+            IntegratorSettings::SimpleVolPath(_) => "simplevolpath",
         }
     }
 
-    /// Creates the integrator.
-    pub fn create(&self) -> Box<dyn Integrator> {
+    /// Creates the integrator for `scene` (as pbrt-v4's `Integrator::Create` receives the
+    /// scene's lights: methods may build per-scene tables here).
+    pub fn create(&self, scene: &Scene) -> Box<dyn Integrator> {
         match self {
             IntegratorSettings::VolPath(s) => Box::new(volpath::VolPath::new(s)),
+            IntegratorSettings::SimpleVolPath(s) => Box::new(simplevolpath::SimpleVolPath::new(s, scene)),
         }
     }
 }

@@ -6,7 +6,7 @@ pub mod observer;
 pub mod path;
 
 pub use observer::{EmissionEvent, NeeEvent, NoObserver, PathObserver, VertexEvent};
-pub use path::{PathConfig, trace_path};
+pub use path::{PathConfig, medium_after, shading_frame, trace_path};
 
 /// Rays traced, for `--stats`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]

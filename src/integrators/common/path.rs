@@ -37,14 +37,14 @@ pub struct PathConfig {
 
 /// Local shading frame at a surface hit.
 #[inline]
-fn shading_frame(hit: &Hit) -> Frame {
+pub fn shading_frame(hit: &Hit) -> Frame {
     let s = &hit.surface;
     if s.dpdu.length_squared() > 0.0 { Frame::from_z_x(s.ns, s.dpdu) } else { Frame::from_z(s.ns) }
 }
 
 /// The medium on the side of a surface that `w` points into.
 #[inline]
-fn medium_after(scene: &Scene, hit: &Hit, w: Vec3, current: u32) -> u32 {
+pub fn medium_after(scene: &Scene, hit: &Hit, w: Vec3, current: u32) -> u32 {
     if hit.prim.interface == NONE {
         return current;
     }

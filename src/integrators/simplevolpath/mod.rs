@@ -1,0 +1,56 @@
+//! `simplevolpath`: the simplified path-tracing architecture (Shirley, Wang, Zimmerman et al.,
+//! "A Simplified Path Tracing Architecture"; `/work/shared/papers/`): no shadow rays, no
+//! direct/indirect split; at every scattering event one direction drawn from a mixture
+//! density over the BSDF or phase function, the luminaires and the environment, weighted by
+//! Equation 2 with the whole mixture density; participating media as probabilistic surfaces
+//! found by the same intersection routine as surfaces.
+//!
+//! pbrt-v4 has an integrator of this name (a minimal reference volumetric path tracer); nimbus
+//! keeps its name and its `maxdepth` parameter and implements the paper. The files follow the
+//! paper (see README.md next to this file for the section and equation map and every
+//! deviation):
+//!
+//! - `mixture.rs`: §3, the mixture density — sampling and evaluating p over its components;
+//! - `intersection.rs`: §4, the probabilistic intersection — surfaces and media, one interface;
+//! - `tracer.rs`: §2 and Eq. 2 and 5, the shading loop.
+
+mod intersection;
+mod mixture;
+mod settings;
+mod tracer;
+
+pub use settings::SimpleVolPathSettings;
+
+use super::Integrator;
+use super::common::RayStats;
+use crate::color::Rgb;
+use crate::geometry::Ray;
+use crate::samplers::Sampler;
+use crate::scene::Scene;
+use mixture::Mixture;
+use tracer::DeltaLights;
+
+/// The simplified path tracer, with the densities of one scene.
+pub struct SimpleVolPath {
+    max_depth: u32,
+    mixture: Mixture,
+    delta: DeltaLights,
+}
+
+impl SimpleVolPath {
+    /// The tracer for `scene` with the given settings (builds the light and environment
+    /// tables the mixture samples from).
+    pub fn new(s: &SimpleVolPathSettings, scene: &Scene) -> SimpleVolPath {
+        SimpleVolPath { max_depth: s.max_depth, mixture: Mixture::new(scene, s), delta: DeltaLights::new(scene) }
+    }
+}
+
+impl Integrator for SimpleVolPath {
+    fn name(&self) -> &'static str {
+        "simplevolpath"
+    }
+
+    fn li(&self, scene: &Scene, ray: Ray, sampler: &mut Sampler, stats: &mut RayStats) -> Rgb {
+        tracer::trace(scene, &self.mixture, &self.delta, self.max_depth, ray, sampler, stats)
+    }
+}

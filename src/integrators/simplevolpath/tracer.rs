@@ -1,0 +1,279 @@
+//! The shading loop: the paper's `radiance(ray)` (§2), made iterative. Every event the
+//! probabilistic intersection returns is shaded the same way, a surface with its BSDF and a
+//! medium particle with its phase function and albedo (§4: "exactly how surfaces are shaded,
+//! except that we use the phase function"):
+//!
+//! 1. add the emission found there (an area light hit, a medium particle's σa/σt·Le, the
+//!    environment when the ray escapes) — the only way light is found, apart from delta
+//!    lights below;
+//! 2. at a medium particle, weight by the single-scattering albedo Λ = σs/σt (Eq. 5);
+//! 3. draw one direction ω' from the mixture density p (§3) and trace it (§4);
+//! 4. multiply by ρ(ω, ω') cos θ' / p(ω') — Equation 2 — or p(ω, ω') / p(ω') in a medium,
+//!    with p evaluated for every component where the ray went ([`super::mixture`]).
+//!
+//! There is no shadow ray and no direct/indirect split, with one exception the paper does not
+//! meet: point, spot and distant lights are deltas that no direction can hit, so each vertex
+//! makes one deterministic connection to one of them ([`DeltaLights`]), traced with the same
+//! probabilistic intersection (a medium 'hit' blocks it like a surface does).
+//!
+//! Russian roulette (pbrt-v4's, on the throughput with refraction's scaling undone) ends
+//! long paths from the third vertex on; it is not in the paper.
+
+use glam::{Vec2, Vec3};
+
+use super::intersection::{Event, Intersection, Seed, intersect};
+use super::mixture::{Mixture, Scatterer};
+use crate::accel::{Hit, NONE};
+use crate::color::{Rgb, average};
+use crate::geometry::{Ray, offset_origin, spawn_ray};
+use crate::integrators::common::{RayStats, medium_after, shading_frame};
+use crate::lights::LightContext;
+use crate::media::phase::HenyeyGreenstein;
+use crate::samplers::Sampler;
+use crate::sampling::distribution::AliasTable;
+use crate::scene::Scene;
+use crate::textures::TexContext;
+
+/// Per-path state.
+struct Path {
+    /// Throughput (per channel: f_c / p_hero).
+    beta: Rgb,
+    /// Spectral-MIS ratios p_c / p_hero of chromatic media (1 otherwise).
+    r_u: Rgb,
+    /// The channel whose coefficients drive distance sampling in chromatic media.
+    hero: usize,
+    /// Scattering events so far.
+    depth: u32,
+    /// Product of η² over refractions (undone for Russian roulette).
+    eta_scale: f32,
+}
+
+impl Path {
+    /// Takes on the throughput factor of reaching an event.
+    #[inline]
+    fn carry(&mut self, i: &Intersection) {
+        self.beta *= i.beta;
+        self.r_u *= i.r_u;
+    }
+
+    /// Radiance `le` found at the current event, as it reaches the camera.
+    #[inline]
+    fn weigh(&self, le: Rgb) -> Rgb {
+        self.beta * le / average(self.r_u)
+    }
+
+    /// Russian roulette; true when the path ends. The sampler value is drawn at every vertex.
+    #[inline]
+    fn roulette(&mut self, sampler: &mut Sampler) -> bool {
+        let u = sampler.get_1d();
+        let rr = (self.beta * self.eta_scale / average(self.r_u)).max_element();
+        if rr < 1.0 && self.depth > 2 {
+            let q = (1.0 - rr).max(0.0);
+            if u < q {
+                return true;
+            }
+            self.beta /= 1.0 - q;
+        }
+        false
+    }
+}
+
+/// x / y per channel, 0 where y is 0 (a channel without extinction has no particles; its
+/// throughput to this event is already 0).
+#[inline]
+fn ratio(x: Rgb, y: Rgb) -> Rgb {
+    let r = |a: f32, b: f32| if b > 0.0 { a / b } else { 0.0 };
+    Rgb::new(r(x.x, y.x), r(x.y, y.y), r(x.z, y.z))
+}
+
+/// Radiance the infinite lights send along an escaping ray.
+#[inline]
+fn escaped(scene: &Scene, d: Vec3) -> Rgb {
+    scene.infinite_lights.iter().map(|&i| scene.lights[i as usize].le(d)).sum()
+}
+
+/// Point, spot and distant lights, chosen in proportion to power for the one deterministic
+/// connection per vertex that they need (a deviation from the paper: they cannot be hit).
+#[derive(Clone, Debug)]
+pub struct DeltaLights {
+    table: Option<AliasTable>,
+}
+
+impl DeltaLights {
+    /// The delta lights of `scene`.
+    pub fn new(scene: &Scene) -> DeltaLights {
+        let w: Vec<f32> =
+            scene.lights.iter().map(|l| if l.is_delta() { l.power(&scene.sphere) } else { 0.0 }).collect();
+        DeltaLights { table: w.iter().any(|p| *p > 0.0).then(|| AliasTable::new(&w)) }
+    }
+
+    /// The light arriving from one delta light at vertex `x` (on surface `hit`, or in a
+    /// medium), scattered towards the previous vertex: f·L·T / P(light), with the
+    /// transmittance T estimated by tracing the connection through the probabilistic
+    /// intersection (1 if it arrives, 0 if anything — a surface or a medium particle — comes
+    /// first; with spectral-MIS ratios in chromatic media).
+    #[allow(clippy::too_many_arguments)]
+    fn connect(
+        &self,
+        scene: &Scene,
+        x: Vec3,
+        hit: Option<&Hit>,
+        medium: u32,
+        sc: &Scatterer<'_>,
+        path: &Path,
+        sampler: &mut Sampler,
+        stats: &mut RayStats,
+    ) -> Rgb {
+        let Some(table) = &self.table else { return Rgb::ZERO };
+        let u_pick = sampler.get_1d();
+        let seed = Seed::draw(scene, sampler);
+        if !sc.is_non_specular() {
+            return Rgb::ZERO;
+        }
+        let Some(pick) = table.sample(u_pick) else { return Rgb::ZERO };
+        let light = &scene.lights[pick.index];
+        let ctx = LightContext { p: x };
+        let Some(ls) = light.sample_li(&ctx, Vec2::ZERO, &scene.surfaces.shapes, &scene.sphere) else {
+            return Rgb::ZERO;
+        };
+        let (f, _) = sc.eval(ls.wi);
+        if f == Rgb::ZERO || ls.l == Rgb::ZERO {
+            return Rgb::ZERO;
+        }
+        let (origin, mut medium) = match hit {
+            Some(h) => (offset_origin(h.surface.p, h.surface.n, ls.wi), medium_after(scene, h, ls.wi, medium)),
+            None => (x, medium),
+        };
+        let mut ray = Ray::new(origin, ls.wi);
+        let mut t_max = if ls.infinite { f32::INFINITY } else { (ls.p - origin).length() };
+        let (mut tr, mut r_u) = (Rgb::ONE, Rgb::ONE);
+        let mut seed = seed;
+        loop {
+            let i = intersect(scene, ray, medium, t_max, seed, path.hero, &mut stats.shadow);
+            tr *= i.beta;
+            r_u *= i.r_u;
+            match i.event {
+                Event::Escape => break,
+                // An emissive interface is still only a boundary for the connection.
+                Event::Surface(h) if scene.materials[h.prim.material as usize].is_interface() => {
+                    medium = medium_after(scene, &h, ray.d, i.medium);
+                    let next = spawn_ray(h.surface.p, h.surface.n, ray.d);
+                    t_max -= (next.o - ray.o).dot(ray.d);
+                    if t_max <= 0.0 {
+                        break;
+                    }
+                    ray = next;
+                    seed = Seed::draw(scene, sampler);
+                }
+                _ => return Rgb::ZERO,
+            }
+        }
+        path.beta * f * ls.l * tr / (pick.pmf * average(path.r_u * r_u))
+    }
+}
+
+/// Radiance arriving at the camera along `ray`, one path.
+pub fn trace(
+    scene: &Scene,
+    mixture: &Mixture,
+    delta: &DeltaLights,
+    max_depth: u32,
+    ray: Ray,
+    sampler: &mut Sampler,
+    stats: &mut RayStats,
+) -> Rgb {
+    let hero = if scene.has_chromatic_media { ((sampler.get_1d() * 3.0) as usize).min(2) } else { 0 };
+    let mut path = Path { beta: Rgb::ONE, r_u: Rgb::ONE, hero, depth: 0, eta_scale: 1.0 };
+    let mut l = Rgb::ZERO;
+    let seed = Seed::draw(scene, sampler);
+    let mut isect = intersect(scene, ray, scene.camera_medium, f32::INFINITY, seed, hero, &mut stats.bounce);
+    path.carry(&isect);
+    loop {
+        if path.beta == Rgb::ZERO || !path.beta.is_finite() {
+            break;
+        }
+        let wo = -isect.ray.d;
+        // Shade the event: emission, then what scatters there.
+        let bxdf;
+        let (x, hit, sc) = match isect.event {
+            Event::Escape => {
+                l += path.weigh(escaped(scene, isect.ray.d));
+                break;
+            }
+            Event::Surface(hit) => {
+                let s = &hit.surface;
+                if hit.prim.area_light != NONE {
+                    l += path.weigh(scene.lights[hit.prim.area_light as usize].emitted(s, wo));
+                }
+                let material = &scene.materials[hit.prim.material as usize];
+                let Some(b) = material.bxdf(&scene.textures, &TexContext { p: s.p, uv: s.uv }) else {
+                    // An emissive `interface`: its light is counted; the ray goes on.
+                    let medium = medium_after(scene, &hit, isect.ray.d, isect.medium);
+                    let seed = Seed::draw(scene, sampler);
+                    let ray = spawn_ray(s.p, s.n, isect.ray.d);
+                    isect = intersect(scene, ray, medium, f32::INFINITY, seed, hero, &mut stats.bounce);
+                    path.carry(&isect);
+                    continue;
+                };
+                if path.depth == max_depth {
+                    break;
+                }
+                path.depth += 1;
+                bxdf = b;
+                let frame = shading_frame(&hit);
+                (s.p, Some(hit), Scatterer::Surface { bxdf: &bxdf, frame, wo: frame.to_local(wo) })
+            }
+            Event::Medium { p, point, medium } => {
+                // The particle emits σa/σt·Le (what a 'hit' with probability ∝ σt sees of the
+                // σa·Le emitted per unit length), counted below maxdepth as pbrt-v4 does.
+                let sigma_t = point.sigma_a + point.sigma_s;
+                if path.depth < max_depth && point.le != Rgb::ZERO {
+                    l += path.weigh(ratio(point.sigma_a, sigma_t) * point.le);
+                }
+                if path.depth == max_depth {
+                    break;
+                }
+                path.depth += 1;
+                // Equation 5: the particle reflects the fraction Λ = σs/σt.
+                path.beta *= ratio(point.sigma_s, sigma_t);
+                if path.beta == Rgb::ZERO {
+                    break; // a purely absorbing particle
+                }
+                let phase = HenyeyGreenstein::new(scene.media[medium as usize].g);
+                (p, None, Scatterer::Medium { phase, wo })
+            }
+        };
+        if path.roulette(sampler) {
+            break;
+        }
+        l += delta.connect(scene, x, hit.as_ref(), isect.medium, &sc, &path, sampler, stats);
+
+        // Equation 2: one direction from the mixture density, traced by the probabilistic
+        // intersection, weighted by f / p with p evaluated where the ray went.
+        let u_comp = sampler.get_1d();
+        let u = sampler.get_2d();
+        let Some(s) = mixture.sample(scene, x, &sc, u_comp, u) else { break };
+        if s.f == Rgb::ZERO {
+            break;
+        }
+        let (ray, medium) = match &hit {
+            Some(h) => (spawn_ray(h.surface.p, h.surface.n, s.wi), medium_after(scene, h, s.wi, isect.medium)),
+            None => (Ray::new(x, s.wi), isect.medium),
+        };
+        let seed = Seed::draw(scene, sampler);
+        let next = intersect(scene, ray, medium, f32::INFINITY, seed, hero, &mut stats.bounce);
+        let first = match &next.event {
+            Event::Surface(h) => Some(h),
+            _ => None,
+        };
+        let Some(pdf) = mixture.pdf_along(scene, x, &s, first) else { break };
+        if pdf <= 0.0 {
+            break;
+        }
+        path.beta *= s.f / pdf;
+        path.eta_scale *= s.eta * s.eta;
+        isect = next;
+        path.carry(&isect);
+    }
+    l
+}

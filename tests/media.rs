@@ -5,7 +5,7 @@ use nimbus::imageio::Image;
 use nimbus::render::{RenderOptions, render};
 use nimbus::scene::{BuildOptions, Scene, build_scene};
 
-use crate::common::reference_scenes_dir;
+use crate::common::{grid_values, media_header, medium_cube, reference_scenes_dir};
 
 fn scene(text: &str) -> Scene {
     let desc = nimbus::parser::load_str(text, "test.pbrt").unwrap_or_else(|e| panic!("{e}"));
@@ -37,27 +37,6 @@ fn assert_channels(img: &Image, expected: [f64; 3], what: &str) {
             expected[c]
         );
     }
-}
-
-/// A unit cube [-1, 1]³ bounding medium `name`, seen through an `interface`.
-const CUBE: &str = r#"  MediumInterface "NAME" ""
-  Material "interface"
-  Shape "trianglemesh" "integer indices" [ 0 2 1 0 3 2  4 5 6 4 6 7  0 1 5 0 5 4  3 7 6 3 6 2  0 4 7 0 7 3  1 2 6 1 6 5 ]
-    "point3 P" [ -1 -1 -1  1 -1 -1  1 1 -1  -1 1 -1  -1 -1 1  1 -1 1  1 1 1  -1 1 1 ]"#;
-
-fn header(spp: u32, depth: u32) -> String {
-    format!(
-        r#"LookAt 0 0 5  0 0 0  0 1 0
-Camera "orthographic" "float screenwindow" [-0.5 0.5 -0.5 0.5]
-Sampler "sobol" "integer pixelsamples" {spp}
-Film "rgb" "integer xresolution" 16 "integer yresolution" 16
-Integrator "volpath" "integer maxdepth" {depth}
-"#
-    )
-}
-
-fn grid_values(n: usize, v: &str) -> String {
-    vec![v; n * n * n].join(" ")
 }
 
 /// Transmittance through a 2-unit slab of absorbing medium is exp(−σa·2), for a homogeneous
@@ -92,8 +71,8 @@ fn slab_transmittance_is_exponential() {
     for (medium, sigma) in media {
         let text = format!(
             "{}WorldBegin\nLightSource \"infinite\" \"rgb L\" [1 1 1]\n{medium}\nAttributeBegin\n{}\nAttributeEnd\n",
-            header(64, 5),
-            CUBE.replace("NAME", "m")
+            media_header("volpath", 64, 5),
+            medium_cube("m")
         );
         let img = render_scene(&scene(&text));
         let expected = sigma.map(|s: f64| (-2.0 * s).exp());
@@ -117,8 +96,8 @@ fn white_furnace_returns_the_environment() {
     for medium in media {
         let text = format!(
             "{}WorldBegin\nLightSource \"infinite\" \"rgb L\" [0.5 0.5 0.5]\n{medium}\nAttributeBegin\n{}\nAttributeEnd\n",
-            header(64, 200),
-            CUBE.replace("NAME", "m")
+            media_header("volpath", 64, 200),
+            medium_cube("m")
         );
         let img = render_scene(&scene(&text));
         assert_channels(&img, [0.5, 0.5, 0.5], &medium);
@@ -130,7 +109,7 @@ fn white_furnace_returns_the_environment() {
 #[test]
 fn infinite_emissive_medium_radiance_equals_le() {
     let homogeneous = r#"MakeNamedMedium "m" "string type" "homogeneous" "rgb sigma_a" [1 1 1] "rgb sigma_s" [2 2 2] "rgb Le" [0.5 0.25 0.125] "float g" 0.5"#;
-    let text = format!("MediumInterface \"m\" \"m\"\n{homogeneous}\n{}WorldBegin\n", header(32, 400));
+    let text = format!("MediumInterface \"m\" \"m\"\n{homogeneous}\n{}WorldBegin\n", media_header("volpath", 32, 400));
     assert_channels(&render_scene(&scene(&text)), [0.5, 0.25, 0.125], "homogeneous Le");
     // Temperature 20 scaled by 100: a 2000 K blackbody, peak-normalised as pbrt-v4 emits it.
     // The grid spans far beyond the camera's reach, so pbrt-v4's Lescale fade is 1 here.
@@ -141,7 +120,7 @@ fn infinite_emissive_medium_radiance_equals_le() {
         grid_values(2, "1"),
         grid_values(2, "20")
     );
-    let text = format!("MediumInterface \"m\" \"m\"\n{grid}\n{}WorldBegin\n", header(32, 400));
+    let text = format!("MediumInterface \"m\" \"m\"\n{grid}\n{}WorldBegin\n", media_header("volpath", 32, 400));
     let le = nimbus::spectra::blackbody_emission_rgb(2000.0, nimbus::parser::ColorSpace::Srgb);
     assert_channels(&render_scene(&scene(&text)), [le.x as f64, le.y as f64, le.z as f64], "blackbody grid");
 }
@@ -164,7 +143,7 @@ AttributeBegin
 {}
 AttributeEnd
 "#,
-            CUBE.replace("NAME", "m")
+            medium_cube("m")
         )
     };
     let homogeneous = body(

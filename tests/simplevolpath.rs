@@ -8,7 +8,7 @@ use nimbus::integrators::volpath::{VolPath, VolPathSettings};
 use nimbus::render::{RenderOptions, render};
 use nimbus::scene::{BuildOptions, Scene, build_scene};
 
-use crate::common::{reference_scenes, scratch_dir};
+use crate::common::{grid_values, media_header, medium_cube, reference_scenes, scratch_dir};
 
 fn scene(text: &str) -> Scene {
     let desc = nimbus::parser::load_str(text, "test.pbrt").unwrap_or_else(|e| panic!("{e}"));
@@ -122,29 +122,6 @@ Shape "sphere" "float radius" 1"#
     }
 }
 
-/// A unit cube [-1, 1]³ bounding medium `name`, seen through an `interface`.
-const CUBE: &str = r#"AttributeBegin
-  MediumInterface "NAME" ""
-  Material "interface"
-  Shape "trianglemesh" "integer indices" [ 0 2 1 0 3 2  4 5 6 4 6 7  0 1 5 0 5 4  3 7 6 3 6 2  0 4 7 0 7 3  1 2 6 1 6 5 ]
-    "point3 P" [ -1 -1 -1  1 -1 -1  1 1 -1  -1 1 -1  -1 -1 1  1 -1 1  1 1 1  -1 1 1 ]
-AttributeEnd"#;
-
-fn header(spp: u32, depth: u32) -> String {
-    format!(
-        r#"LookAt 0 0 5  0 0 0  0 1 0
-Camera "orthographic" "float screenwindow" [-0.5 0.5 -0.5 0.5]
-Sampler "sobol" "integer pixelsamples" {spp}
-Film "rgb" "integer xresolution" 16 "integer yresolution" 16
-Integrator "simplevolpath" "integer maxdepth" {depth}
-"#
-    )
-}
-
-fn grid_values(n: usize, v: &str) -> String {
-    vec![v; n * n * n].join(" ")
-}
-
 /// White furnace: a non-absorbing medium in a uniform environment of radiance L returns L:
 /// media as probabilistic surfaces of albedo 1, for a homogeneous medium, a density grid and
 /// a chromatic rgbgrid (σs differing per channel: spectral MIS keeps each channel exact).
@@ -168,8 +145,8 @@ fn white_furnace_in_media_returns_the_environment() {
     for medium in media {
         let text = format!(
             "{}WorldBegin\nLightSource \"infinite\" \"rgb L\" [0.5 0.5 0.5]\n{medium}\n{}\n",
-            header(64, 200),
-            CUBE.replace("NAME", "m")
+            media_header("simplevolpath", 64, 200),
+            medium_cube("m")
         );
         assert_channels(&render_scene(&scene(&text)), [0.5; 3], &medium);
     }
@@ -184,7 +161,8 @@ fn infinite_emissive_medium_radiance_equals_le() {
         r#"MakeNamedMedium "m" "string type" "homogeneous" "rgb sigma_a" [1 0.5 2] "rgb sigma_s" [2 3 0.5] "rgb Le" [0.5 0.25 0.125] "float g" -0.2"#,
     ];
     for medium in media {
-        let text = format!("MediumInterface \"m\" \"m\"\n{medium}\n{}WorldBegin\n", header(32, 400));
+        let text =
+            format!("MediumInterface \"m\" \"m\"\n{medium}\n{}WorldBegin\n", media_header("simplevolpath", 32, 400));
         assert_channels(&render_scene(&scene(&text)), [0.5, 0.25, 0.125], medium);
     }
 }
@@ -236,10 +214,7 @@ AttributeBegin
   Shape "sphere" "float radius" 0.35
 AttributeEnd"#;
     let cube = |medium: &str| {
-        format!(
-            "{medium}\nAttributeBegin\nTranslate 0 0.8 0\nScale 0.6 0.6 0.6\n{}\nAttributeEnd",
-            CUBE.replace("NAME", "m")
-        )
+        format!("{medium}\nAttributeBegin\nTranslate 0 0.8 0\nScale 0.6 0.6 0.6\n{}\nAttributeEnd", medium_cube("m"))
     };
     let homogeneous = cube(
         r#"MakeNamedMedium "m" "string type" "homogeneous" "rgb sigma_a" [0.2 0.2 0.2] "rgb sigma_s" [2 2 2] "float g" 0.5"#,

@@ -31,3 +31,34 @@ pub fn scratch_dir(test: &str) -> PathBuf {
     std::fs::create_dir_all(&dir).unwrap();
     dir
 }
+
+/// A cube [-1, 1]³ bounding medium `name` through an `interface` surface, in its own attribute
+/// block: the media tests' standard volume.
+pub fn medium_cube(name: &str) -> String {
+    format!(
+        r#"AttributeBegin
+  MediumInterface "{name}" ""
+  Material "interface"
+  Shape "trianglemesh" "integer indices" [ 0 2 1 0 3 2  4 5 6 4 6 7  0 1 5 0 5 4  3 7 6 3 6 2  0 4 7 0 7 3  1 2 6 1 6 5 ]
+    "point3 P" [ -1 -1 -1  1 -1 -1  1 1 -1  -1 1 -1  -1 -1 1  1 -1 1  1 1 1  -1 1 1 ]
+AttributeEnd"#
+    )
+}
+
+/// Camera, sampler and 16×16 film looking down −z at the unit cube's centre (the central ray
+/// sees through [-1, 1]³), rendered by `integrator` with `maxdepth` `depth`.
+pub fn media_header(integrator: &str, spp: u32, depth: u32) -> String {
+    format!(
+        r#"LookAt 0 0 5  0 0 0  0 1 0
+Camera "orthographic" "float screenwindow" [-0.5 0.5 -0.5 0.5]
+Sampler "sobol" "integer pixelsamples" {spp}
+Film "rgb" "integer xresolution" 16 "integer yresolution" 16
+Integrator "{integrator}" "integer maxdepth" {depth}
+"#
+    )
+}
+
+/// `n`³ copies of the voxel value(s) `v`, as a grid parameter's text.
+pub fn grid_values(n: usize, v: &str) -> String {
+    vec![v; n * n * n].join(" ")
+}

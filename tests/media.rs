@@ -1,42 +1,14 @@
 //! Participating media checked against analytic answers, against each other, and against
 //! pbrt-v4's renders of the media parity scenes.
 
-use nimbus::imageio::Image;
-use nimbus::render::{RenderOptions, render};
 use nimbus::scene::{BuildOptions, Scene, build_scene};
 
-use crate::common::{grid_values, media_header, medium_cube, reference_scenes_dir};
+use crate::common::{
+    assert_channels, grid_values, load_scene, media_header, medium_cube, reference_scenes_dir, render_scene,
+};
 
 fn scene(text: &str) -> Scene {
-    let desc = nimbus::parser::load_str(text, "test.pbrt").unwrap_or_else(|e| panic!("{e}"));
-    build_scene(&desc, &BuildOptions::default()).unwrap_or_else(|e| panic!("{e}"))
-}
-
-fn render_scene(s: &Scene) -> Image {
-    let integrator = s.integrator.create(s);
-    render(s, integrator.as_ref(), &RenderOptions { time_budget: None, quiet: true }).image
-}
-
-/// Per-channel image mean and its standard error from the pixel spread.
-fn channel_stats(img: &Image) -> [(f64, f64); 3] {
-    let n = img.pixels.len() as f64;
-    let mut out = [(0.0, 0.0); 3];
-    for (c, o) in out.iter_mut().enumerate() {
-        let mean = img.pixels.iter().map(|p| p[c] as f64).sum::<f64>() / n;
-        let var = img.pixels.iter().map(|p| (p[c] as f64 - mean).powi(2)).sum::<f64>() / (n - 1.0);
-        *o = (mean, (var / n).sqrt());
-    }
-    out
-}
-
-fn assert_channels(img: &Image, expected: [f64; 3], what: &str) {
-    for (c, (mean, se)) in channel_stats(img).iter().enumerate() {
-        assert!(
-            (mean - expected[c]).abs() < 4.0 * se + 2e-3 * expected[c].max(1e-3),
-            "{what}: channel {c} mean {mean} ± {se}, expected {}",
-            expected[c]
-        );
-    }
+    load_scene(text, &BuildOptions::default())
 }
 
 /// Transmittance through a 2-unit slab of absorbing medium is exp(−σa·2), for a homogeneous

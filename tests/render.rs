@@ -2,26 +2,14 @@
 //! itself (MIS vs no next-event estimation, thread counts) and against pbrt-v4.
 
 use nimbus::imageio::Image;
-use nimbus::integrators::Integrator;
 use nimbus::integrators::common::PathConfig;
 use nimbus::integrators::volpath::VolPath;
-use nimbus::render::{RenderOptions, render};
 use nimbus::scene::{BuildOptions, Scene, build_scene};
 
-use crate::common::reference_scenes_dir;
+use crate::common::{load_scene, reference_scenes_dir, render_scene, render_with, reversed_sphere_images};
 
 fn scene(text: &str, opts: &BuildOptions) -> Scene {
-    let desc = nimbus::parser::load_str(text, "test.pbrt").unwrap_or_else(|e| panic!("{e}"));
-    build_scene(&desc, opts).unwrap_or_else(|e| panic!("{e}"))
-}
-
-fn render_with(scene: &Scene, integrator: &dyn Integrator) -> Image {
-    render(scene, integrator, &RenderOptions { time_budget: None, quiet: true }).image
-}
-
-fn render_scene(scene: &Scene) -> Image {
-    let integrator = scene.integrator.create(scene);
-    render_with(scene, integrator.as_ref())
+    load_scene(text, opts)
 }
 
 /// Mean of all pixels and channels, and the standard error of that mean estimated from the
@@ -35,30 +23,10 @@ fn mean_and_stderr(img: &Image) -> (f64, f64) {
     (mean, (var / n).sqrt())
 }
 
-const SAMPLERS: [&str; 4] = [
-    r#"Sampler "independent" "integer pixelsamples" 16"#,
-    r#"Sampler "stratified" "integer xsamples" 4 "integer ysamples" 4"#,
-    r#"Sampler "sobol" "integer pixelsamples" 16"#,
-    r#"Sampler "zsobol" "integer pixelsamples" 16"#,
-];
-
 /// Renders the inside of a reversed unit sphere with diffuse albedo 0.5 and `light` with every
 /// sampler, and checks each image's mean against `expected`.
 fn reversed_sphere_gives(light: &str, expected: f64) {
-    for sampler in SAMPLERS {
-        let text = format!(
-            r#"LookAt 0 0 0  0 0 1  0 1 0
-Camera "perspective" "float fov" 45
-{sampler}
-Film "rgb" "integer xresolution" 32 "integer yresolution" 32
-Integrator "volpath" "integer maxdepth" 30
-WorldBegin
-{light}
-Material "diffuse" "rgb reflectance" [0.5 0.5 0.5]
-ReverseOrientation
-Shape "sphere" "float radius" 1"#
-        );
-        let img = render_scene(&scene(&text, &BuildOptions::default()));
+    for (sampler, img) in reversed_sphere_images("volpath", light) {
         let (mean, se) = mean_and_stderr(&img);
         assert!((mean - expected).abs() < 4.0 * se + 1e-3, "{sampler}: mean {mean} ± {se}, expected {expected}");
     }

@@ -2,26 +2,17 @@
 //! and against `volpath`: the two are different unbiased estimators of the same image.
 
 use nimbus::imageio::Image;
-use nimbus::integrators::Integrator;
 use nimbus::integrators::simplevolpath::{SimpleVolPath, SimpleVolPathSettings};
 use nimbus::integrators::volpath::{VolPath, VolPathSettings};
-use nimbus::render::{RenderOptions, render};
 use nimbus::scene::{BuildOptions, Scene, build_scene};
 
-use crate::common::{grid_values, media_header, medium_cube, reference_scenes, scratch_dir};
+use crate::common::{
+    assert_channels, channel_stats, grid_values, load_scene, media_header, medium_cube, reference_scenes, render_scene,
+    render_with, reversed_sphere_images, scratch_dir,
+};
 
 fn scene(text: &str) -> Scene {
-    let desc = nimbus::parser::load_str(text, "test.pbrt").unwrap_or_else(|e| panic!("{e}"));
-    build_scene(&desc, &BuildOptions::default()).unwrap_or_else(|e| panic!("{e}"))
-}
-
-fn render_with(s: &Scene, integrator: &dyn Integrator) -> Image {
-    render(s, integrator, &RenderOptions { time_budget: None, quiet: true }).image
-}
-
-/// Renders with the scene's integrator.
-fn render_scene(s: &Scene) -> Image {
-    render_with(s, s.integrator.create(s).as_ref())
+    load_scene(text, &BuildOptions::default())
 }
 
 /// Renders with `simplevolpath` and with `volpath`, both with the scene's `maxdepth`.
@@ -33,28 +24,6 @@ fn render_both(s: &Scene, max_depth: u32) -> (Image, Image) {
         light_sampler: nimbus::integrators::volpath::LightSamplerKind::Bvh,
     });
     (render_with(s, &simple), render_with(s, &volpath))
-}
-
-/// Per-channel image mean and its standard error from the pixel spread.
-fn channel_stats(img: &Image) -> [(f64, f64); 3] {
-    let n = img.pixels.len() as f64;
-    let mut out = [(0.0, 0.0); 3];
-    for (c, o) in out.iter_mut().enumerate() {
-        let mean = img.pixels.iter().map(|p| p[c] as f64).sum::<f64>() / n;
-        let var = img.pixels.iter().map(|p| (p[c] as f64 - mean).powi(2)).sum::<f64>() / (n - 1.0);
-        *o = (mean, (var / n).sqrt());
-    }
-    out
-}
-
-fn assert_channels(img: &Image, expected: [f64; 3], what: &str) {
-    for (c, (mean, se)) in channel_stats(img).iter().enumerate() {
-        assert!(
-            (mean - expected[c]).abs() < 4.0 * se + 2e-3 * expected[c].max(1e-3),
-            "{what}: channel {c} mean {mean} ± {se}, expected {}",
-            expected[c]
-        );
-    }
 }
 
 /// The per-pixel difference a − b: its mean over pixels and channels and the standard error
@@ -69,33 +38,14 @@ fn mean_difference(a: &Image, b: &Image) -> (f64, f64) {
     (md, sd)
 }
 
-const SAMPLERS: [&str; 4] = [
-    r#"Sampler "independent" "integer pixelsamples" 16"#,
-    r#"Sampler "stratified" "integer xsamples" 4 "integer ysamples" 4"#,
-    r#"Sampler "sobol" "integer pixelsamples" 16"#,
-    r#"Sampler "zsobol" "integer pixelsamples" 16"#,
-];
-
 /// pbrt-v4's analytic test: an emitting sphere (Le = 0.5) of albedo 0.5 seen from inside has
 /// L = 0.5 + 0.5 L = 1. Here light is only found by hitting it: the mixture's luminaire
 /// density samples the sphere from its own surface.
 #[test]
 fn emissive_sphere_gives_one_for_every_sampler() {
-    for sampler in SAMPLERS {
-        let text = format!(
-            r#"LookAt 0 0 0  0 0 1  0 1 0
-Camera "perspective" "float fov" 45
-{sampler}
-Film "rgb" "integer xresolution" 32 "integer yresolution" 32
-Integrator "simplevolpath" "integer maxdepth" 30
-WorldBegin
-AreaLightSource "diffuse" "rgb L" [0.5 0.5 0.5]
-Material "diffuse" "rgb reflectance" [0.5 0.5 0.5]
-ReverseOrientation
-Shape "sphere" "float radius" 1"#
-        );
-        let img = render_scene(&scene(&text));
-        let expected = 1.0 - 0.5f64.powi(31);
+    let expected = 1.0 - 0.5f64.powi(31);
+    for (sampler, img) in reversed_sphere_images("simplevolpath", r#"AreaLightSource "diffuse" "rgb L" [0.5 0.5 0.5]"#)
+    {
         assert_channels(&img, [expected; 3], sampler);
     }
 }
@@ -104,20 +54,8 @@ Shape "sphere" "float radius" 1"#
 /// sphere of albedo 0.5 gives L = 1 (through the deterministic delta-light connection).
 #[test]
 fn point_light_in_reversed_sphere_gives_one_for_every_sampler() {
-    for sampler in SAMPLERS {
-        let text = format!(
-            r#"LookAt 0 0 0  0 0 1  0 1 0
-Camera "perspective" "float fov" 45
-{sampler}
-Film "rgb" "integer xresolution" 32 "integer yresolution" 32
-Integrator "simplevolpath" "integer maxdepth" 30
-WorldBegin
-LightSource "point" "rgb I" [3.14159265 3.14159265 3.14159265]
-Material "diffuse" "rgb reflectance" [0.5 0.5 0.5]
-ReverseOrientation
-Shape "sphere" "float radius" 1"#
-        );
-        let img = render_scene(&scene(&text));
+    let light = r#"LightSource "point" "rgb I" [3.14159265 3.14159265 3.14159265]"#;
+    for (sampler, img) in reversed_sphere_images("simplevolpath", light) {
         assert_channels(&img, [1.0 - 0.5f64.powi(30); 3], sampler);
     }
 }

@@ -3,6 +3,8 @@
 use std::path::PathBuf;
 use std::process::{Command, Output};
 
+use nimbus::imageio::Image;
+
 /// The pbrt-v4 parity scenes shipped beside the repository.
 pub fn reference_scenes_dir() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/pbrt-v4-references/scenes")
@@ -61,4 +63,75 @@ Integrator "{integrator}" "integer maxdepth" {depth}
 /// `n`³ copies of the voxel value(s) `v`, as a grid parameter's text.
 pub fn grid_values(n: usize, v: &str) -> String {
     vec![v; n * n * n].join(" ")
+}
+
+/// Parses `text` and builds its scene; a failure panics with the located error.
+pub fn load_scene(text: &str, opts: &nimbus::scene::BuildOptions) -> nimbus::scene::Scene {
+    let desc = nimbus::parser::load_str(text, "test.pbrt").unwrap_or_else(|e| panic!("{e}"));
+    nimbus::scene::build_scene(&desc, opts).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// Renders `scene` with `integrator` at the scene's spp.
+pub fn render_with(scene: &nimbus::scene::Scene, integrator: &dyn nimbus::integrators::Integrator) -> Image {
+    let options = nimbus::render::RenderOptions { time_budget: None, quiet: true };
+    nimbus::render::render(scene, integrator, &options).image
+}
+
+/// Renders `scene` with its own integrator.
+pub fn render_scene(scene: &nimbus::scene::Scene) -> Image {
+    render_with(scene, scene.integrator.create(scene).as_ref())
+}
+
+/// Per-channel image mean and its standard error from the pixel spread.
+pub fn channel_stats(img: &Image) -> [(f64, f64); 3] {
+    let n = img.pixels.len() as f64;
+    let mut out = [(0.0, 0.0); 3];
+    for (c, o) in out.iter_mut().enumerate() {
+        let mean = img.pixels.iter().map(|p| p[c] as f64).sum::<f64>() / n;
+        let var = img.pixels.iter().map(|p| (p[c] as f64 - mean).powi(2)).sum::<f64>() / (n - 1.0);
+        *o = (mean, (var / n).sqrt());
+    }
+    out
+}
+
+/// Every channel's image mean within 4 standard errors (plus 0.2 %) of `expected`.
+pub fn assert_channels(img: &Image, expected: [f64; 3], what: &str) {
+    for (c, (mean, se)) in channel_stats(img).iter().enumerate() {
+        assert!(
+            (mean - expected[c]).abs() < 4.0 * se + 2e-3 * expected[c].max(1e-3),
+            "{what}: channel {c} mean {mean} ± {se}, expected {}",
+            expected[c]
+        );
+    }
+}
+
+/// pbrt-v4's four samplers at 16 spp.
+pub const SAMPLERS: [&str; 4] = [
+    r#"Sampler "independent" "integer pixelsamples" 16"#,
+    r#"Sampler "stratified" "integer xsamples" 4 "integer ysamples" 4"#,
+    r#"Sampler "sobol" "integer pixelsamples" 16"#,
+    r#"Sampler "zsobol" "integer pixelsamples" 16"#,
+];
+
+/// pbrt-v4's analytic scene: the inside of a reversed unit sphere of diffuse albedo 0.5 with
+/// `light`, seen through a 32×32 film by `integrator` (maxdepth 30), once per sampler.
+pub fn reversed_sphere_images(integrator: &str, light: &str) -> Vec<(&'static str, Image)> {
+    SAMPLERS
+        .iter()
+        .map(|sampler| {
+            let text = format!(
+                r#"LookAt 0 0 0  0 0 1  0 1 0
+Camera "perspective" "float fov" 45
+{sampler}
+Film "rgb" "integer xresolution" 32 "integer yresolution" 32
+Integrator "{integrator}" "integer maxdepth" 30
+WorldBegin
+{light}
+Material "diffuse" "rgb reflectance" [0.5 0.5 0.5]
+ReverseOrientation
+Shape "sphere" "float radius" 1"#
+            );
+            (*sampler, render_scene(&load_scene(&text, &nimbus::scene::BuildOptions::default())))
+        })
+        .collect()
 }

@@ -165,7 +165,8 @@ fn media_scenes_match_pbrt_v4() {
         ("grid-cloud", 16, 0.01, 1.5),
         ("graph-cloud", 16, 0.01, 1.5),
         ("fog-spotlight", 16, 0.01, 1.5),
-        ("emissive-grid", 16, 0.01, 1.5),
+        // Emission inside the cloud is heavy-tailed: judged at the README's 32 spp.
+        ("emissive-grid", 32, 0.01, 1.5),
         ("vdb-cloud", 16, 0.01, 1.5),
         ("rgbgrid-smoke", 16, 0.03, 4.0),
         ("wax-dielectric", 32, 0.03, 4.0),

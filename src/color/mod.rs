@@ -1,4 +1,11 @@
-//! RGB color: nimbus transports light as linear RGB in the film's color space.
+//! The channels light is carried in. nimbus transports either linear RGB in the film's
+//! color space ([`Rgb`]) or pbrt-v4's sampled spectra (four wavelengths per path), chosen per
+//! scene; everything that multiplies light — BSDFs, media, lights, the path loop — is
+//! written once, generic over [`Channels`], and monomorphised for each representation.
+
+mod channels;
+
+pub use channels::Channels;
 
 use glam::Vec3;
 

@@ -7,7 +7,7 @@ pub mod volpath;
 
 use nimbus_parser::{Entity, Error};
 
-use crate::color::Rgb;
+use crate::color::{Channels, Rgb};
 use crate::geometry::Ray;
 use crate::samplers::Sampler;
 use crate::scene::Scene;
@@ -59,11 +59,40 @@ impl IntegratorSettings {
     }
 }
 
-/// A light transport method: radiance along camera rays.
+/// A light transport method: radiance along camera rays, in each representation nimbus
+/// transports. Per-ray methods implement [`RayIntegrator`] once, generic over the channels,
+/// and get this trait from it.
 pub trait Integrator: Sync {
     /// The method's name (as in scene files).
     fn name(&self) -> &'static str;
 
-    /// Radiance arriving at the camera along `ray`, one sample.
-    fn li(&self, scene: &Scene, ray: Ray, sampler: &mut Sampler, stats: &mut RayStats) -> Rgb;
+    /// Radiance arriving at the camera along `ray` as RGB, one sample.
+    fn li_rgb(&self, scene: &Scene, ray: Ray, lambda: &mut (), sampler: &mut Sampler, stats: &mut RayStats) -> Rgb;
+}
+
+/// A method that estimates radiance one camera ray at a time, written once for every
+/// representation of light (monomorphised for each).
+pub trait RayIntegrator: Sync {
+    /// The method's name (as in scene files).
+    fn name(&self) -> &'static str;
+
+    /// Radiance arriving at the camera along `ray` at the wavelengths `lambda`, one sample.
+    fn li<C: Channels>(
+        &self,
+        scene: &Scene,
+        ray: Ray,
+        lambda: &mut C::Lambda,
+        sampler: &mut Sampler,
+        stats: &mut RayStats,
+    ) -> C;
+}
+
+impl<T: RayIntegrator> Integrator for T {
+    fn name(&self) -> &'static str {
+        RayIntegrator::name(self)
+    }
+
+    fn li_rgb(&self, scene: &Scene, ray: Ray, lambda: &mut (), sampler: &mut Sampler, stats: &mut RayStats) -> Rgb {
+        self.li::<Rgb>(scene, ray, lambda, sampler, stats)
+    }
 }

@@ -6,15 +6,19 @@ use std::path::Path;
 
 use glam::{Affine3A, Vec2, Vec3};
 
-use crate::color::{Rgb, luminance};
+use nimbus_parser::ColorSpace;
+
+use crate::color::{Channels, Rgb, luminance};
 use crate::imageio::Image;
 use crate::sampling::distribution::PiecewiseConstant2D;
+use crate::spectra::RgbRole;
 
 /// An environment light's image, orientation and sampling distribution.
 #[derive(Clone, Debug)]
 pub struct EnvironmentMap {
     size: usize,
     pixels: Vec<Rgb>,
+    space: ColorSpace,
     world_from_light: Affine3A,
     light_from_world: Affine3A,
     distribution: PiecewiseConstant2D,
@@ -61,8 +65,13 @@ pub fn equal_area_sphere_to_square(d: Vec3) -> Vec2 {
 }
 
 impl EnvironmentMap {
-    /// An environment map from a square image, scaled by `scale`.
-    pub fn new(image: &Image, world_from_light: Affine3A, scale: f32) -> Result<EnvironmentMap, String> {
+    /// An environment map from a square image of color space `space`, scaled by `scale`.
+    pub fn new(
+        image: &Image,
+        space: ColorSpace,
+        world_from_light: Affine3A,
+        scale: f32,
+    ) -> Result<EnvironmentMap, String> {
         if image.width != image.height || image.width == 0 {
             return Err(format!(
                 "environment image is {}x{}; pbrt-v4 environment maps are square equal-area octahedral images",
@@ -77,6 +86,7 @@ impl EnvironmentMap {
         Ok(EnvironmentMap {
             size,
             pixels,
+            space,
             world_from_light,
             light_from_world: world_from_light.inverse(),
             distribution,
@@ -84,10 +94,24 @@ impl EnvironmentMap {
         })
     }
 
-    /// Reads an environment map image (EXR or PNG).
-    pub fn load(path: &Path, world_from_light: Affine3A, scale: f32) -> Result<EnvironmentMap, String> {
+    /// Reads an environment map image (EXR or PNG) of color space `space`.
+    pub fn load(
+        path: &Path,
+        space: ColorSpace,
+        world_from_light: Affine3A,
+        scale: f32,
+    ) -> Result<EnvironmentMap, String> {
         let image = crate::imageio::read_image(path)?;
-        EnvironmentMap::new(&image, world_from_light, scale)
+        EnvironmentMap::new(&image, space, world_from_light, scale)
+    }
+
+    /// Applies `f` to every pixel (e.g. RGB transport converting each texel through a camera
+    /// sensor once); the sampling distribution is kept, as it only needs to be proportional
+    /// to the radiance roughly.
+    pub fn map_pixels(&mut self, f: impl Fn(Rgb) -> Rgb) {
+        for p in &mut self.pixels {
+            *p = f(*p);
+        }
     }
 
     /// Mean luminance of the image (after scaling).
@@ -96,21 +120,24 @@ impl EnvironmentMap {
     }
 
     /// Radiance arriving from world direction `w` (nearest pixel, as pbrt-v4 looks it up).
-    pub fn lookup(&self, w: Vec3) -> Rgb {
+    pub fn lookup<C: Channels>(&self, w: Vec3, lambda: &C::Lambda) -> C {
         let wl = self.light_from_world.transform_vector3(w).normalize_or_zero();
-        self.pixel(equal_area_sphere_to_square(wl))
+        self.radiance(equal_area_sphere_to_square(wl), lambda)
     }
 
-    fn pixel(&self, uv: Vec2) -> Rgb {
+    /// The pixel at `uv` as emitted radiance (an illuminant spectrum for spectral transport,
+    /// as pbrt-v4's `ImageLe`).
+    #[inline]
+    fn radiance<C: Channels>(&self, uv: Vec2, lambda: &C::Lambda) -> C {
         let n = self.size as f32;
         let x = ((uv.x * n) as usize).min(self.size - 1);
         let y = ((uv.y * n) as usize).min(self.size - 1);
-        self.pixels[y * self.size + x]
+        C::from_rgb(self.pixels[y * self.size + x], RgbRole::Illuminant, self.space, lambda)
     }
 
     /// Samples a direction in proportion to luminance: (direction, pdf per solid angle,
     /// radiance).
-    pub fn sample(&self, u: Vec2) -> Option<(Vec3, f32, Rgb)> {
+    pub fn sample<C: Channels>(&self, u: Vec2, lambda: &C::Lambda) -> Option<(Vec3, f32, C)> {
         let s = self.distribution.sample(u);
         if s.pdf <= 0.0 {
             return None;
@@ -118,7 +145,7 @@ impl EnvironmentMap {
         let wl = equal_area_square_to_sphere(s.point);
         let w = self.world_from_light.transform_vector3(wl).normalize();
         // The mapping is area preserving: the solid-angle density is the square's over 4π.
-        Some((w, s.pdf / (4.0 * PI), self.pixel(s.point)))
+        Some((w, s.pdf / (4.0 * PI), self.radiance(s.point, lambda)))
     }
 
     /// Density of [`EnvironmentMap::sample`] for world direction `w`.
@@ -168,15 +195,16 @@ mod tests {
         for (k, p) in img.pixels.iter_mut().enumerate() {
             *p = Rgb::splat(1.0 + (k % 5) as f32);
         }
-        let map = EnvironmentMap::new(&img, Affine3A::IDENTITY, 1.0).unwrap();
+        let map = EnvironmentMap::new(&img, ColorSpace::Srgb, Affine3A::IDENTITY, 1.0).unwrap();
         for u in [Vec2::new(0.1, 0.2), Vec2::new(0.7, 0.4), Vec2::new(0.95, 0.9)] {
-            let (w, pdf, l) = map.sample(u).unwrap();
+            let (w, pdf, l) = map.sample::<Rgb>(u, &()).unwrap();
             assert!((map.pdf(w) - pdf).abs() < 1e-3 * pdf, "{} vs {pdf}", map.pdf(w));
-            assert_eq!(map.lookup(w), l);
+            assert_eq!(map.lookup::<Rgb>(w, &()), l);
         }
         // A constant map of 1 gives illuminance π.
         let flat = EnvironmentMap::new(
             &Image { pixels: vec![Rgb::ONE; 64 * 64], ..Image::new(64, 64) },
+            ColorSpace::Srgb,
             Affine3A::IDENTITY,
             1.0,
         )

@@ -12,10 +12,11 @@ use std::f32::consts::PI;
 use glam::{Vec2, Vec3};
 
 use crate::accel::{Geometry, ShapeStore};
-use crate::color::{Rgb, average};
+use crate::color::{Channels, Rgb, average};
 use crate::math::Frame;
 use crate::sampling::warp;
 use crate::shapes::{SurfaceHit, triangle_sample};
+use crate::spectra::SpectrumValue;
 
 /// What a light is.
 #[derive(Clone, Debug)]
@@ -25,7 +26,7 @@ pub enum LightKind {
         /// Position.
         p: Vec3,
         /// Radiant intensity.
-        i: Rgb,
+        i: SpectrumValue,
     },
     /// Point source limited to a cone with a smooth falloff.
     Spot {
@@ -34,7 +35,7 @@ pub enum LightKind {
         /// Frame whose z axis is the spot direction.
         frame: Frame,
         /// Radiant intensity on the axis.
-        i: Rgb,
+        i: SpectrumValue,
         /// cos of the angle where the falloff starts.
         cos_falloff_start: f32,
         /// cos of the cone angle (falloff end).
@@ -45,12 +46,12 @@ pub enum LightKind {
         /// Unit direction towards the light.
         w: Vec3,
         /// Radiance.
-        l: Rgb,
+        l: SpectrumValue,
     },
     /// Constant radiance from every direction.
     UniformInfinite {
         /// Radiance.
-        l: Rgb,
+        l: SpectrumValue,
     },
     /// Radiance from an equal-area octahedral image.
     ImageInfinite(Box<EnvironmentMap>),
@@ -59,7 +60,7 @@ pub enum LightKind {
         /// The emitting geometry (never an instance).
         geometry: Geometry,
         /// Emitted radiance.
-        l: Rgb,
+        l: SpectrumValue,
         /// Emits from both sides.
         two_sided: bool,
         /// Surface area (world space).
@@ -85,9 +86,9 @@ pub struct LightContext {
 
 /// Incident light sampled from a light.
 #[derive(Clone, Copy, Debug)]
-pub struct LightSample {
+pub struct LightSample<C = Rgb> {
     /// Radiance arriving (for delta lights, the incident radiance-like quantity I/r²).
-    pub l: Rgb,
+    pub l: C,
     /// Unit direction from the reference point towards the light.
     pub wi: Vec3,
     /// Density per solid angle (1 for delta lights).
@@ -131,26 +132,29 @@ impl Light {
     /// Total emitted power (channel average), for choosing lights in proportion to it.
     pub fn power(&self, scene: &SceneSphere) -> f32 {
         let p = match &self.kind {
-            LightKind::Point { i, .. } => 4.0 * PI * average(*i),
+            LightKind::Point { i, .. } => 4.0 * PI * average(i.rgb),
             LightKind::Spot { i, cos_falloff_start, cos_falloff_end, .. } => {
-                2.0 * PI * average(*i) * ((1.0 - cos_falloff_start) + (cos_falloff_start - cos_falloff_end) / 2.0)
+                2.0 * PI * average(i.rgb) * ((1.0 - cos_falloff_start) + (cos_falloff_start - cos_falloff_end) / 2.0)
             }
-            LightKind::Distant { l, .. } => PI * scene.radius * scene.radius * average(*l),
-            LightKind::UniformInfinite { l } => 4.0 * PI * PI * scene.radius * scene.radius * average(*l),
+            LightKind::Distant { l, .. } => PI * scene.radius * scene.radius * average(l.rgb),
+            LightKind::UniformInfinite { l } => 4.0 * PI * PI * scene.radius * scene.radius * average(l.rgb),
             LightKind::ImageInfinite(map) => 4.0 * PI * PI * scene.radius * scene.radius * map.average_radiance(),
-            LightKind::Area { l, two_sided, area, .. } => PI * if *two_sided { 2.0 } else { 1.0 } * area * average(*l),
+            LightKind::Area { l, two_sided, area, .. } => {
+                PI * if *two_sided { 2.0 } else { 1.0 } * area * average(l.rgb)
+            }
         };
         if p.is_finite() { p.max(0.0) } else { 0.0 }
     }
 
-    /// Samples incident light at `ctx`.
-    pub fn sample_li(
+    /// Samples incident light at `ctx`, in the path's channels.
+    pub fn sample_li<C: Channels>(
         &self,
         ctx: &LightContext,
         u: Vec2,
         shapes: &ShapeStore,
         scene: &SceneSphere,
-    ) -> Option<LightSample> {
+        lambda: &C::Lambda,
+    ) -> Option<LightSample<C>> {
         match &self.kind {
             LightKind::Point { p, i } => {
                 let d2 = p.distance_squared(ctx.p);
@@ -158,7 +162,15 @@ impl Light {
                     return None;
                 }
                 let wi = (*p - ctx.p) / d2.sqrt();
-                Some(LightSample { l: *i / d2, wi, pdf: 1.0, p: *p, n: Vec3::ZERO, delta: true, infinite: false })
+                Some(LightSample {
+                    l: C::eval(i, lambda) / d2,
+                    wi,
+                    pdf: 1.0,
+                    p: *p,
+                    n: Vec3::ZERO,
+                    delta: true,
+                    infinite: false,
+                })
             }
             LightKind::Spot { p, frame, i, cos_falloff_start, cos_falloff_end } => {
                 let d2 = p.distance_squared(ctx.p);
@@ -172,7 +184,7 @@ impl Light {
                     return None;
                 }
                 Some(LightSample {
-                    l: *i * (falloff / d2),
+                    l: C::eval(i, lambda) * (falloff / d2),
                     wi,
                     pdf: 1.0,
                     p: *p,
@@ -182,7 +194,7 @@ impl Light {
                 })
             }
             LightKind::Distant { w, l } => Some(LightSample {
-                l: *l,
+                l: C::eval(l, lambda),
                 wi: *w,
                 pdf: 1.0,
                 p: ctx.p + *w * (2.0 * scene.radius),
@@ -193,7 +205,7 @@ impl Light {
             LightKind::UniformInfinite { l } => {
                 let wi = warp::uniform_sphere(u);
                 Some(LightSample {
-                    l: *l,
+                    l: C::eval(l, lambda),
                     wi,
                     pdf: warp::UNIFORM_SPHERE_PDF,
                     p: ctx.p + wi * (2.0 * scene.radius),
@@ -203,7 +215,7 @@ impl Light {
                 })
             }
             LightKind::ImageInfinite(map) => {
-                let (wi, pdf, l) = map.sample(u)?;
+                let (wi, pdf, l) = map.sample::<C>(u, lambda)?;
                 Some(LightSample {
                     l,
                     wi,
@@ -240,10 +252,10 @@ impl Light {
                 if !pdf.is_finite() || pdf <= 0.0 {
                     return None;
                 }
-                let le = if *two_sided || cos_light > 0.0 { *l } else { Rgb::ZERO };
-                if le == Rgb::ZERO {
+                if !(*two_sided || cos_light > 0.0) || l.is_zero() {
                     return None;
                 }
+                let le = C::eval(l, lambda);
                 Some(LightSample { l: le, wi, pdf, p: s.p, n: s.n, delta: false, infinite: false })
             }
         }
@@ -271,20 +283,26 @@ impl Light {
 
     /// Radiance an area light emits from `hit` in direction `w` (pointing away from it).
     #[inline]
-    pub fn emitted(&self, hit: &SurfaceHit, w: Vec3) -> Rgb {
+    pub fn emitted<C: Channels>(&self, hit: &SurfaceHit, w: Vec3, lambda: &C::Lambda) -> C {
         match &self.kind {
-            LightKind::Area { l, two_sided, .. } if *two_sided || hit.n.dot(w) > 0.0 => *l,
-            _ => Rgb::ZERO,
+            LightKind::Area { l, two_sided, .. } if *two_sided || hit.n.dot(w) > 0.0 => C::eval(l, lambda),
+            _ => C::ZERO,
         }
+    }
+
+    /// Whether an area light emits from `hit` in direction `w` at all.
+    #[inline]
+    pub fn emits(&self, hit: &SurfaceHit, w: Vec3) -> bool {
+        matches!(&self.kind, LightKind::Area { l, two_sided, .. } if (*two_sided || hit.n.dot(w) > 0.0) && !l.is_zero())
     }
 
     /// Radiance an infinite light sends along a ray leaving the scene in direction `d`.
     #[inline]
-    pub fn le(&self, d: Vec3) -> Rgb {
+    pub fn le<C: Channels>(&self, d: Vec3, lambda: &C::Lambda) -> C {
         match &self.kind {
-            LightKind::UniformInfinite { l } => *l,
-            LightKind::ImageInfinite(map) => map.lookup(d),
-            _ => Rgb::ZERO,
+            LightKind::UniformInfinite { l } => C::eval(l, lambda),
+            LightKind::ImageInfinite(map) => map.lookup(d, lambda),
+            _ => C::ZERO,
         }
     }
 }

@@ -4,7 +4,8 @@
 use super::bxdf::{
     Bxdf, CoatedDiffuseBxdf, ConductorBxdf, DielectricBxdf, DiffuseBxdf, ThinDielectricBxdf, TrowbridgeReitz,
 };
-use crate::color::Rgb;
+use crate::color::Channels;
+use crate::spectra::{RgbRole, SpectrumValue};
 use crate::textures::{Tex, TexContext, Textures};
 
 /// Microfacet roughness inputs.
@@ -33,8 +34,9 @@ pub enum ConductorInput {
         eta: Tex,
         /// k (spectrum texture).
         k: Tex,
-        /// Multiplier on the Fresnel reflectance (1 unless a spectral fit needed it).
-        scale: Rgb,
+        /// Multiplier on the Fresnel reflectance (1 unless an RGB fit of spectral constants
+        /// needed it).
+        scale: SpectrumValue,
     },
     /// Normal-incidence reflectance (spectrum texture).
     Reflectance(Tex),
@@ -58,14 +60,14 @@ pub enum Material {
     /// Glass.
     Dielectric {
         /// Index of refraction.
-        eta: f32,
+        eta: SpectrumValue,
         /// Roughness.
         roughness: RoughnessTex,
     },
     /// Thin glass.
     ThinDielectric {
         /// Index of refraction.
-        eta: f32,
+        eta: SpectrumValue,
     },
     /// Dielectric coating over a diffuse base.
     CoatedDiffuse {
@@ -76,7 +78,7 @@ pub enum Material {
         /// Coating thickness (float texture).
         thickness: Tex,
         /// Coating IOR.
-        eta: f32,
+        eta: SpectrumValue,
         /// Albedo of the medium in the coating.
         albedo: Tex,
         /// Its asymmetry (float texture).
@@ -97,36 +99,48 @@ impl Material {
         matches!(self, Material::Interface)
     }
 
-    /// The BxDF at a hit (`None` for interfaces).
-    pub fn bxdf(&self, textures: &Textures, ctx: &TexContext) -> Option<Bxdf> {
+    /// The BxDF at a hit (`None` for interfaces), in the path's channels. A dispersive
+    /// index of refraction keeps only the path's first wavelength (pbrt-v4's dielectric
+    /// materials call `TerminateSecondary`).
+    pub fn bxdf<C: Channels>(&self, textures: &Textures, ctx: &TexContext, lambda: &mut C::Lambda) -> Option<Bxdf<C>> {
+        let albedo = |t: Tex, lambda: &C::Lambda| textures.eval::<C>(t, ctx, lambda, RgbRole::Albedo).clamp(0.0, 1.0);
         Some(match self {
-            Material::Diffuse { reflectance } => {
-                Bxdf::Diffuse(DiffuseBxdf::new(textures.eval(*reflectance, ctx).clamp(Rgb::ZERO, Rgb::ONE)))
-            }
+            Material::Diffuse { reflectance } => Bxdf::Diffuse(DiffuseBxdf::new(albedo(*reflectance, lambda))),
             Material::Conductor { input, roughness } => {
                 let d = roughness.distribution(textures, ctx);
                 match input {
-                    ConductorInput::EtaK { eta, k, scale } => Bxdf::Conductor(
-                        ConductorBxdf::new(d, textures.eval(*eta, ctx), textures.eval(*k, ctx))
-                            .with_fresnel_scale(*scale),
-                    ),
+                    ConductorInput::EtaK { eta, k, scale } => {
+                        let eta = textures.eval::<C>(*eta, ctx, lambda, RgbRole::Unbounded);
+                        let k = textures.eval::<C>(*k, ctx, lambda, RgbRole::Unbounded);
+                        Bxdf::Conductor(ConductorBxdf::new(d, eta, k).with_fresnel_scale(C::eval(scale, lambda)))
+                    }
                     ConductorInput::Reflectance(r) => {
-                        Bxdf::Conductor(ConductorBxdf::from_reflectance(d, textures.eval(*r, ctx)))
+                        let r = textures.eval::<C>(*r, ctx, lambda, RgbRole::Albedo);
+                        Bxdf::Conductor(ConductorBxdf::from_reflectance(d, r))
                     }
                 }
             }
             Material::Dielectric { eta, roughness } => {
-                Bxdf::Dielectric(DielectricBxdf::new(*eta, roughness.distribution(textures, ctx)))
+                Bxdf::Dielectric(DielectricBxdf::new(C::eta(eta, lambda), roughness.distribution(textures, ctx)))
             }
-            Material::ThinDielectric { eta } => Bxdf::ThinDielectric(ThinDielectricBxdf::new(*eta)),
-            Material::CoatedDiffuse { reflectance, roughness, thickness, eta, albedo, g, max_depth, n_samples } => {
-                let top = DielectricBxdf::new(*eta, roughness.distribution(textures, ctx));
-                let bottom = DiffuseBxdf::new(textures.eval(*reflectance, ctx).clamp(Rgb::ZERO, Rgb::ONE));
+            Material::ThinDielectric { eta } => Bxdf::ThinDielectric(ThinDielectricBxdf::new(C::eta(eta, lambda))),
+            Material::CoatedDiffuse {
+                reflectance,
+                roughness,
+                thickness,
+                eta,
+                albedo: medium_albedo,
+                g,
+                max_depth,
+                n_samples,
+            } => {
+                let top = DielectricBxdf::new(C::eta(eta, lambda), roughness.distribution(textures, ctx));
+                let bottom = DiffuseBxdf::new(albedo(*reflectance, lambda));
                 Bxdf::CoatedDiffuse(CoatedDiffuseBxdf::new(
                     top,
                     bottom,
                     textures.eval_float(*thickness, ctx),
-                    textures.eval(*albedo, ctx).clamp(Rgb::ZERO, Rgb::ONE),
+                    albedo(*medium_albedo, lambda),
                     textures.eval_float(*g, ctx),
                     *max_depth,
                     *n_samples,

@@ -54,6 +54,27 @@ impl<T: GridValue> DenseGrid<T> {
         self.values[(z as usize * self.n.y as usize + y as usize) * self.n.x as usize + x as usize]
     }
 
+    /// Trilinear interpolation at `p` in [0, 1]³ of the samples mapped by `f` (zero outside):
+    /// pbrt-v4's `SampledGrid::Lookup` with a conversion, which interpolates the converted
+    /// values (e.g. sampled spectra of RGB voxels), not the raw samples.
+    #[inline]
+    pub fn lookup_map<U>(&self, p: Vec3, f: impl Fn(T) -> U) -> U
+    where
+        U: Copy + std::ops::Add<Output = U> + std::ops::Mul<f32, Output = U>,
+    {
+        let ps = p * self.n.as_vec3() - Vec3::splat(0.5);
+        let pf = ps.floor();
+        let d = ps - pf;
+        let (x, y, z) = (pf.x as i32, pf.y as i32, pf.z as i32);
+        let at = |x, y, z| f(self.at(x, y, z));
+        let lerp = |t: f32, a: U, b: U| a * (1.0 - t) + b * t;
+        let d00 = lerp(d.x, at(x, y, z), at(x + 1, y, z));
+        let d10 = lerp(d.x, at(x, y + 1, z), at(x + 1, y + 1, z));
+        let d01 = lerp(d.x, at(x, y, z + 1), at(x + 1, y, z + 1));
+        let d11 = lerp(d.x, at(x, y + 1, z + 1), at(x + 1, y + 1, z + 1));
+        lerp(d.z, lerp(d.y, d00, d10), lerp(d.y, d01, d11))
+    }
+
     /// Trilinear interpolation at `p` in [0, 1]³.
     #[inline]
     pub fn lookup(&self, p: Vec3) -> T {
@@ -72,6 +93,12 @@ impl<T: GridValue> DenseGrid<T> {
     /// The largest component of any sample that can influence lookups inside the box
     /// [lo, hi] ⊂ [0, 1]³ (pbrt-v4's SampledGrid::MaxValue).
     pub fn max_value(&self, lo: Vec3, hi: Vec3) -> f32 {
+        self.max_value_by(lo, hi, T::max_component)
+    }
+
+    /// [`DenseGrid::max_value`] of the samples mapped by `f` (e.g. the maximum over
+    /// wavelengths of a voxel's spectrum).
+    pub fn max_value_by(&self, lo: Vec3, hi: Vec3, f: impl Fn(T) -> f32) -> f32 {
         let n = self.n.as_vec3();
         let p0 = (lo * n - Vec3::splat(0.5)).floor();
         let p1 = (hi * n - Vec3::splat(0.5)).floor() + Vec3::ONE;
@@ -82,7 +109,7 @@ impl<T: GridValue> DenseGrid<T> {
         for z in i0.z..=i1.z {
             for y in i0.y..=i1.y {
                 for x in i0.x..=i1.x {
-                    m = m.max(self.at(x, y, z).max_component());
+                    m = m.max(f(self.at(x, y, z)));
                 }
             }
         }

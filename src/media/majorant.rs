@@ -4,7 +4,7 @@
 
 use glam::{UVec3, Vec3};
 
-use crate::color::Rgb;
+use crate::color::{Channels, Rgb};
 use crate::geometry::Bounds3;
 
 /// Maximum density per cell of a regular grid over a medium's bounds.
@@ -48,20 +48,20 @@ impl MajorantGrid {
 
 /// A stretch of ray with a constant majorant.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Segment {
+pub struct Segment<C = Rgb> {
     /// Start (ray parameter).
     pub t_min: f32,
     /// End.
     pub t_max: f32,
     /// Majorant σ over the stretch.
-    pub sigma_maj: Rgb,
+    pub sigma_maj: C,
 }
 
 /// Walks a ray through a [`MajorantGrid`] cell by cell.
 #[derive(Clone, Debug)]
-pub struct DdaIterator<'a> {
+pub struct DdaIterator<'a, C = Rgb> {
     grid: &'a MajorantGrid,
-    sigma_t: Rgb,
+    sigma_t: C,
     t_min: f32,
     t_max: f32,
     next_crossing: [f32; 3],
@@ -71,10 +71,10 @@ pub struct DdaIterator<'a> {
     voxel: [i32; 3],
 }
 
-impl<'a> DdaIterator<'a> {
+impl<'a, C: Channels> DdaIterator<'a, C> {
     /// Starts at `t_min` on the medium-space ray (o, d), ending at `t_max`; σmaj of a cell is
     /// `sigma_t` × the cell's value.
-    pub fn new(grid: &'a MajorantGrid, o: Vec3, d: Vec3, t_min: f32, t_max: f32, sigma_t: Rgb) -> DdaIterator<'a> {
+    pub fn new(grid: &'a MajorantGrid, o: Vec3, d: Vec3, t_min: f32, t_max: f32, sigma_t: C) -> DdaIterator<'a, C> {
         let diag = grid.bounds.max - grid.bounds.min;
         let o_grid = (o - grid.bounds.min) / diag;
         let d_grid = d / diag;
@@ -112,11 +112,11 @@ impl<'a> DdaIterator<'a> {
     }
 }
 
-impl Iterator for DdaIterator<'_> {
-    type Item = Segment;
+impl<C: Channels> Iterator for DdaIterator<'_, C> {
+    type Item = Segment<C>;
 
     #[inline]
-    fn next(&mut self) -> Option<Segment> {
+    fn next(&mut self) -> Option<Segment<C>> {
         if self.t_min >= self.t_max {
             return None;
         }

@@ -8,19 +8,21 @@ use super::cloud::Cloud;
 use super::dense::DenseGrid;
 use super::grid::SparseGrid;
 use super::majorant::{DdaIterator, MajorantGrid, Segment};
-use crate::color::{Rgb, is_gray};
-use crate::geometry::{Bounds3, Ray};
-use crate::spectra::BlackbodyRgbTable;
+use nimbus_parser::ColorSpace;
 
-/// Scattering properties at a point.
+use crate::color::{Channels, Rgb};
+use crate::geometry::{Bounds3, Ray};
+use crate::spectra::{BlackbodyRgbTable, RgbRole, SpectrumValue};
+
+/// Scattering properties at a point, in the path's channels.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct MediumPoint {
+pub struct MediumPoint<C = Rgb> {
     /// Absorption coefficient.
-    pub sigma_a: Rgb,
+    pub sigma_a: C,
     /// Scattering coefficient.
-    pub sigma_s: Rgb,
+    pub sigma_s: C,
     /// Emitted radiance (emission is σa·Le).
-    pub le: Rgb,
+    pub le: C,
 }
 
 /// Voxel data of a medium: dense over its box, or sparse with its own index transform.
@@ -84,7 +86,7 @@ pub enum Emission {
     /// A constant Le (already normalised) times a scale grid.
     Radiance {
         /// Le.
-        le: Rgb,
+        le: SpectrumValue,
         /// Multiplier grid: pbrt-v4's `Lescale` array, or a single sample of 1 when absent —
         /// which pbrt-v4 interpolates with zero outside, fading emission from 1 at the box's
         /// centre to ⅛ at its corners. nimbus does the same so its images match.
@@ -104,7 +106,7 @@ pub enum Emission {
         /// Multiplier grid, as for [`Emission::Radiance`] (`uniformgrid`); none for the
         /// VDB media, which pbrt-v4 scales by a constant.
         scale_grid: Option<DenseGrid<f32>>,
-        /// RGB of the peak-normalised blackbody by temperature.
+        /// RGB of the peak-normalised blackbody by temperature (for RGB transport).
         table: Box<BlackbodyRgbTable>,
     },
 }
@@ -119,16 +121,18 @@ pub struct GridMedium {
     /// Density source.
     pub density: Density,
     /// σa at density 1 (scale applied).
-    pub sigma_a: Rgb,
+    pub sigma_a: SpectrumValue,
     /// σs at density 1 (scale applied).
-    pub sigma_s: Rgb,
+    pub sigma_s: SpectrumValue,
     /// Emission.
     pub emission: Emission,
     /// Majorant grid over `bounds`.
     pub majorant: MajorantGrid,
 }
 
-/// Per-voxel RGB coefficients (pbrt-v4's `rgbgrid`).
+/// Per-voxel RGB coefficients (pbrt-v4's `rgbgrid`). For RGB transport the voxels hold
+/// film RGB; for spectral transport they hold the scene's RGB, and each lookup turns the eight
+/// voxels around the point into spectra before interpolating, as pbrt-v4 does.
 #[derive(Clone, Debug)]
 pub struct RgbGridMedium {
     /// Medium-from-world transform.
@@ -139,8 +143,12 @@ pub struct RgbGridMedium {
     pub sigma_a: Option<DenseGrid<Vec3>>,
     /// σs per voxel (scale applied), or 1 everywhere when absent.
     pub sigma_s: Option<DenseGrid<Vec3>>,
-    /// Le per voxel (RGB already in film units, Lescale applied).
+    /// Le per voxel: film units for RGB transport, illuminant RGB for spectral.
     pub le: Option<DenseGrid<Vec3>>,
+    /// Multiplier on `le`.
+    pub le_scale: f32,
+    /// Color space of the voxels' RGB.
+    pub space: ColorSpace,
     /// Majorant grid (of max σt over channels).
     pub majorant: MajorantGrid,
 }
@@ -151,11 +159,11 @@ pub enum MediumKind {
     /// Constant coefficients everywhere.
     Homogeneous {
         /// σa.
-        sigma_a: Rgb,
+        sigma_a: SpectrumValue,
         /// σs.
-        sigma_s: Rgb,
+        sigma_s: SpectrumValue,
         /// Emitted radiance.
-        le: Rgb,
+        le: SpectrumValue,
     },
     /// Density-scaled coefficients.
     Grid(Box<GridMedium>),
@@ -180,18 +188,18 @@ pub struct Medium {
 }
 
 /// Majorant segments along a ray.
-pub enum Segments<'a> {
+pub enum Segments<'a, C> {
     /// One segment (homogeneous media) or none.
-    Single(Option<Segment>),
+    Single(Option<Segment<C>>),
     /// Cells of a majorant grid.
-    Dda(DdaIterator<'a>),
+    Dda(DdaIterator<'a, C>),
 }
 
-impl Iterator for Segments<'_> {
-    type Item = Segment;
+impl<C: Channels> Iterator for Segments<'_, C> {
+    type Item = Segment<C>;
 
     #[inline]
-    fn next(&mut self) -> Option<Segment> {
+    fn next(&mut self) -> Option<Segment<C>> {
         match self {
             Segments::Single(s) => s.take(),
             Segments::Dda(it) => it.next(),
@@ -201,9 +209,16 @@ impl Iterator for Segments<'_> {
 
 impl Medium {
     /// A homogeneous medium.
-    pub fn homogeneous(name: String, sigma_a: Rgb, sigma_s: Rgb, le: Rgb, g: f32) -> Medium {
-        let chromatic = !is_gray(sigma_a) || !is_gray(sigma_s);
-        Medium { name, kind: MediumKind::Homogeneous { sigma_a, sigma_s, le }, g, chromatic, emissive: le != Rgb::ZERO }
+    pub fn homogeneous(
+        name: String,
+        sigma_a: SpectrumValue,
+        sigma_s: SpectrumValue,
+        le: SpectrumValue,
+        g: f32,
+    ) -> Medium {
+        let chromatic = !sigma_a.is_constant() || !sigma_s.is_constant();
+        let emissive = !le.is_zero();
+        Medium { name, kind: MediumKind::Homogeneous { sigma_a, sigma_s, le }, g, chromatic, emissive }
     }
 
     /// A density-grid medium; builds its majorant grid (pbrt-v4 uses 16³ for grids).
@@ -213,8 +228,8 @@ impl Medium {
         world_from_medium: Affine3A,
         bounds: Bounds3,
         density: Density,
-        sigma_a: Rgb,
-        sigma_s: Rgb,
+        sigma_a: SpectrumValue,
+        sigma_s: SpectrumValue,
         emission: Emission,
         g: f32,
     ) -> Medium {
@@ -237,7 +252,7 @@ impl Medium {
             // The procedural cloud's density never exceeds 1.
             Density::Cloud(_) => MajorantGrid::new(bounds, UVec3::ONE, |_, _| 1.0),
         };
-        let chromatic = !is_gray(sigma_a) || !is_gray(sigma_s);
+        let chromatic = !sigma_a.is_constant() || !sigma_s.is_constant();
         let emissive = !matches!(emission, Emission::None);
         Medium {
             name,
@@ -256,7 +271,10 @@ impl Medium {
         }
     }
 
-    /// An `rgbgrid` medium; builds its 16³ majorant grid.
+    /// An `rgbgrid` medium; builds its 16³ majorant grid from `voxel_max`, the largest value
+    /// over the channels of a voxel's coefficient (the largest RGB component, or for spectral
+    /// transport the maximum of the voxel's spectrum, which can exceed it).
+    #[allow(clippy::too_many_arguments)] // mirrors pbrt-v4's RGBGridMedium constructor
     pub fn rgb_grid(
         name: String,
         world_from_medium: Affine3A,
@@ -264,11 +282,14 @@ impl Medium {
         sigma_a: Option<DenseGrid<Vec3>>,
         sigma_s: Option<DenseGrid<Vec3>>,
         le: Option<DenseGrid<Vec3>>,
+        le_scale: f32,
+        space: ColorSpace,
         g: f32,
+        voxel_max: impl Fn(Vec3) -> f32,
     ) -> Medium {
         let majorant = MajorantGrid::new(bounds, UVec3::splat(16), |lo, hi| {
-            sigma_a.as_ref().map_or(1.0, |s| s.max_value(lo, hi))
-                + sigma_s.as_ref().map_or(1.0, |s| s.max_value(lo, hi))
+            sigma_a.as_ref().map_or(1.0, |s| s.max_value_by(lo, hi, &voxel_max))
+                + sigma_s.as_ref().map_or(1.0, |s| s.max_value_by(lo, hi, &voxel_max))
         });
         let emissive = le.is_some();
         Medium {
@@ -279,6 +300,8 @@ impl Medium {
                 sigma_a,
                 sigma_s,
                 le,
+                le_scale,
+                space,
                 majorant,
             })),
             g,
@@ -336,66 +359,81 @@ impl Medium {
         }
     }
 
-    /// Coefficients at world point `p`.
+    /// Coefficients at world point `p`, in the path's channels.
     #[inline]
-    pub fn sample_point(&self, p: Vec3) -> MediumPoint {
+    pub fn sample_point<C: Channels>(&self, p: Vec3, lambda: &C::Lambda) -> MediumPoint<C> {
         match &self.kind {
-            MediumKind::Homogeneous { sigma_a, sigma_s, le } => {
-                MediumPoint { sigma_a: *sigma_a, sigma_s: *sigma_s, le: *le }
-            }
+            MediumKind::Homogeneous { sigma_a, sigma_s, le } => MediumPoint {
+                sigma_a: C::eval(sigma_a, lambda),
+                sigma_s: C::eval(sigma_s, lambda),
+                le: if self.emissive { C::eval(le, lambda) } else { C::ZERO },
+            },
             MediumKind::Grid(g) => {
                 let pm = g.medium_from_world.transform_point3(p);
                 let pu = (pm - g.bounds.min) / (g.bounds.max - g.bounds.min);
                 let d = g.density.at(pm, pu);
                 let le = match &g.emission {
-                    Emission::None => Rgb::ZERO,
-                    Emission::Radiance { le, scale } => *le * scale.lookup(pu),
+                    Emission::None => C::ZERO,
+                    Emission::Radiance { le, scale } => C::eval(le, lambda) * scale.lookup(pu),
                     Emission::Temperature { grid, offset, scale, le_scale, scale_grid, table } => {
                         let t = (grid.at(pm, pu) - offset) * scale;
                         if t > 100.0 {
-                            table.lookup(t) * *le_scale * scale_grid.as_ref().map_or(1.0, |s| s.lookup(pu))
+                            C::blackbody(t, table, lambda)
+                                * (*le_scale * scale_grid.as_ref().map_or(1.0, |s| s.lookup(pu)))
                         } else {
-                            Rgb::ZERO
+                            C::ZERO
                         }
                     }
                 };
-                MediumPoint { sigma_a: g.sigma_a * d, sigma_s: g.sigma_s * d, le }
+                MediumPoint { sigma_a: C::eval(&g.sigma_a, lambda) * d, sigma_s: C::eval(&g.sigma_s, lambda) * d, le }
             }
             MediumKind::RgbGrid(g) => {
                 let pm = g.medium_from_world.transform_point3(p);
                 let pu = (pm - g.bounds.min) / (g.bounds.max - g.bounds.min);
-                let sa = g.sigma_a.as_ref().map_or(Rgb::ONE, |s| s.lookup(pu));
-                let ss = g.sigma_s.as_ref().map_or(Rgb::ONE, |s| s.lookup(pu));
-                let le = g.le.as_ref().map_or(Rgb::ZERO, |l| l.lookup(pu));
-                MediumPoint { sigma_a: sa, sigma_s: ss, le }
+                let coefficient = |grid: &Option<DenseGrid<Vec3>>| match grid {
+                    Some(s) => s.lookup_map(pu, |v| C::from_rgb(v, RgbRole::Unbounded, g.space, lambda)),
+                    None => C::ONE,
+                };
+                let le = match &g.le {
+                    Some(l) => l.lookup_map(pu, |v| C::from_rgb(v, RgbRole::Illuminant, g.space, lambda)) * g.le_scale,
+                    None => C::ZERO,
+                };
+                MediumPoint { sigma_a: coefficient(&g.sigma_a), sigma_s: coefficient(&g.sigma_s), le }
             }
         }
     }
 
     /// Majorant segments along the world ray between 0 and `t_max` (unit direction).
     #[inline]
-    pub fn segments(&self, ray: &Ray, t_max: f32) -> Segments<'_> {
+    pub fn segments<C: Channels>(&self, ray: &Ray, t_max: f32, lambda: &C::Lambda) -> Segments<'_, C> {
         match &self.kind {
-            MediumKind::Homogeneous { sigma_a, sigma_s, .. } => {
-                Segments::Single(Some(Segment { t_min: 0.0, t_max, sigma_maj: *sigma_a + *sigma_s }))
-            }
-            MediumKind::Grid(g) => {
-                grid_segments(&g.medium_from_world, &g.bounds, &g.majorant, ray, t_max, g.sigma_a + g.sigma_s)
-            }
-            MediumKind::RgbGrid(g) => grid_segments(&g.medium_from_world, &g.bounds, &g.majorant, ray, t_max, Rgb::ONE),
+            MediumKind::Homogeneous { sigma_a, sigma_s, .. } => Segments::Single(Some(Segment {
+                t_min: 0.0,
+                t_max,
+                sigma_maj: C::eval(sigma_a, lambda) + C::eval(sigma_s, lambda),
+            })),
+            MediumKind::Grid(g) => grid_segments(
+                &g.medium_from_world,
+                &g.bounds,
+                &g.majorant,
+                ray,
+                t_max,
+                C::eval(&g.sigma_a, lambda) + C::eval(&g.sigma_s, lambda),
+            ),
+            MediumKind::RgbGrid(g) => grid_segments(&g.medium_from_world, &g.bounds, &g.majorant, ray, t_max, C::ONE),
         }
     }
 }
 
 #[inline]
-fn grid_segments<'a>(
+fn grid_segments<'a, C: Channels>(
     medium_from_world: &Affine3A,
     bounds: &Bounds3,
     majorant: &'a MajorantGrid,
     ray: &Ray,
     t_max: f32,
-    sigma_t: Rgb,
-) -> Segments<'a> {
+    sigma_t: C,
+) -> Segments<'a, C> {
     let o = medium_from_world.transform_point3(ray.o);
     let d = medium_from_world.transform_vector3(ray.d);
     match bounds.intersect_ray(o, d, t_max) {

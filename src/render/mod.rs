@@ -8,7 +8,8 @@ use std::time::Instant;
 use glam::UVec2;
 use rayon::prelude::*;
 
-use crate::color::Rgb;
+use crate::color::{Channels, Rgb};
+use crate::geometry::Ray;
 use crate::imageio::Image;
 use crate::integrators::Integrator;
 use crate::integrators::common::RayStats;
@@ -81,9 +82,45 @@ impl Accumulator {
     }
 }
 
+/// The channels a render can carry: how to ask an integrator for them and how a sample
+/// reaches the film.
+trait FilmChannels: Channels {
+    /// The integrator's estimate along `ray` in these channels.
+    fn li(
+        integrator: &dyn Integrator,
+        scene: &Scene,
+        ray: Ray,
+        lambda: &mut Self::Lambda,
+        sampler: &mut Sampler,
+        stats: &mut RayStats,
+    ) -> Self;
+
+    /// The sample as the film accumulates it.
+    fn to_film(self, lambda: &Self::Lambda, scene: &Scene) -> Rgb;
+}
+
+impl FilmChannels for Rgb {
+    #[inline]
+    fn li(
+        integrator: &dyn Integrator,
+        scene: &Scene,
+        ray: Ray,
+        lambda: &mut (),
+        sampler: &mut Sampler,
+        stats: &mut RayStats,
+    ) -> Rgb {
+        integrator.li_rgb(scene, ray, lambda, sampler, stats)
+    }
+
+    #[inline]
+    fn to_film(self, _lambda: &(), _scene: &Scene) -> Rgb {
+        self
+    }
+}
+
 /// Renders samples `[first, first + count)` of every pixel in one tile.
 #[allow(clippy::too_many_arguments)]
-fn render_tile(
+fn render_tile<C: FilmChannels>(
     scene: &Scene,
     integrator: &dyn Integrator,
     sampler: &mut Sampler,
@@ -102,10 +139,14 @@ fn render_tile(
             let mut sum = PixelSum::default();
             for s in first..first + count {
                 sampler.start_pixel_sample(pixel, s, 0);
+                // pbrt-v4 draws the wavelengths first; RGB draws the same dimension so the
+                // two representations see the same samples afterwards.
+                let mut lambda = C::sample_lambda(sampler.get_1d());
                 let cs = get_camera_sample(sampler, pixel, &scene.filter);
                 let ray = scene.camera.generate_ray(cs.p_film, cs.p_lens);
                 stats.camera += 1;
-                let mut l = integrator.li(scene, ray, sampler, stats);
+                let l = C::li(integrator, scene, ray, &mut lambda, sampler, stats);
+                let mut l = l.to_film(&lambda, scene);
                 if !l.is_finite() {
                     // A NaN or infinite sample would poison the pixel; pbrt-v4 logs and zeroes it.
                     l = Rgb::ZERO;
@@ -244,7 +285,7 @@ pub fn render_with_passes(
                 let mut sampler = base_sampler.clone();
                 let mut out = Vec::with_capacity(((tile[2] - tile[0]) * (tile[3] - tile[1])) as usize);
                 let mut stats = RayStats::default();
-                render_tile(
+                render_tile::<Rgb>(
                     scene,
                     integrator,
                     &mut sampler,

@@ -20,6 +20,7 @@ use super::materials::{ConductorSpec, Eta, MaterialKind, MaterialSettings, Rough
 use super::media::{MediumKind as MediumSpec, MediumSettings};
 use super::sampler::SamplerSettings;
 use super::shapes::{ShapeKind, ShapeSettings};
+use super::spectra::SpectrumResolver;
 use super::textures::{Mapping, TexInput, TextureKind, TextureSettings};
 use super::values::{FloatInput, SpectrumInput, SpectrumSpec};
 use crate::accel::{Accel, Geometry, Instance, NONE, Primitive, ShapeStore, Surfaces};
@@ -36,10 +37,7 @@ use crate::media::dense::DenseGrid;
 use crate::media::grid::VdbFile;
 use crate::media::{Density, Emission, Field, Medium};
 use crate::shapes::{Cylinder, Disk, Mesh, Sphere, uniform_scale};
-use crate::spectra::{
-    BlackbodyRgbTable, conductor_rgb, convert_reflectance_rgb, dielectric_eta, emission_rgb, illuminant_rgb,
-    reflectance_rgb,
-};
+use crate::spectra::{BlackbodyRgbTable, SpectrumValue};
 use crate::textures::{Tex, TexMapping, TexNode, Textures, Wrap};
 
 /// Command-line choices that override the scene file (pbrt-v4's flags).
@@ -153,13 +151,13 @@ struct TextureBuilder {
     textures: Textures,
     float_names: HashMap<String, u32>,
     spectrum_names: HashMap<String, u32>,
-    film_cs: ColorSpace,
+    spectra: SpectrumResolver,
 }
 
 impl TextureBuilder {
     fn float(&self, input: &FloatInput, loc: &FileLoc) -> Result<Tex, Error> {
         Ok(match input {
-            FloatInput::Value(v) => Tex::Const(Rgb::splat(*v)),
+            FloatInput::Value(v) => Tex::Const(SpectrumValue::constant(*v)),
             FloatInput::Texture(name) => Tex::Node(
                 *self
                     .float_names
@@ -169,10 +167,17 @@ impl TextureBuilder {
         })
     }
 
+    /// A spectrum texture input; a constant is read as a reflectance, or as an unbounded
+    /// coefficient with `unbounded`.
     fn spectrum(&self, input: &SpectrumInput, cs: ColorSpace, loc: &FileLoc) -> Result<Tex, Error> {
+        self.spectrum_as(input, cs, loc, false)
+    }
+
+    fn spectrum_as(&self, input: &SpectrumInput, cs: ColorSpace, loc: &FileLoc, unbounded: bool) -> Result<Tex, Error> {
         Ok(match input {
             SpectrumInput::Value(spec) => {
-                Tex::Const(reflectance_rgb(spec, cs, self.film_cs).map_err(|e| err(loc, e.to_string()))?)
+                let v = if unbounded { self.spectra.unbounded(spec, cs) } else { self.spectra.albedo(spec, cs) };
+                Tex::Const(v.map_err(|e| err(loc, e.to_string()))?)
             }
             SpectrumInput::Texture(name) => Tex::Node(
                 *self
@@ -207,7 +212,9 @@ impl TextureBuilder {
         };
         let cs = e.color_space;
         let node = match &settings.kind {
-            TextureKind::Constant(v) => TexNode::Scale { tex: self.input(v, cs, &e.loc)?, scale: Tex::Const(Rgb::ONE) },
+            TextureKind::Constant(v) => {
+                TexNode::Scale { tex: self.input(v, cs, &e.loc)?, scale: Tex::Const(SpectrumValue::constant(1.0)) }
+            }
             TextureKind::Scale { tex, scale } => {
                 TexNode::Scale { tex: self.input(tex, cs, &e.loc)?, scale: self.float(scale, &e.loc)? }
             }
@@ -234,11 +241,19 @@ impl TextureBuilder {
                         ));
                     }
                 };
-                TexNode::Image { image: Arc::new(image), mapping: mapping(m), scale: *scale, invert: *invert, wrap }
+                TexNode::Image {
+                    image: Arc::new(image),
+                    mapping: mapping(m),
+                    scale: *scale,
+                    invert: *invert,
+                    wrap,
+                    space: cs,
+                }
             }
-            TextureKind::Unsupported(_) => {
-                TexNode::Scale { tex: Tex::Const(Rgb::splat(0.5)), scale: Tex::Const(Rgb::ONE) }
-            }
+            TextureKind::Unsupported(_) => TexNode::Scale {
+                tex: Tex::Const(SpectrumValue::constant(0.5)),
+                scale: Tex::Const(SpectrumValue::constant(1.0)),
+            },
         };
         let id = self.textures.nodes.len() as u32;
         self.textures.nodes.push(node);
@@ -278,11 +293,8 @@ fn roughness(r: &Roughness, tb: &TextureBuilder, loc: &FileLoc) -> Result<Roughn
     Ok(RoughnessTex { u: tb.float(&r.u, loc)?, v: tb.float(&r.v, loc)?, remap: r.remap })
 }
 
-fn eta_value(eta: &Eta, cs: ColorSpace, loc: &FileLoc) -> Result<f32, Error> {
-    match eta {
-        Eta::Constant(v) => Ok(*v),
-        Eta::Spectrum(s) => dielectric_eta(s, cs).map_err(|e| err(loc, e.to_string())),
-    }
+fn eta_value(eta: &Eta, tb: &TextureBuilder, cs: ColorSpace, loc: &FileLoc) -> Result<SpectrumValue, Error> {
+    tb.spectra.eta(eta, cs).map_err(|e| err(loc, e.to_string()))
 }
 
 fn material(e: &nimbus_parser::Entity, tb: &TextureBuilder, warnings: &mut Vec<Warning>) -> Result<Material, Error> {
@@ -295,43 +307,43 @@ fn material(e: &nimbus_parser::Entity, tb: &TextureBuilder, warnings: &mut Vec<W
             let input = match spec {
                 ConductorSpec::Reflectance(r) => ConductorInput::Reflectance(tb.spectrum(r, cs, loc)?),
                 ConductorSpec::EtaK { eta: SpectrumInput::Value(eta), k: SpectrumInput::Value(k) } => {
-                    let fit = conductor_rgb(eta, k, cs, tb.film_cs).map_err(|m| err(loc, m.to_string()))?;
-                    ConductorInput::EtaK { eta: Tex::Const(fit.eta), k: Tex::Const(fit.k), scale: fit.scale }
+                    let c = tb.spectra.conductor(eta, k, cs).map_err(|m| err(loc, m.to_string()))?;
+                    ConductorInput::EtaK { eta: Tex::Const(c.eta), k: Tex::Const(c.k), scale: c.scale }
                 }
                 ConductorSpec::EtaK { eta, k } => {
                     // Textured optical constants: used per channel as given.
                     let as_tex = |s: &SpectrumInput| -> Result<Tex, Error> {
                         Ok(match s {
                             SpectrumInput::Value(v) => {
-                                let fit = conductor_rgb(v, v, cs, tb.film_cs).map_err(|m| err(loc, m.to_string()))?;
-                                Tex::Const(fit.eta)
+                                let c = tb.spectra.conductor(v, v, cs).map_err(|m| err(loc, m.to_string()))?;
+                                Tex::Const(c.eta)
                             }
-                            t => tb.spectrum(t, cs, loc)?,
+                            t => tb.spectrum_as(t, cs, loc, true)?,
                         })
                     };
-                    ConductorInput::EtaK { eta: as_tex(eta)?, k: as_tex(k)?, scale: Rgb::ONE }
+                    ConductorInput::EtaK { eta: as_tex(eta)?, k: as_tex(k)?, scale: SpectrumValue::constant(1.0) }
                 }
             };
             Material::Conductor { input, roughness: roughness(r, tb, loc)? }
         }
         MaterialKind::Dielectric { eta, roughness: r } => {
-            Material::Dielectric { eta: eta_value(eta, cs, loc)?, roughness: roughness(r, tb, loc)? }
+            Material::Dielectric { eta: eta_value(eta, tb, cs, loc)?, roughness: roughness(r, tb, loc)? }
         }
-        MaterialKind::ThinDielectric { eta } => Material::ThinDielectric { eta: eta_value(eta, cs, loc)? },
+        MaterialKind::ThinDielectric { eta } => Material::ThinDielectric { eta: eta_value(eta, tb, cs, loc)? },
         MaterialKind::Interface => Material::Interface,
         MaterialKind::CoatedDiffuse { reflectance, roughness: r, thickness, eta, albedo, g, max_depth, n_samples } => {
             Material::CoatedDiffuse {
                 reflectance: tb.spectrum(reflectance, cs, loc)?,
                 roughness: roughness(r, tb, loc)?,
                 thickness: tb.float(thickness, loc)?,
-                eta: eta_value(eta, cs, loc)?,
+                eta: eta_value(eta, tb, cs, loc)?,
                 albedo: tb.spectrum(albedo, cs, loc)?,
                 g: tb.float(g, loc)?,
                 max_depth: *max_depth,
                 n_samples: *n_samples,
             }
         }
-        MaterialKind::Unsupported(_) => Material::Diffuse { reflectance: Tex::Const(Rgb::splat(0.5)) },
+        MaterialKind::Unsupported(_) => Material::Diffuse { reflectance: Tex::Const(SpectrumValue::constant(0.5)) },
     })
 }
 
@@ -340,20 +352,20 @@ fn area_light_radiance(
     settings: &AreaLightSettings,
     e: &nimbus_parser::Entity,
     area: f32,
-    film_cs: ColorSpace,
-) -> Result<Rgb, Error> {
-    let l = illuminant_rgb(&settings.radiance, e.color_space, film_cs).map_err(|m| err(&e.loc, m.to_string()))?;
+    spectra: &SpectrumResolver,
+) -> Result<SpectrumValue, Error> {
+    let l = spectra.illuminant(&settings.radiance, e.color_space).map_err(|m| err(&e.loc, m.to_string()))?;
     let mut scale = settings.scale;
     if let Some(phi) = settings.power {
         let k_e = if settings.two_sided { 2.0 } else { 1.0 } * area * std::f32::consts::PI;
         scale *= phi / k_e;
     }
-    Ok(l * scale)
+    Ok(l.scaled(scale))
 }
 
 struct ShapeBuilder<'a> {
     store: ShapeStore,
-    film_cs: ColorSpace,
+    spectra: SpectrumResolver,
     material_ids: &'a dyn Fn(&MaterialRef) -> u32,
     interface_ids: &'a dyn Fn(&nimbus_parser::MediumInterface) -> Result<u32, Error>,
     lights: Vec<Light>,
@@ -449,7 +461,7 @@ impl ShapeBuilder<'_> {
                         .ok_or_else(|| err(&e.loc, "an emitting cylinder must not be scaled non-uniformly"))?,
                     Geometry::Instance(_) => continue,
                 };
-                let l = area_light_radiance(&settings, al_entity, area, self.film_cs)?;
+                let l = area_light_radiance(&settings, al_entity, area, &self.spectra)?;
                 prim.area_light = self.lights.len() as u32;
                 self.lights.push(Light {
                     kind: LightKind::Area { geometry: prim.geometry, l, two_sided: settings.two_sided, area },
@@ -485,23 +497,18 @@ impl ShapeBuilder<'_> {
     }
 }
 
-fn light(
-    l: &nimbus_parser::LightEntity,
-    film_cs: ColorSpace,
-    sphere: &SceneSphere,
-    medium: u32,
-) -> Result<Light, Error> {
+fn light(l: &nimbus_parser::LightEntity, spectra: &SpectrumResolver, medium: u32) -> Result<Light, Error> {
     let e = &l.entity;
     let settings = LightSettings::from_entity(l)?;
     let world = fixed_transform(&l.world_from_light, &e.loc, "light")?;
-    let rgb = |s: &SpectrumSpec| illuminant_rgb(s, e.color_space, film_cs).map_err(|m| err(&e.loc, m.to_string()));
+    let rgb = |s: &SpectrumSpec| spectra.illuminant(s, e.color_space).map_err(|m| err(&e.loc, m.to_string()));
     let kind = match &settings.kind {
         LightSpec::Point { intensity, from, power } => {
             let mut scale = settings.scale;
             if let Some(phi) = power {
                 scale *= phi / (4.0 * std::f32::consts::PI);
             }
-            LightKind::Point { p: world.transform_point3(Vec3::from(*from)), i: rgb(intensity)? * scale }
+            LightKind::Point { p: world.transform_point3(Vec3::from(*from)), i: rgb(intensity)?.scaled(scale) }
         }
         LightSpec::Spot { intensity, from, to, cone_angle, cone_delta_angle, power } => {
             let cos_end = cone_angle.to_radians().cos();
@@ -519,7 +526,7 @@ fn light(
             LightKind::Spot {
                 p,
                 frame: Frame::from_z(dir.normalize()),
-                i: rgb(intensity)? * scale,
+                i: rgb(intensity)?.scaled(scale),
                 cos_falloff_start: cos_start,
                 cos_falloff_end: cos_end,
             }
@@ -527,18 +534,20 @@ fn light(
         LightSpec::Distant { radiance, from, to, illuminance } => {
             let w = world.transform_vector3(Vec3::from(*from) - Vec3::from(*to)).normalize();
             let scale = settings.scale * illuminance.unwrap_or(1.0);
-            LightKind::Distant { w, l: rgb(radiance)? * scale }
+            LightKind::Distant { w, l: rgb(radiance)?.scaled(scale) }
         }
         LightSpec::Infinite { radiance: Some(r), illuminance, .. } => {
             let scale = settings.scale * illuminance.map_or(1.0, |ev| ev / std::f32::consts::PI);
-            LightKind::UniformInfinite { l: rgb(r)? * scale }
+            LightKind::UniformInfinite { l: rgb(r)?.scaled(scale) }
         }
         LightSpec::Infinite { radiance: None, filename: Some(path), illuminance } => {
-            let mut map = EnvironmentMap::load(path, world, settings.scale).map_err(|m| err(&e.loc, m))?;
+            let cs = e.color_space;
+            let mut map = EnvironmentMap::load(path, cs, world, settings.scale).map_err(|m| err(&e.loc, m))?;
             if let Some(ev) = illuminance {
                 let k_e = map.upper_hemisphere_illuminance();
                 if k_e > 0.0 {
-                    map = EnvironmentMap::load(path, world, settings.scale * ev / k_e).map_err(|m| err(&e.loc, m))?;
+                    map =
+                        EnvironmentMap::load(path, cs, world, settings.scale * ev / k_e).map_err(|m| err(&e.loc, m))?;
                 }
             }
             LightKind::ImageInfinite(Box::new(map))
@@ -547,7 +556,6 @@ fn light(
             return Err(err(&e.loc, "infinite light without radiance or image"));
         }
     };
-    let _ = sphere;
     Ok(Light { kind, medium })
 }
 
@@ -566,16 +574,17 @@ fn used_media(desc: &SceneDescription) -> std::collections::HashSet<&str> {
 fn build_medium(
     m: &nimbus_parser::MediumEntity,
     settings: &MediumSettings<'_>,
-    film_cs: ColorSpace,
+    spectra: &SpectrumResolver,
 ) -> Result<Medium, Error> {
     let e = &m.entity;
     let cs = e.color_space;
-    let unbounded = |s: &SpectrumSpec| reflectance_rgb(s, cs, film_cs).map_err(|x| err(&e.loc, x.to_string()));
-    let sigma_a = unbounded(&settings.sigma_a)? * settings.scale;
-    let sigma_s = unbounded(&settings.sigma_s)? * settings.scale;
+    let film_cs = spectra.film;
+    let unbounded = |s: &SpectrumSpec| spectra.unbounded(s, cs).map_err(|x| err(&e.loc, x.to_string()));
+    let sigma_a = unbounded(&settings.sigma_a)?.scaled(settings.scale);
+    let sigma_s = unbounded(&settings.sigma_s)?.scaled(settings.scale);
     let le = match &settings.le {
-        Some(s) => illuminant_rgb(s, cs, film_cs).map_err(|x| err(&e.loc, x.to_string()))? * settings.le_scale,
-        None => Rgb::ZERO,
+        Some(s) => spectra.illuminant(s, cs).map_err(|x| err(&e.loc, x.to_string()))?.scaled(settings.le_scale),
+        None => SpectrumValue::ZERO,
     };
     let world = fixed_transform(&m.world_from_medium, &e.loc, "medium")?;
     let g = settings.g;
@@ -599,7 +608,7 @@ fn build_medium(
                     scale_grid: Some(scale_grid()?),
                     table: Box::new(BlackbodyRgbTable::new(film_cs)),
                 },
-                None if le != Rgb::ZERO => Emission::Radiance { le, scale: scale_grid()? },
+                None if !le.is_zero() => Emission::Radiance { le, scale: scale_grid()? },
                 None => Emission::None,
             };
             let b = Bounds3::new(Vec3::from(bounds[0]), Vec3::from(bounds[1]));
@@ -627,19 +636,12 @@ fn build_medium(
                 DenseGrid::new(glam::UVec3::from(*n), v.iter().map(|c| f(Rgb::from(*c))).collect())
                     .ok_or_else(|| err(&e.loc, "grid size mismatch"))
             };
-            let adapt = |c: Rgb| {
-                if cs == film_cs { c } else { convert_reflectance_rgb(c, cs, film_cs) }
-            };
+            let sa = ga.map(|v| rgb_grid(v, &|c| spectra.grid_coefficient(c, cs) * scale)).transpose()?;
+            let ss = gs.map(|v| rgb_grid(v, &|c| spectra.grid_coefficient(c, cs) * scale)).transpose()?;
             // pbrt-v4 does not normalise rgbgrid emission: RGB illuminant spectra in film units.
-            let le_unit = emission_rgb(&SpectrumSpec::Rgb([1.0, 1.0, 1.0]), cs, film_cs)
-                .map_err(|x| err(&e.loc, x.to_string()))?;
-            let sa = ga.map(|v| rgb_grid(v, &|c| adapt(c) * scale)).transpose()?;
-            let ss = gs.map(|v| rgb_grid(v, &|c| adapt(c) * scale)).transpose()?;
-            let le_grid = gl
-                .map(|v| rgb_grid(v, &|c| crate::spectra::convert_rgb(c, cs, film_cs) * le_unit * settings.le_scale))
-                .transpose()?;
+            let le_grid = gl.map(|v| rgb_grid(v, &|c| spectra.grid_emission(c, cs))).transpose()?;
             let b = Bounds3::new(Vec3::from(bounds[0]), Vec3::from(bounds[1]));
-            Medium::rgb_grid(m.name.clone(), world, b, sa, ss, le_grid, g)
+            Medium::rgb_grid(m.name.clone(), world, b, sa, ss, le_grid, settings.le_scale, cs, g, |v| v.max_element())
         }
         MediumSpec::Vdb { openvdb, filename, grid_name, temperature_name, temperature } => {
             let loc = e.params.loc("filename").unwrap_or(&e.loc);
@@ -728,11 +730,12 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions) -> Result<Scene
     let integrator = IntegratorSettings::from_entity(&desc.integrator, opts.integrator.as_deref())?;
 
     // Textures, in definition order (a texture may use those defined before it).
+    let spectra = SpectrumResolver { film: film_cs };
     let mut tb = TextureBuilder {
         textures: Textures::default(),
         float_names: HashMap::new(),
         spectrum_names: HashMap::new(),
-        film_cs,
+        spectra,
     };
     for t in &desc.textures {
         tb.add(t, &mut warnings)?;
@@ -765,7 +768,7 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions) -> Result<Scene
         let settings = MediumSettings::from_entity(m)?;
         if used.contains(m.name.as_str()) {
             media_ids.insert(m.name.clone(), media.len() as u32);
-            media.push(build_medium(m, &settings, film_cs)?);
+            media.push(build_medium(m, &settings, &spectra)?);
         }
     }
     let interfaces = std::cell::RefCell::new(Vec::<[u32; 2]>::new());
@@ -787,7 +790,7 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions) -> Result<Scene
     let tg = Instant::now();
     let mut sb = ShapeBuilder {
         store: ShapeStore::default(),
-        film_cs,
+        spectra,
         material_ids: &material_ids,
         interface_ids: &interface_ids,
         lights: Vec::new(),
@@ -854,7 +857,7 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions) -> Result<Scene
     };
     for l in &desc.lights {
         let medium = l.medium.as_deref().map_or(NONE, |n| media_ids.get(n).copied().unwrap_or(NONE));
-        lights.push(light(l, film_cs, &sphere, medium)?);
+        lights.push(light(l, &spectra, medium)?);
     }
     let infinite_lights = lights.iter().enumerate().filter(|(_, l)| l.is_infinite()).map(|(i, _)| i as u32).collect();
     let by_power = !matches!(&integrator, IntegratorSettings::VolPath(v) if v.light_sampler == crate::integrators::volpath::LightSamplerKind::Uniform);

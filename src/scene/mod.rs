@@ -15,6 +15,7 @@ pub mod values;
 
 mod build;
 mod check;
+mod spectra;
 
 pub use build::{BuildOptions, BuildStats, Scene, build_scene};
 pub use check::{SceneCheck, check_scene, unused_parameters};

@@ -18,6 +18,7 @@ mod error;
 mod named;
 mod piecewise;
 mod spectrum;
+mod value;
 
 pub use blackbody::{BlackbodyRgbTable, BlackbodySpectrum, blackbody_emission_rgb, planck};
 pub use cie::{CIE_Y_INTEGRAL, LAMBDA_MAX, LAMBDA_MIN, cie_xyz_bar, integrate_xyz, integrate_y};
@@ -33,3 +34,4 @@ pub use error::SpectrumError;
 pub use named::{is_named_spectrum, named_spectrum, named_spectrum_names};
 pub use piecewise::PiecewiseLinearSpectrum;
 pub use spectrum::{ResolvedSpectrum, Spectrum, resolve, resolve_spectral};
+pub use value::{RgbRole, SpectrumValue};

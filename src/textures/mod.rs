@@ -1,20 +1,26 @@
 //! Textures as pbrt-v4 evaluates them (without ray-differential filtering): constants,
 //! scale, mix, 2D checkerboards and image maps, over uv, spherical, cylindrical or planar
 //! mappings. Float textures evaluate to gray RGB and are read from the first channel.
+//! Spectrum textures evaluate in the path's channels: constants are scene spectra, and image
+//! texels become spectra (for spectral transport) only after filtering, as in pbrt-v4's
+//! `RGBImageTexture`.
 
 use std::f32::consts::PI;
 use std::sync::Arc;
 
 use glam::{Affine3A, Vec2, Vec3};
 
-use crate::color::Rgb;
+use nimbus_parser::ColorSpace;
+
+use crate::color::{Channels, Rgb};
 use crate::imageio::Image;
+use crate::spectra::{RgbRole, SpectrumValue};
 
 /// A texture input: a constant (the common case, no indirection) or a texture node.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Tex {
     /// A constant value.
-    Const(Rgb),
+    Const(SpectrumValue),
     /// Index of a node in [`Textures`].
     Node(u32),
 }
@@ -138,6 +144,8 @@ pub enum TexNode {
         invert: bool,
         /// Out-of-range behaviour.
         wrap: Wrap,
+        /// Color space of the texels.
+        space: ColorSpace,
     },
 }
 
@@ -149,47 +157,56 @@ pub struct Textures {
 }
 
 impl Textures {
-    /// Evaluates a texture input.
+    /// Evaluates a spectrum texture input in the path's channels; image texels are read as
+    /// spectra of kind `role` (albedo, unbounded or illuminant, as pbrt-v4's material
+    /// parameters ask for them).
     #[inline]
-    pub fn eval(&self, t: Tex, ctx: &TexContext) -> Rgb {
+    pub fn eval<C: Channels>(&self, t: Tex, ctx: &TexContext, lambda: &C::Lambda, role: RgbRole) -> C {
         match t {
-            Tex::Const(c) => c,
-            Tex::Node(i) => self.eval_node(&self.nodes[i as usize], ctx),
+            Tex::Const(c) => C::eval(&c, lambda),
+            Tex::Node(i) => self.eval_node(&self.nodes[i as usize], ctx, lambda, role),
         }
+    }
+
+    /// Evaluates a spectrum texture input as RGB.
+    #[inline]
+    pub fn eval_rgb(&self, t: Tex, ctx: &TexContext) -> Rgb {
+        self.eval::<Rgb>(t, ctx, &(), RgbRole::Albedo)
     }
 
     /// Evaluates a float texture input (first channel).
     #[inline]
     pub fn eval_float(&self, t: Tex, ctx: &TexContext) -> f32 {
-        self.eval(t, ctx).x
+        self.eval_rgb(t, ctx).x
     }
 
-    fn eval_node(&self, node: &TexNode, ctx: &TexContext) -> Rgb {
+    fn eval_node<C: Channels>(&self, node: &TexNode, ctx: &TexContext, lambda: &C::Lambda, role: RgbRole) -> C {
         match node {
             TexNode::Scale { tex, scale } => {
                 let s = self.eval_float(*scale, ctx);
-                if s == 0.0 { Rgb::ZERO } else { self.eval(*tex, ctx) * s }
+                if s == 0.0 { C::ZERO } else { self.eval::<C>(*tex, ctx, lambda, role) * s }
             }
             TexNode::Mix { a, b, amount } => {
                 let t = self.eval_float(*amount, ctx);
-                let va = if t != 1.0 { self.eval(*a, ctx) } else { Rgb::ZERO };
-                let vb = if t != 0.0 { self.eval(*b, ctx) } else { Rgb::ZERO };
-                (1.0 - t) * va + t * vb
+                let va = if t != 1.0 { self.eval(*a, ctx, lambda, role) } else { C::ZERO };
+                let vb = if t != 0.0 { self.eval(*b, ctx, lambda, role) } else { C::ZERO };
+                va * (1.0 - t) + vb * t
             }
             TexNode::Checkerboard { a, b, mapping } => {
                 let st = mapping.map(ctx);
                 if (st.x.floor() as i64 + st.y.floor() as i64) % 2 == 0 {
-                    self.eval(*a, ctx)
+                    self.eval(*a, ctx, lambda, role)
                 } else {
-                    self.eval(*b, ctx)
+                    self.eval(*b, ctx, lambda, role)
                 }
             }
-            TexNode::Image { image, mapping, scale, invert, wrap } => {
+            TexNode::Image { image, mapping, scale, invert, wrap, space } => {
                 let mut st = mapping.map(ctx);
                 // pbrt-v4 flips t so that images are not upside down.
                 st.y = 1.0 - st.y;
                 let v = bilerp(image, st, *wrap) * *scale;
-                if *invert { (Rgb::ONE - v).max(Rgb::ZERO) } else { v }
+                let v = if *invert { (Rgb::ONE - v).max(Rgb::ZERO) } else { v.max(Rgb::ZERO) };
+                C::from_rgb(v, role, *space, lambda)
             }
         }
     }
@@ -231,19 +248,19 @@ mod tests {
     fn checkerboard_and_mix() {
         let mut t = Textures::default();
         t.nodes.push(TexNode::Checkerboard {
-            a: Tex::Const(Rgb::ONE),
-            b: Tex::Const(Rgb::ZERO),
+            a: Tex::Const(SpectrumValue::constant(1.0)),
+            b: Tex::Const(SpectrumValue::constant(0.0)),
             mapping: TexMapping::Uv { s: Vec2::splat(2.0), d: Vec2::ZERO },
         });
         t.nodes.push(TexNode::Mix {
             a: Tex::Node(0),
-            b: Tex::Const(Rgb::splat(0.5)),
-            amount: Tex::Const(Rgb::splat(0.5)),
+            b: Tex::Const(SpectrumValue::constant(0.5)),
+            amount: Tex::Const(SpectrumValue::constant(0.5)),
         });
         let at = |u: f32, v: f32| TexContext { p: Vec3::ZERO, uv: Vec2::new(u, v) };
-        assert_eq!(t.eval(Tex::Node(0), &at(0.25, 0.25)), Rgb::ONE);
-        assert_eq!(t.eval(Tex::Node(0), &at(0.75, 0.25)), Rgb::ZERO);
-        assert_eq!(t.eval(Tex::Node(1), &at(0.25, 0.25)), Rgb::splat(0.75));
+        assert_eq!(t.eval_rgb(Tex::Node(0), &at(0.25, 0.25)), Rgb::ONE);
+        assert_eq!(t.eval_rgb(Tex::Node(0), &at(0.75, 0.25)), Rgb::ZERO);
+        assert_eq!(t.eval_rgb(Tex::Node(1), &at(0.25, 0.25)), Rgb::splat(0.75));
     }
 
     #[test]
@@ -257,8 +274,9 @@ mod tests {
             scale: 1.0,
             invert: false,
             wrap: Wrap::Clamp,
+            space: ColorSpace::Srgb,
         });
-        let v = t.eval(Tex::Node(0), &TexContext { p: Vec3::ZERO, uv: Vec2::new(0.5, 0.5) });
+        let v = t.eval_rgb(Tex::Node(0), &TexContext { p: Vec3::ZERO, uv: Vec2::new(0.5, 0.5) });
         assert!((v.x - 0.5).abs() < 1e-6);
     }
 }

@@ -5,15 +5,10 @@
 
 use glam::Vec3;
 
-use crate::color::Rgb;
+use crate::color::{Channels, Rgb};
 use crate::geometry::Ray;
 use crate::media::{Medium, MediumPoint};
 use crate::sampling::rng::Pcg32;
-
-#[inline]
-fn exp_rgb(v: Rgb) -> Rgb {
-    Rgb::new((-v.x).exp(), (-v.y).exp(), (-v.z).exp())
-}
 
 /// Walks `ray` (unit direction) through `medium` up to `t_max`, sampling tentative collisions
 /// with density σmaj[hero]·exp(−σmaj[hero] t) in each majorant segment. At each collision
@@ -21,24 +16,26 @@ fn exp_rgb(v: Rgb) -> Rgb {
 /// majorant transmittance since the previous collision. Returns the majorant transmittance
 /// from the last collision to the end (1 if the callback stopped the walk).
 #[inline]
-pub fn sample_t_maj<F>(
+#[allow(clippy::too_many_arguments)] // pbrt-v4's SampleT_maj takes the same inputs
+pub fn sample_t_maj<C: Channels, F>(
     medium: &Medium,
     ray: &Ray,
     t_max: f32,
     mut u: f32,
     rng: &mut Pcg32,
     hero: usize,
+    lambda: &C::Lambda,
     mut callback: F,
-) -> Rgb
+) -> C
 where
-    F: FnMut(Vec3, &MediumPoint, Rgb, Rgb, &mut Pcg32) -> bool,
+    F: FnMut(Vec3, &MediumPoint<C>, C, C, &mut Pcg32) -> bool,
 {
-    let mut t_maj = Rgb::ONE;
-    for seg in medium.segments(ray, t_max) {
+    let mut t_maj = C::ONE;
+    for seg in medium.segments::<C>(ray, t_max, lambda) {
         let sigma = seg.sigma_maj[hero];
         if sigma == 0.0 {
             let dt = seg.t_max - seg.t_min;
-            t_maj *= exp_rgb(dt * seg.sigma_maj);
+            t_maj *= (seg.sigma_maj * dt).exp_neg();
             continue;
         }
         let mut t_min = seg.t_min;
@@ -46,18 +43,18 @@ where
             let t = t_min - (1.0 - u).ln() / sigma;
             u = rng.uniform();
             if t < seg.t_max {
-                t_maj *= exp_rgb((t - t_min) * seg.sigma_maj);
+                t_maj *= (seg.sigma_maj * (t - t_min)).exp_neg();
                 let p = ray.at(t);
-                let mp = medium.sample_point(p);
+                let mp = medium.sample_point::<C>(p, lambda);
                 if !callback(p, &mp, seg.sigma_maj, t_maj, rng) {
-                    return Rgb::ONE;
+                    return C::ONE;
                 }
-                t_maj = Rgb::ONE;
+                t_maj = C::ONE;
                 t_min = t;
             } else {
                 let dt = seg.t_max - t_min;
                 // An infinite segment with σmaj > 0 has zero transmittance (avoid inf·0).
-                t_maj *= if dt.is_infinite() { Rgb::ZERO } else { exp_rgb(dt * seg.sigma_maj) };
+                t_maj *= if dt.is_infinite() { C::ZERO } else { (seg.sigma_maj * dt).exp_neg() };
                 break;
             }
         }
@@ -67,18 +64,18 @@ where
 
 /// A shadow ray's running transmittance estimate with pbrt-v4's rescaled probabilities.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ShadowEstimate {
+pub struct ShadowEstimate<C = Rgb> {
     /// Transmittance estimate.
-    pub t_ray: Rgb,
+    pub t_ray: C,
     /// Rescaled unidirectional (delta-tracking) path probability.
-    pub r_u: Rgb,
+    pub r_u: C,
     /// Rescaled light-sampling (ratio-tracking) path probability.
-    pub r_l: Rgb,
+    pub r_l: C,
 }
 
-impl Default for ShadowEstimate {
+impl<C: Channels> Default for ShadowEstimate<C> {
     fn default() -> Self {
-        ShadowEstimate { t_ray: Rgb::ONE, r_u: Rgb::ONE, r_l: Rgb::ONE }
+        ShadowEstimate { t_ray: C::ONE, r_u: C::ONE, r_l: C::ONE }
     }
 }
 
@@ -86,32 +83,41 @@ impl Default for ShadowEstimate {
 /// `est` (unchanged for an empty segment). Russian roulette stops walks whose estimate has
 /// fallen below 0.05.
 #[inline]
-pub fn ratio_tracking(medium: &Medium, ray: &Ray, t_max: f32, rng: &mut Pcg32, hero: usize, est: &mut ShadowEstimate) {
+pub fn ratio_tracking<C: Channels>(
+    medium: &Medium,
+    ray: &Ray,
+    t_max: f32,
+    rng: &mut Pcg32,
+    hero: usize,
+    lambda: &C::Lambda,
+    est: &mut ShadowEstimate<C>,
+) {
     let u = rng.uniform();
-    let t_maj = sample_t_maj(medium, ray, t_max, u, rng, hero, |_, mp, sigma_maj, t_maj, rr| {
-        let sigma_n = (sigma_maj - mp.sigma_a - mp.sigma_s).max(Rgb::ZERO);
-        let pdf = t_maj[hero] * sigma_maj[hero];
-        est.t_ray *= t_maj * sigma_n / pdf;
-        est.r_l *= t_maj * sigma_maj / pdf;
-        est.r_u *= t_maj * sigma_n / pdf;
-        let tr = est.t_ray / crate::color::average(est.r_l + est.r_u);
-        if tr.max_element() < 0.05 {
-            let q = 0.75;
-            if rr.uniform() < q {
-                est.t_ray = Rgb::ZERO;
-            } else {
-                est.t_ray /= 1.0 - q;
+    let t_maj =
+        sample_t_maj(medium, ray, t_max, u, rng, hero, lambda, |_, mp: &MediumPoint<C>, sigma_maj: C, t_maj: C, rr| {
+            let sigma_n = (sigma_maj - mp.sigma_a - mp.sigma_s).max(C::ZERO);
+            let pdf = t_maj[hero] * sigma_maj[hero];
+            est.t_ray *= t_maj * sigma_n / pdf;
+            est.r_l *= t_maj * sigma_maj / pdf;
+            est.r_u *= t_maj * sigma_n / pdf;
+            let tr = est.t_ray / (est.r_l + est.r_u).average();
+            if tr.max_element() < 0.05 {
+                let q = 0.75;
+                if rr.uniform() < q {
+                    est.t_ray = C::ZERO;
+                } else {
+                    est.t_ray /= 1.0 - q;
+                }
             }
-        }
-        est.t_ray != Rgb::ZERO
-    });
+            !est.t_ray.is_zero()
+        });
     let h = t_maj[hero];
     if h > 0.0 {
         est.t_ray *= t_maj / h;
         est.r_l *= t_maj / h;
         est.r_u *= t_maj / h;
     } else {
-        est.t_ray = Rgb::ZERO;
+        est.t_ray = C::ZERO;
     }
 }
 
@@ -119,19 +125,21 @@ pub fn ratio_tracking(medium: &Medium, ray: &Ray, t_max: f32, rng: &mut Pcg32, h
 mod tests {
     use super::*;
     use crate::media::Medium;
+    use crate::spectra::SpectrumValue;
 
     /// Ratio tracking through a homogeneous slab estimates exp(−σt d) (exactly, since
     /// σmaj = σt leaves no null collisions to weigh).
     #[test]
     fn homogeneous_transmittance_is_exponential() {
-        let m = Medium::homogeneous("m".into(), Rgb::splat(0.5), Rgb::splat(1.5), Rgb::ZERO, 0.0);
+        let (sa, ss) = (SpectrumValue::constant(0.5), SpectrumValue::constant(1.5));
+        let m = Medium::homogeneous("m".into(), sa, ss, SpectrumValue::ZERO, 0.0);
         let ray = Ray::new(Vec3::ZERO, Vec3::X);
         let mut rng = Pcg32::new(1, 2);
         let n = 20000;
         let mut sum = 0.0;
         for _ in 0..n {
             let mut est = ShadowEstimate::default();
-            ratio_tracking(&m, &ray, 0.7, &mut rng, 0, &mut est);
+            ratio_tracking(&m, &ray, 0.7, &mut rng, 0, &(), &mut est);
             sum += (est.t_ray / crate::color::average(est.r_l)).x as f64;
         }
         let est = sum / n as f64;
@@ -147,6 +155,7 @@ mod heterogeneous_tests {
     use crate::geometry::Bounds3;
     use crate::media::dense::DenseGrid;
     use crate::media::{Density, Emission, Field, Medium};
+    use crate::spectra::SpectrumValue;
     use glam::{Affine3A, UVec3};
 
     fn grid_medium() -> Medium {
@@ -166,8 +175,8 @@ mod heterogeneous_tests {
             Affine3A::IDENTITY,
             bounds,
             density,
-            Rgb::splat(0.4),
-            Rgb::splat(0.8),
+            SpectrumValue::constant(0.4),
+            SpectrumValue::constant(0.8),
             Emission::None,
             0.0,
         )
@@ -184,7 +193,7 @@ mod heterogeneous_tests {
             if p.abs().max_element() > 1.0 {
                 continue;
             }
-            let mp = m.sample_point(p);
+            let mp = m.sample_point::<Rgb>(p, &());
             tau += (mp.sigma_a + mp.sigma_s).x as f64 * dt;
         }
         (-tau).exp()
@@ -203,11 +212,11 @@ mod heterogeneous_tests {
         let (mut ratio, mut delta) = (0.0f64, 0.0f64);
         for _ in 0..n {
             let mut est = ShadowEstimate::default();
-            ratio_tracking(&m, &ray, t_max, &mut rng, 0, &mut est);
+            ratio_tracking(&m, &ray, t_max, &mut rng, 0, &(), &mut est);
             ratio += (est.t_ray / crate::color::average(est.r_l)).x as f64;
             let u = rng.uniform();
             let mut escaped = true;
-            sample_t_maj(&m, &ray, t_max, u, &mut rng, 0, |p, mp, sigma_maj, _, r| {
+            sample_t_maj(&m, &ray, t_max, u, &mut rng, 0, &(), |p, mp: &MediumPoint<Rgb>, sigma_maj: Rgb, _, r| {
                 assert!((mp.sigma_a + mp.sigma_s).x <= sigma_maj.x * 1.0001, "majorant below σt at {p:?}");
                 if r.uniform() < (mp.sigma_a + mp.sigma_s).x / sigma_maj.x {
                     escaped = false;
@@ -232,14 +241,18 @@ mod heterogeneous_tests {
             let p =
                 Vec3::new(-1.0 + (x as f32 + 0.5) * 0.5, -1.0 + (y as f32 + 0.5) * 0.5, -1.0 + (z as f32 + 0.5) * 0.5);
             let d = 0.2 + 0.3 * x as f32 + 0.15 * y as f32 + 0.1 * ((x + z) % 3) as f32;
-            let mp = m.sample_point(p);
+            let mp = m.sample_point::<Rgb>(p, &());
             assert!((mp.sigma_s.x - 0.8 * d).abs() < 1e-5 && (mp.sigma_a.y - 0.4 * d).abs() < 1e-5, "{x},{y},{z}");
         }
         // An rgbgrid returns its per-voxel RGB coefficients.
         let sa = DenseGrid::new(UVec3::new(2, 1, 1), vec![Vec3::new(0.1, 0.2, 0.3), Vec3::new(0.4, 0.5, 0.6)]).unwrap();
         let bounds = Bounds3::new(Vec3::ZERO, Vec3::ONE);
-        let rgb = Medium::rgb_grid("r".into(), Affine3A::IDENTITY, bounds, Some(sa), None, None, 0.0);
-        let mp = rgb.sample_point(Vec3::new(0.75, 0.5, 0.5));
+        let space = nimbus_parser::ColorSpace::Srgb;
+        let rgb =
+            Medium::rgb_grid("r".into(), Affine3A::IDENTITY, bounds, Some(sa), None, None, 1.0, space, 0.0, |v| {
+                v.max_element()
+            });
+        let mp = rgb.sample_point::<Rgb>(Vec3::new(0.75, 0.5, 0.5), &());
         assert!((mp.sigma_a - Vec3::new(0.4, 0.5, 0.6)).abs().max_element() < 1e-6);
         assert_eq!(mp.sigma_s, Rgb::ONE);
     }

@@ -5,11 +5,11 @@
 
 use glam::Vec3;
 
-use crate::color::Rgb;
+use crate::color::{Channels, Rgb};
 
 /// A scattering vertex: where the path scattered and how it continued.
 #[derive(Clone, Copy, Debug)]
-pub struct VertexEvent {
+pub struct VertexEvent<C = Rgb> {
     /// Number of scattering events before this one (0 for the first vertex).
     pub depth: u32,
     /// Position.
@@ -23,9 +23,9 @@ pub struct VertexEvent {
     /// Density of `wi` under the sampling technique used.
     pub pdf: f32,
     /// BSDF or phase value × |cos| for `wi` (value only for phase functions).
-    pub f: Rgb,
+    pub f: C,
     /// Throughput arriving at the vertex (before this scattering).
-    pub beta: Rgb,
+    pub beta: C,
     /// True when the continuation was a specular (delta) sample.
     pub specular: bool,
     /// True for a vertex inside a medium.
@@ -34,7 +34,7 @@ pub struct VertexEvent {
 
 /// A next-event estimate at a vertex.
 #[derive(Clone, Copy, Debug)]
-pub struct NeeEvent {
+pub struct NeeEvent<C = Rgb> {
     /// Scattering events before the vertex.
     pub depth: u32,
     /// The vertex position.
@@ -46,34 +46,35 @@ pub struct NeeEvent {
     /// BSDF/phase density of `wi` (MIS partner).
     pub pdf_scatter: f32,
     /// Contribution added to the pixel (already MIS-weighted, transmittance included).
-    pub contribution: Rgb,
+    pub contribution: C,
 }
 
 /// Emission found by the path (hit area light, escaped to the environment, medium
 /// emission).
 #[derive(Clone, Copy, Debug)]
-pub struct EmissionEvent {
+pub struct EmissionEvent<C = Rgb> {
     /// Scattering events before it.
     pub depth: u32,
     /// Contribution added to the pixel (MIS-weighted).
-    pub contribution: Rgb,
+    pub contribution: C,
 }
 
-/// Receives the path loop's events.
-pub trait PathObserver {
+/// Receives the path loop's events, in the channels the path carries (RGB or the path's
+/// sampled wavelengths).
+pub trait PathObserver<C: Channels> {
     /// A scattering vertex was sampled.
     #[inline]
-    fn on_vertex(&mut self, _v: &VertexEvent) {}
+    fn on_vertex(&mut self, _v: &VertexEvent<C>) {}
     /// A next-event estimate was made.
     #[inline]
-    fn on_nee(&mut self, _e: &NeeEvent) {}
+    fn on_nee(&mut self, _e: &NeeEvent<C>) {}
     /// Emission was added.
     #[inline]
-    fn on_emission(&mut self, _e: &EmissionEvent) {}
+    fn on_emission(&mut self, _e: &EmissionEvent<C>) {}
 }
 
 /// The observer that records nothing.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct NoObserver;
 
-impl PathObserver for NoObserver {}
+impl<C: Channels> PathObserver<C> for NoObserver {}

@@ -12,7 +12,7 @@ use super::RayStats;
 use super::media::{ShadowEstimate, ratio_tracking, sample_t_maj};
 use super::observer::{EmissionEvent, NeeEvent, PathObserver, VertexEvent};
 use crate::accel::{Hit, NONE};
-use crate::color::{Rgb, average};
+use crate::color::Channels;
 use crate::geometry::{Ray, offset_origin, spawn_ray};
 use crate::lights::{LightContext, LightSample};
 use crate::materials::bxdf::{Bxdf, ReflTransFlags, TransportMode};
@@ -53,55 +53,58 @@ pub fn medium_after(scene: &Scene, hit: &Hit, w: Vec3, current: u32) -> u32 {
 }
 
 /// What scatters at a vertex: a BSDF in a local frame, or a phase function.
-enum Scatterer<'a> {
-    Surface { bxdf: &'a Bxdf, frame: &'a Frame, wo_local: Vec3 },
+enum Scatterer<'a, C> {
+    Surface { bxdf: &'a Bxdf<C>, frame: &'a Frame, wo_local: Vec3 },
     Medium { phase: HenyeyGreenstein, wo: Vec3 },
 }
 
-impl Scatterer<'_> {
+impl<C: Channels> Scatterer<'_, C> {
     /// f·|cos| (or p) and the sampling density for direction `wi`.
     #[inline]
-    fn eval(&self, wi: Vec3) -> (Rgb, f32) {
+    fn eval(&self, wi: Vec3) -> (C, f32) {
         match self {
             Scatterer::Surface { bxdf, frame, wo_local } => {
                 let wl = frame.to_local(wi);
                 let f = bxdf.f(*wo_local, wl, TransportMode::Radiance) * wl.z.abs();
-                if f == Rgb::ZERO {
+                if f.is_zero() {
                     return (f, 0.0);
                 }
                 (f, bxdf.pdf(*wo_local, wl, TransportMode::Radiance, ReflTransFlags::ALL))
             }
             Scatterer::Medium { phase, wo } => {
                 let p = phase.p(*wo, wi);
-                (Rgb::splat(p), phase.pdf(*wo, wi))
+                (C::splat(p), phase.pdf(*wo, wi))
             }
         }
     }
 }
 
 /// Per-path state shared by the loop and its helpers.
-struct PathState {
-    beta: Rgb,
-    r_u: Rgb,
-    r_l: Rgb,
+struct PathState<C: Channels> {
+    beta: C,
+    r_u: C,
+    r_l: C,
     hero: usize,
 }
 
-/// Radiance arriving along `ray` (from the camera, in medium `medium`), estimated by one
-/// path. `observer` sees every vertex, light sample and emission event.
-pub fn trace_path<O: PathObserver>(
+/// Radiance arriving along `ray` (from the camera, in medium `medium`) at the wavelengths
+/// `lambda` (which a dispersive surface may cut down to the first), estimated by one path in
+/// the channels `C`. `observer` sees every vertex, light sample and emission event.
+#[allow(clippy::too_many_arguments)]
+pub fn trace_path<C: Channels, O: PathObserver<C>>(
     scene: &Scene,
     mut ray: Ray,
     mut medium: u32,
+    lambda: &mut C::Lambda,
     sampler: &mut Sampler,
     config: &PathConfig,
     observer: &mut O,
     stats: &mut RayStats,
-) -> Rgb {
-    let mut l = Rgb::ZERO;
+) -> C {
+    let mut l = C::ZERO;
     // Chromatic media need a randomly chosen hero channel for spectral MIS.
-    let hero = if scene.has_chromatic_media { ((sampler.get_1d() * 3.0) as usize).min(2) } else { 0 };
-    let mut st = PathState { beta: Rgb::ONE, r_u: Rgb::ONE, r_l: Rgb::ONE, hero };
+    let hero = if scene.has_chromatic_media { C::hero_channel(sampler.get_1d()) } else { 0 };
+    let mut st = PathState { beta: C::ONE, r_u: C::ONE, r_l: C::ONE, hero };
     let mut specular_bounce = false;
     let mut any_non_specular = false;
     let mut eta_scale = 1.0f32;
@@ -121,62 +124,63 @@ pub fn trace_path<O: PathObserver>(
             let u = sampler.get_1d();
             let (mut scattered, mut terminated) = (false, false);
             let mut scatter_p = Vec3::ZERO;
-            let t_maj = sample_t_maj(m, &ray, t_max, u, &mut rng, hero, |p, mp, sigma_maj, t_maj, rng| {
-                if st.beta == Rgb::ZERO {
-                    terminated = true;
-                    return false;
-                }
-                // Medium emission, weighted by the chance of having reached it.
-                if depth < config.max_depth && mp.le != Rgb::ZERO {
-                    let pdf = sigma_maj[hero] * t_maj[hero];
-                    let betap = st.beta * t_maj / pdf;
-                    let r_e = st.r_u * sigma_maj * t_maj / pdf;
-                    if r_e != Rgb::ZERO {
-                        let c = betap * mp.sigma_a * mp.le / average(r_e);
-                        l += c;
-                        observer.on_emission(&EmissionEvent { depth, contribution: c });
-                    }
-                }
-                // Choose absorption, real scattering or null scattering with the hero
-                // channel's probabilities.
-                let p_absorb = mp.sigma_a[hero] / sigma_maj[hero];
-                let p_scatter = mp.sigma_s[hero] / sigma_maj[hero];
-                let um = rng.uniform();
-                if um < p_absorb {
-                    terminated = true;
-                    false
-                } else if um < p_absorb + p_scatter {
-                    if depth >= config.max_depth {
+            let t_maj =
+                sample_t_maj::<C, _>(m, &ray, t_max, u, &mut rng, hero, lambda, |p, mp, sigma_maj, t_maj, rng| {
+                    if st.beta.is_zero() {
                         terminated = true;
                         return false;
                     }
-                    depth += 1;
-                    // In a gray medium these ratios are 1: only chromatic media pay for
-                    // spectral MIS.
-                    if m.chromatic {
-                        let pdf = t_maj[hero] * mp.sigma_s[hero];
-                        st.beta *= t_maj * mp.sigma_s / pdf;
-                        st.r_u *= t_maj * mp.sigma_s / pdf;
+                    // Medium emission, weighted by the chance of having reached it.
+                    if depth < config.max_depth && !mp.le.is_zero() {
+                        let pdf = sigma_maj[hero] * t_maj[hero];
+                        let betap = st.beta * t_maj / pdf;
+                        let r_e = st.r_u * sigma_maj * t_maj / pdf;
+                        if !r_e.is_zero() {
+                            let c = betap * mp.sigma_a * mp.le / r_e.average();
+                            l += c;
+                            observer.on_emission(&EmissionEvent { depth, contribution: c });
+                        }
                     }
-                    scattered = true;
-                    scatter_p = p;
-                    false
-                } else {
-                    let sigma_n = (sigma_maj - mp.sigma_a - mp.sigma_s).max(Rgb::ZERO);
-                    let pdf = t_maj[hero] * sigma_n[hero];
-                    if pdf == 0.0 {
-                        st.beta = Rgb::ZERO;
-                    } else if m.chromatic {
-                        st.beta *= t_maj * sigma_n / pdf;
-                        st.r_u *= t_maj * sigma_n / pdf;
-                        st.r_l *= t_maj * sigma_maj / pdf;
+                    // Choose absorption, real scattering or null scattering with the hero
+                    // channel's probabilities.
+                    let p_absorb = mp.sigma_a[hero] / sigma_maj[hero];
+                    let p_scatter = mp.sigma_s[hero] / sigma_maj[hero];
+                    let um = rng.uniform();
+                    if um < p_absorb {
+                        terminated = true;
+                        false
+                    } else if um < p_absorb + p_scatter {
+                        if depth >= config.max_depth {
+                            terminated = true;
+                            return false;
+                        }
+                        depth += 1;
+                        // In a gray medium these ratios are 1: only chromatic media pay for
+                        // spectral MIS.
+                        if m.chromatic {
+                            let pdf = t_maj[hero] * mp.sigma_s[hero];
+                            st.beta *= t_maj * mp.sigma_s / pdf;
+                            st.r_u *= t_maj * mp.sigma_s / pdf;
+                        }
+                        scattered = true;
+                        scatter_p = p;
+                        false
                     } else {
-                        st.r_l *= sigma_maj[hero] / sigma_n[hero];
+                        let sigma_n = (sigma_maj - mp.sigma_a - mp.sigma_s).max(C::ZERO);
+                        let pdf = t_maj[hero] * sigma_n[hero];
+                        if pdf == 0.0 {
+                            st.beta = C::ZERO;
+                        } else if m.chromatic {
+                            st.beta *= t_maj * sigma_n / pdf;
+                            st.r_u *= t_maj * sigma_n / pdf;
+                            st.r_l *= t_maj * sigma_maj / pdf;
+                        } else {
+                            st.r_l *= sigma_maj[hero] / sigma_n[hero];
+                        }
+                        !st.beta.is_zero() && !st.r_u.is_zero()
                     }
-                    st.beta != Rgb::ZERO && st.r_u != Rgb::ZERO
-                }
-            });
-            if terminated || st.beta == Rgb::ZERO || st.r_u == Rgb::ZERO {
+                });
+            if terminated || st.beta.is_zero() || st.r_u.is_zero() {
                 return l;
             }
             if scattered {
@@ -196,6 +200,7 @@ pub fn trace_path<O: PathObserver>(
                         u_pick,
                         u_light,
                         &st,
+                        lambda,
                         depth - 1,
                         observer,
                         stats,
@@ -217,7 +222,7 @@ pub fn trace_path<O: PathObserver>(
                     wo,
                     wi: ps.wi,
                     pdf: ps.pdf,
-                    f: Rgb::splat(ps.p),
+                    f: C::splat(ps.p),
                     beta: st.beta,
                     specular: false,
                     in_medium: true,
@@ -245,16 +250,16 @@ pub fn trace_path<O: PathObserver>(
             // Escaped: environment emission.
             for &i in &scene.infinite_lights {
                 let light = &scene.lights[i as usize];
-                let le = light.le(ray.d);
-                if le == Rgb::ZERO {
+                let le = light.le::<C>(ray.d, lambda);
+                if le.is_zero() {
                     continue;
                 }
                 let c = if depth == 0 || specular_bounce || !config.next_event {
-                    st.beta * le / average(st.r_u)
+                    st.beta * le / st.r_u.average()
                 } else {
                     let pdf = scene.light_sampler.pmf(i as usize)
                         * light.pdf_li(&LightContext { p: prev_p }, ray.d, None, &scene.surfaces.shapes);
-                    st.beta * le / average(st.r_u + st.r_l * pdf)
+                    st.beta * le / (st.r_u + st.r_l * pdf).average()
                 };
                 l += c;
                 observer.on_emission(&EmissionEvent { depth, contribution: c });
@@ -267,14 +272,14 @@ pub fn trace_path<O: PathObserver>(
         // Emission from an area light that was hit.
         if hit.prim.area_light != NONE {
             let light = &scene.lights[hit.prim.area_light as usize];
-            let le = light.emitted(s, wo);
-            if le != Rgb::ZERO {
+            let le = light.emitted::<C>(s, wo, lambda);
+            if !le.is_zero() {
                 let c = if depth == 0 || specular_bounce || !config.next_event {
-                    st.beta * le / average(st.r_u)
+                    st.beta * le / st.r_u.average()
                 } else {
                     let pdf = scene.light_sampler.pmf(hit.prim.area_light as usize)
                         * light.pdf_li(&LightContext { p: prev_p }, ray.d, Some(s), &scene.surfaces.shapes);
-                    st.beta * le / average(st.r_u + st.r_l * pdf)
+                    st.beta * le / (st.r_u + st.r_l * pdf).average()
                 };
                 l += c;
                 observer.on_emission(&EmissionEvent { depth, contribution: c });
@@ -283,7 +288,7 @@ pub fn trace_path<O: PathObserver>(
 
         let material = &scene.materials[hit.prim.material as usize];
         let tex_ctx = TexContext { p: s.p, uv: s.uv };
-        let Some(mut bxdf) = material.bxdf(&scene.textures, &tex_ctx) else {
+        let Some(mut bxdf) = material.bxdf::<C>(&scene.textures, &tex_ctx, lambda) else {
             // An interface: cross it without counting a bounce.
             medium = medium_after(scene, &hit, ray.d, medium);
             ray = spawn_ray(s.p, s.n, ray.d);
@@ -304,9 +309,20 @@ pub fn trace_path<O: PathObserver>(
             let u_pick = sampler.get_1d();
             let u_light = sampler.get_2d();
             let sc = Scatterer::Surface { bxdf: &bxdf, frame: &frame, wo_local };
-            if let Some(c) =
-                sample_direct(scene, s.p, Some(&hit), medium, &sc, u_pick, u_light, &st, depth - 1, observer, stats)
-            {
+            if let Some(c) = sample_direct(
+                scene,
+                s.p,
+                Some(&hit),
+                medium,
+                &sc,
+                u_pick,
+                u_light,
+                &st,
+                lambda,
+                depth - 1,
+                observer,
+                stats,
+            ) {
                 l += c;
             }
         }
@@ -355,11 +371,11 @@ pub fn trace_path<O: PathObserver>(
 /// Russian roulette on the throughput with refraction's radiance scaling undone; true
 /// when the path ends.
 #[inline]
-fn rr(st: &mut PathState, eta_scale: f32, depth: u32, sampler: &mut Sampler) -> bool {
-    if st.beta == Rgb::ZERO || !st.beta.is_finite() {
+fn rr<C: Channels>(st: &mut PathState<C>, eta_scale: f32, depth: u32, sampler: &mut Sampler) -> bool {
+    if st.beta.is_zero() || !st.beta.is_finite() {
         return true;
     }
-    let rr_beta = st.beta * eta_scale / average(st.r_u);
+    let rr_beta = st.beta * eta_scale / st.r_u.average();
     let rr_max = rr_beta.max_element();
     let u_rr = sampler.get_1d();
     if rr_max < 1.0 && depth > 1 {
@@ -376,27 +392,28 @@ fn rr(st: &mut PathState, eta_scale: f32, depth: u32, sampler: &mut Sampler) -> 
 /// is none), MIS-weighted against BSDF/phase sampling (pbrt-v4's SampleLd). The shadow ray
 /// crosses `interface` surfaces and accumulates ratio-tracking transmittance through media.
 #[allow(clippy::too_many_arguments)]
-fn sample_direct<O: PathObserver>(
+fn sample_direct<C: Channels, O: PathObserver<C>>(
     scene: &Scene,
     p: Vec3,
     hit: Option<&Hit>,
     medium: u32,
-    scatterer: &Scatterer<'_>,
+    scatterer: &Scatterer<'_, C>,
     u_pick: f32,
     u_light: Vec2,
-    st: &PathState,
+    st: &PathState<C>,
+    lambda: &C::Lambda,
     depth: u32,
     observer: &mut O,
     stats: &mut RayStats,
-) -> Option<Rgb> {
+) -> Option<C> {
     let (index, pmf) = scene.light_sampler.sample(u_pick)?;
     let light = &scene.lights[index];
-    let ls = light.sample_li(&LightContext { p }, u_light, &scene.surfaces.shapes, &scene.sphere)?;
-    if ls.pdf == 0.0 || ls.l == Rgb::ZERO {
+    let ls = light.sample_li::<C>(&LightContext { p }, u_light, &scene.surfaces.shapes, &scene.sphere, lambda)?;
+    if ls.pdf == 0.0 || ls.l.is_zero() {
         return None;
     }
     let (f, pdf_scatter) = scatterer.eval(ls.wi);
-    if f == Rgb::ZERO {
+    if f.is_zero() {
         return None;
     }
     // A shadow ray leaving a surface starts in the medium on the side it leaves towards.
@@ -404,14 +421,14 @@ fn sample_direct<O: PathObserver>(
         Some(h) => (h.surface.n, medium_after(scene, h, ls.wi, medium)),
         None => (Vec3::ZERO, medium),
     };
-    let ShadowEstimate { t_ray, r_u, r_l } = transmittance(scene, p, n, medium, &ls, st.hero, stats)?;
+    let ShadowEstimate { t_ray, r_u, r_l } = transmittance(scene, p, n, medium, &ls, st.hero, lambda, stats)?;
     let pdf_light = pmf * ls.pdf;
     let r_l = r_l * st.r_u * pdf_light;
     let r_u = r_u * st.r_u * pdf_scatter;
     let contribution = if ls.delta {
-        st.beta * f * t_ray * ls.l / average(r_l)
+        st.beta * f * t_ray * ls.l / r_l.average()
     } else {
-        st.beta * f * t_ray * ls.l / average(r_l + r_u)
+        st.beta * f * t_ray * ls.l / (r_l + r_u).average()
     };
     observer.on_nee(&NeeEvent {
         depth,
@@ -426,15 +443,17 @@ fn sample_direct<O: PathObserver>(
 
 /// Transmittance from `p` to the light sample, with the rescaled probabilities of the
 /// segments through media, or `None` when something opaque is in the way.
-fn transmittance(
+#[allow(clippy::too_many_arguments)]
+fn transmittance<C: Channels>(
     scene: &Scene,
     p: Vec3,
     n: Vec3,
     mut medium: u32,
-    ls: &LightSample,
+    ls: &LightSample<C>,
     hero: usize,
+    lambda: &C::Lambda,
     stats: &mut RayStats,
-) -> Option<ShadowEstimate> {
+) -> Option<ShadowEstimate<C>> {
     let mut est = ShadowEstimate::default();
     let origin = if n == Vec3::ZERO { p } else { offset_origin(p, n, ls.wi) };
     let mut ray = Ray::new(origin, ls.wi);
@@ -455,8 +474,8 @@ fn transmittance(
         }
         if medium != NONE {
             let t_max = hit.as_ref().map_or(remaining, |h| h.surface.t);
-            ratio_tracking(&scene.media[medium as usize], &ray, t_max, &mut rng, hero, &mut est);
-            if est.t_ray == Rgb::ZERO {
+            ratio_tracking(&scene.media[medium as usize], &ray, t_max, &mut rng, hero, lambda, &mut est);
+            if est.t_ray.is_zero() {
                 return None;
             }
         }

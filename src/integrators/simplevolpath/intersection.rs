@@ -26,7 +26,7 @@
 use glam::{Vec2, Vec3};
 
 use crate::accel::{Hit, NONE};
-use crate::color::Rgb;
+use crate::color::{Channels, Rgb};
 use crate::geometry::{Ray, spawn_ray};
 use crate::integrators::common::media::sample_t_maj;
 use crate::integrators::common::medium_after;
@@ -65,7 +65,7 @@ impl Seed {
 
 /// What a ray meets first.
 #[derive(Clone, Copy, Debug)]
-pub enum Event {
+pub enum Event<C = Rgb> {
     /// Nothing before `t_max`: the ray left the scene (or reached its target).
     Escape,
     /// A surface (never a non-emissive `interface`).
@@ -75,7 +75,7 @@ pub enum Event {
         /// Where.
         p: Vec3,
         /// σa, σs and Le there.
-        point: MediumPoint,
+        point: MediumPoint<C>,
         /// Index of the medium.
         medium: u32,
     },
@@ -83,34 +83,36 @@ pub enum Event {
 
 /// The nearest event along a ray and the throughput factor of reaching it.
 #[derive(Clone, Copy, Debug)]
-pub struct Intersection {
+pub struct Intersection<C = Rgb> {
     /// The event.
-    pub event: Event,
+    pub event: Event<C>,
     /// The last straight piece of the ray (after crossing interfaces): its direction is the
     /// ray's, its origin where the last piece started.
     pub ray: Ray,
     /// The medium the ray travelled through to reach the event.
     pub medium: u32,
     /// Throughput factor f_c/p_hero per channel (1 in gray media).
-    pub beta: Rgb,
+    pub beta: C,
     /// Spectral-MIS ratio p_c/p_hero per channel (1 in gray media).
-    pub r_u: Rgb,
+    pub r_u: C,
 }
 
 /// The nearest event along `ray` (unit direction) before `t_max`, starting in `medium`:
 /// surfaces and media through one interface. `segments` counts the straight pieces traced
 /// (one plus one per interface crossed).
-pub fn intersect(
+#[allow(clippy::too_many_arguments)]
+pub fn intersect<C: Channels>(
     scene: &Scene,
     mut ray: Ray,
     mut medium: u32,
     mut t_max: f32,
     seed: Seed,
     hero: usize,
+    lambda: &C::Lambda,
     segments: &mut u64,
-) -> Intersection {
-    let mut beta = Rgb::ONE;
-    let mut r_u = Rgb::ONE;
+) -> Intersection<C> {
+    let mut beta = C::ONE;
+    let mut r_u = C::ONE;
     let mut r = Some(seed.r);
     let mut rng: Option<Pcg32> = None;
     loop {
@@ -121,7 +123,7 @@ pub fn intersect(
             let t_end = hit.as_ref().map_or(t_max, |h| h.surface.t);
             let rng = rng.get_or_insert_with(|| seed.rng());
             let u = r.take().unwrap_or_else(|| rng.uniform());
-            if let Some((p, point)) = medium_hit(m, &ray, t_end, u, rng, hero, &mut beta, &mut r_u) {
+            if let Some((p, point)) = medium_hit(m, &ray, t_end, u, rng, hero, lambda, &mut beta, &mut r_u) {
                 return Intersection { event: Event::Medium { p, point, medium }, ray, medium, beta, r_u };
             }
         }
@@ -147,43 +149,45 @@ pub fn intersect(
 /// spectral-MIS ratios of chromatic media (for a gray medium they stay 1).
 #[allow(clippy::too_many_arguments)]
 #[inline]
-fn medium_hit(
+fn medium_hit<C: Channels>(
     m: &Medium,
     ray: &Ray,
     t_end: f32,
     u: f32,
     rng: &mut Pcg32,
     hero: usize,
-    beta: &mut Rgb,
-    r_u: &mut Rgb,
-) -> Option<(Vec3, MediumPoint)> {
+    lambda: &C::Lambda,
+    beta: &mut C,
+    r_u: &mut C,
+) -> Option<(Vec3, MediumPoint<C>)> {
     let mut found = None;
-    let t_maj = sample_t_maj(m, ray, t_end, u, rng, hero, |p, point, sigma_maj, t_maj, rng| {
-        let sigma_t = point.sigma_a + point.sigma_s;
-        // A tentative collision is a particle with probability σt/σmaj (1 in a homogeneous
-        // medium, where no generator value is spent).
-        let p_hit = sigma_t[hero] / sigma_maj[hero];
-        if p_hit >= 1.0 || rng.uniform() < p_hit {
+    let t_maj =
+        sample_t_maj(m, ray, t_end, u, rng, hero, lambda, |p, point: &MediumPoint<C>, sigma_maj, t_maj, rng| {
+            let sigma_t = point.sigma_a + point.sigma_s;
+            // A tentative collision is a particle with probability σt/σmaj (1 in a homogeneous
+            // medium, where no generator value is spent).
+            let p_hit = sigma_t[hero] / sigma_maj[hero];
+            if p_hit >= 1.0 || rng.uniform() < p_hit {
+                if m.chromatic {
+                    let ratio = t_maj * sigma_t / (t_maj[hero] * sigma_t[hero]);
+                    *beta *= ratio;
+                    *r_u *= ratio;
+                }
+                found = Some((p, *point));
+                return false;
+            }
             if m.chromatic {
-                let ratio = t_maj * sigma_t / (t_maj[hero] * sigma_t[hero]);
+                let sigma_n = (sigma_maj - sigma_t).max(C::ZERO);
+                let ratio = t_maj * sigma_n / (t_maj[hero] * sigma_n[hero]);
                 *beta *= ratio;
                 *r_u *= ratio;
             }
-            found = Some((p, *point));
-            return false;
-        }
-        if m.chromatic {
-            let sigma_n = (sigma_maj - sigma_t).max(Rgb::ZERO);
-            let ratio = t_maj * sigma_n / (t_maj[hero] * sigma_n[hero]);
-            *beta *= ratio;
-            *r_u *= ratio;
-        }
-        true
-    });
+            true
+        });
     if found.is_none() && m.chromatic {
         // Passed through: the hero channel's probability of no collision is T_maj[hero].
         let h = t_maj[hero];
-        let ratio = if h > 0.0 { t_maj / h } else { Rgb::ZERO };
+        let ratio = if h > 0.0 { t_maj / h } else { C::ZERO };
         *beta *= ratio;
         *r_u *= ratio;
     }
@@ -222,7 +226,7 @@ WorldBegin"#,
         for k in 0..100 {
             let r = (k as f32 + 0.5) / 100.0;
             let mut n = 0;
-            let i = intersect(&s, ray, s.camera_medium, f32::INFINITY, Seed { r, u_rng: 0.3 }, 0, &mut n);
+            let i = intersect::<Rgb>(&s, ray, s.camera_medium, f32::INFINITY, Seed { r, u_rng: 0.3 }, 0, &(), &mut n);
             let Event::Medium { p, point, .. } = i.event else { panic!("an infinite medium is always hit") };
             let t = -(1.0 - r).ln() / 1.5;
             assert!((p.length() - t).abs() <= 1e-5 * t.max(1.0), "R {r}: {} vs {t}", p.length());
@@ -258,7 +262,7 @@ Shape "trianglemesh" "integer indices" [0 1 2 0 2 3] "point3 P" [-5 -5 3  5 -5 3
             .map(|k| {
                 let p = ray.at(t0 + (k as f32 + 0.5) * dt);
                 if p.abs().max_element() < 1.0 {
-                    (m.sample_point(p).sigma_a.x + m.sample_point(p).sigma_s.x) as f64
+                    (m.sample_point::<Rgb>(p, &()).sigma_a.x + m.sample_point::<Rgb>(p, &()).sigma_s.x) as f64
                 } else {
                     0.0
                 }
@@ -271,7 +275,7 @@ Shape "trianglemesh" "integer indices" [0 1 2 0 2 3] "point3 P" [-5 -5 3  5 -5 3
         for k in 0..n {
             let seed = Seed { r: (k as f32 + 0.5) / n as f32, u_rng: ((k * 7919) % n) as f32 / n as f32 };
             let mut segs = 0;
-            match intersect(&s, ray, NONE, f32::INFINITY, seed, 0, &mut segs).event {
+            match intersect::<Rgb>(&s, ray, NONE, f32::INFINITY, seed, 0, &(), &mut segs).event {
                 Event::Surface(h) => {
                     assert!((h.surface.p.z - 3.0).abs() < 1e-4, "only the back wall is a surface");
                     passed += 1;
@@ -307,7 +311,7 @@ MakeNamedMedium "m" "string type" "rgbgrid" "integer nx" 2 "integer ny" 2 "integ
             let hero = k % 3;
             let seed = Seed { r: ((k / 3) as f32 + 0.5) / (n / 3) as f32, u_rng: (k as f32 * 0.618_034).fract() };
             let mut segs = 0;
-            let i = intersect(&s, ray, NONE, f32::INFINITY, seed, hero, &mut segs);
+            let i = intersect::<Rgb>(&s, ray, NONE, f32::INFINITY, seed, hero, &(), &mut segs);
             if let Event::Escape = i.event {
                 let w = i.beta / average(i.r_u);
                 for c in 0..3 {

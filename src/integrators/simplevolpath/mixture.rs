@@ -37,7 +37,7 @@ use glam::{Vec2, Vec3};
 
 use super::settings::SimpleVolPathSettings;
 use crate::accel::{Hit, NONE};
-use crate::color::Rgb;
+use crate::color::{Channels, Rgb};
 use crate::lights::{LightContext, LightKind};
 use crate::materials::bxdf::{Bxdf, ReflTransFlags, TransportMode};
 use crate::math::Frame;
@@ -65,11 +65,11 @@ impl Weights {
 /// What scatters at a vertex: the source of p_s, and of the ρ cos θ' (Eq. 2) or Λ p (Eq. 5)
 /// factor.
 #[derive(Clone, Copy, Debug)]
-pub enum Scatterer<'a> {
+pub enum Scatterer<'a, C = Rgb> {
     /// A BSDF in its shading frame; `wo` is local.
     Surface {
         /// The BSDF.
-        bxdf: &'a Bxdf,
+        bxdf: &'a Bxdf<C>,
         /// Shading frame.
         frame: Frame,
         /// Direction towards the previous vertex, in the shading frame.
@@ -86,11 +86,11 @@ pub enum Scatterer<'a> {
 
 /// A direction drawn from p_s.
 #[derive(Clone, Copy, Debug)]
-pub struct ScatterSample {
+pub struct ScatterSample<C = Rgb> {
     /// Direction (world space).
     pub wi: Vec3,
     /// ρ·|cos θ'| or the phase function value.
-    pub f: Rgb,
+    pub f: C,
     /// Its density, or the discrete probability of a specular lobe.
     pub pdf: f32,
     /// True for a sample of a Dirac delta lobe.
@@ -99,10 +99,10 @@ pub struct ScatterSample {
     pub eta: f32,
 }
 
-impl Scatterer<'_> {
+impl<C: Channels> Scatterer<'_, C> {
     /// ρ(ω, ω')·|cos θ'| at a surface or p(ω, ω') in a medium, and p_s(ω').
     #[inline]
-    pub fn eval(&self, wi: Vec3) -> (Rgb, f32) {
+    pub fn eval(&self, wi: Vec3) -> (C, f32) {
         match self {
             Scatterer::Surface { bxdf, frame, wo } => {
                 let wl = frame.to_local(wi);
@@ -111,14 +111,14 @@ impl Scatterer<'_> {
             }
             Scatterer::Medium { phase, wo } => {
                 let p = phase.p(*wo, wi);
-                (Rgb::splat(p), phase.pdf(*wo, wi))
+                (C::splat(p), phase.pdf(*wo, wi))
             }
         }
     }
 
     /// Draws ω' from p_s with `uc` (lobe choice) and `u`.
     #[inline]
-    pub fn sample(&self, uc: f32, u: Vec2) -> Option<ScatterSample> {
+    pub fn sample(&self, uc: f32, u: Vec2) -> Option<ScatterSample<C>> {
         match self {
             Scatterer::Surface { bxdf, frame, wo } => {
                 let bs = bxdf.sample_f(*wo, uc, u, TransportMode::Radiance, ReflTransFlags::ALL)?;
@@ -132,7 +132,7 @@ impl Scatterer<'_> {
             }
             Scatterer::Medium { phase, wo } => {
                 let ps = phase.sample_p(*wo, u)?;
-                Some(ScatterSample { wi: ps.wi, f: Rgb::splat(ps.p), pdf: ps.pdf, specular: false, eta: 1.0 })
+                Some(ScatterSample { wi: ps.wi, f: C::splat(ps.p), pdf: ps.pdf, specular: false, eta: 1.0 })
             }
         }
     }
@@ -180,13 +180,13 @@ pub enum Component {
 /// A direction drawn from the mixture, with what Equation 2 needs except the luminaire
 /// density, which depends on where the ray goes ([`Mixture::pdf_along`]).
 #[derive(Clone, Copy, Debug)]
-pub struct MixtureSample {
+pub struct MixtureSample<C = Rgb> {
     /// Direction (world space).
     pub wi: Vec3,
     /// The density that drew it.
     pub component: Component,
     /// ρ·|cos θ'| or the phase function value at `wi`.
-    pub f: Rgb,
+    pub f: C,
     /// p_s(wi) (the discrete probability for a specular sample).
     pub scatter_pdf: f32,
     /// True for a specular sample of p_s.
@@ -242,7 +242,7 @@ impl Mixture {
 
     /// The coefficients at a vertex.
     #[inline]
-    pub fn weights(&self, sc: &Scatterer<'_>) -> Weights {
+    pub fn weights<C: Channels>(&self, sc: &Scatterer<'_, C>) -> Weights {
         if sc.mixes() { self.base } else { Weights::SCATTER_ONLY }
     }
 
@@ -250,7 +250,15 @@ impl Mixture {
     /// [0, 1), drives it together with `u`). `None` when the chosen density has nothing to
     /// offer here (e.g. the back of a one-sided light): that sample contributes nothing, and
     /// the densities below count only what can be drawn.
-    pub fn sample(&self, scene: &Scene, x: Vec3, sc: &Scatterer<'_>, u_comp: f32, u: Vec2) -> Option<MixtureSample> {
+    pub fn sample<C: Channels>(
+        &self,
+        scene: &Scene,
+        x: Vec3,
+        sc: &Scatterer<'_, C>,
+        u_comp: f32,
+        u: Vec2,
+        lambda: &C::Lambda,
+    ) -> Option<MixtureSample<C>> {
         let w = self.weights(sc);
         let rescale = |lo: f32, c: f32| ((u_comp - lo) / c).clamp(0.0, ONE_MINUS_EPSILON);
         if u_comp < w.scatter {
@@ -268,11 +276,11 @@ impl Mixture {
         let ctx = LightContext { p: x };
         let (component, wi) = if w.env == 0.0 || (w.light > 0.0 && u_comp < w.scatter + w.light) {
             let pick = self.lights.as_ref()?.sample(rescale(w.scatter, w.light))?;
-            let ls = scene.lights[pick.index].sample_li(&ctx, u, &scene.surfaces.shapes, &scene.sphere)?;
+            let ls = scene.lights[pick.index].sample_li::<C>(&ctx, u, &scene.surfaces.shapes, &scene.sphere, lambda)?;
             (Component::Light { light: pick.index as u32, p: ls.p }, ls.wi)
         } else {
             let pick = self.envs.as_ref()?.sample(rescale(w.scatter + w.light, w.env))?;
-            let ls = scene.lights[pick.index].sample_li(&ctx, u, &scene.surfaces.shapes, &scene.sphere)?;
+            let ls = scene.lights[pick.index].sample_li::<C>(&ctx, u, &scene.surfaces.shapes, &scene.sphere, lambda)?;
             (Component::Environment, ls.wi)
         };
         let (f, scatter_pdf) = sc.eval(wi);
@@ -312,7 +320,7 @@ impl Mixture {
         let i = h.prim.area_light as usize;
         let pmf = t.pmf(i);
         let light = &scene.lights[i];
-        if pmf == 0.0 || light.emitted(&h.surface, -wi) == Rgb::ZERO {
+        if pmf == 0.0 || !light.emits(&h.surface, -wi) {
             return 0.0;
         }
         pmf * light.pdf_li(&LightContext { p: x }, wi, Some(&h.surface), &scene.surfaces.shapes)
@@ -323,7 +331,14 @@ impl Mixture {
     /// the sampled directions; the shading loop uses [`Mixture::pdf_along`], which reuses the
     /// sample's p_s.
     #[cfg(test)]
-    pub fn pdf_at(&self, scene: &Scene, x: Vec3, sc: &Scatterer<'_>, wi: Vec3, first: Option<&Hit>) -> f32 {
+    pub fn pdf_at<C: Channels>(
+        &self,
+        scene: &Scene,
+        x: Vec3,
+        sc: &Scatterer<'_, C>,
+        wi: Vec3,
+        first: Option<&Hit>,
+    ) -> f32 {
         let w = self.weights(sc);
         let light = if w.light > 0.0 { self.light_pdf(scene, x, wi, first) } else { 0.0 };
         let env = if w.env > 0.0 { self.env_pdf(scene, wi) } else { 0.0 };
@@ -334,7 +349,13 @@ impl Mixture {
     /// `first` first; `None` when the sample has weight 0: a luminaire sample whose ray does
     /// not reach the sampled point before anything else (see the module notes).
     #[inline]
-    pub fn pdf_along(&self, scene: &Scene, x: Vec3, s: &MixtureSample, first: Option<&Hit>) -> Option<f32> {
+    pub fn pdf_along<C: Channels>(
+        &self,
+        scene: &Scene,
+        x: Vec3,
+        s: &MixtureSample<C>,
+        first: Option<&Hit>,
+    ) -> Option<f32> {
         let w = s.weights;
         if s.specular {
             // A delta direction: only p_s can produce it, chosen with probability c_s.
@@ -392,8 +413,9 @@ AttributeEnd"#;
             *p = Rgb::splat(if (k % 16) < 4 && k / 16 < 5 { 40.0 } else { 0.5 + (k % 7) as f32 * 0.1 });
         }
         let env = &scene_env_index(&s);
-        s.lights[*env].kind =
-            LightKind::ImageInfinite(Box::new(EnvironmentMap::new(&img, Affine3A::from_rotation_x(0.7), 1.0).unwrap()));
+        s.lights[*env].kind = LightKind::ImageInfinite(Box::new(
+            EnvironmentMap::new(&img, nimbus_parser::ColorSpace::Srgb, Affine3A::from_rotation_x(0.7), 1.0).unwrap(),
+        ));
         s
     }
 
@@ -464,7 +486,7 @@ AttributeEnd"#;
             for _ in 0..n {
                 let u_comp = rng.uniform();
                 let u = Vec2::new(rng.uniform(), rng.uniform());
-                let ms = m.sample(&s, x, sc, u_comp, u).expect("every density samples from x");
+                let ms = m.sample::<Rgb>(&s, x, sc, u_comp, u, &()).expect("every density samples from x");
                 let theta = (ms.wi.z as f64).clamp(-1.0, 1.0).acos();
                 let phi = (ms.wi.y as f64).atan2(ms.wi.x as f64).rem_euclid(2.0 * PI);
                 let i = ((theta / PI * NT as f64) as usize).min(NT - 1);
@@ -515,7 +537,14 @@ AttributeEnd"#;
         let w = m.weights(&sc);
         let ms = (0..64)
             .find_map(|k| {
-                let ms = m.sample(&s, x, &sc, w.scatter + 0.5 * w.light, Vec2::new((k as f32 + 0.5) / 64.0, 0.3))?;
+                let ms = m.sample::<Rgb>(
+                    &s,
+                    x,
+                    &sc,
+                    w.scatter + 0.5 * w.light,
+                    Vec2::new((k as f32 + 0.5) / 64.0, 0.3),
+                    &(),
+                )?;
                 matches!(ms.component, Component::Light { .. }).then_some(ms)
             })
             .expect("a light sample");

@@ -21,9 +21,9 @@ mod tracer;
 
 pub use settings::SimpleVolPathSettings;
 
-use super::Integrator;
+use super::RayIntegrator;
 use super::common::RayStats;
-use crate::color::Rgb;
+use crate::color::Channels;
 use crate::geometry::Ray;
 use crate::samplers::Sampler;
 use crate::scene::Scene;
@@ -45,12 +45,19 @@ impl SimpleVolPath {
     }
 }
 
-impl Integrator for SimpleVolPath {
+impl RayIntegrator for SimpleVolPath {
     fn name(&self) -> &'static str {
         "simplevolpath"
     }
 
-    fn li(&self, scene: &Scene, ray: Ray, sampler: &mut Sampler, stats: &mut RayStats) -> Rgb {
-        tracer::trace(scene, &self.mixture, &self.delta, self.max_depth, ray, sampler, stats)
+    fn li<C: Channels>(
+        &self,
+        scene: &Scene,
+        ray: Ray,
+        lambda: &mut C::Lambda,
+        sampler: &mut Sampler,
+        stats: &mut RayStats,
+    ) -> C {
+        tracer::trace(scene, &self.mixture, &self.delta, self.max_depth, ray, lambda, sampler, stats)
     }
 }

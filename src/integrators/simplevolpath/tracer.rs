@@ -24,7 +24,7 @@ use glam::{Vec2, Vec3};
 use super::intersection::{Event, Intersection, Seed, intersect};
 use super::mixture::{Mixture, Scatterer};
 use crate::accel::{Hit, NONE};
-use crate::color::{Rgb, average};
+use crate::color::Channels;
 use crate::geometry::{Ray, offset_origin, spawn_ray};
 use crate::integrators::common::{RayStats, medium_after, shading_frame};
 use crate::lights::LightContext;
@@ -35,11 +35,11 @@ use crate::scene::Scene;
 use crate::textures::TexContext;
 
 /// Per-path state.
-struct Path {
+struct Path<C> {
     /// Throughput (per channel: f_c / p_hero).
-    beta: Rgb,
+    beta: C,
     /// Spectral-MIS ratios p_c / p_hero of chromatic media (1 otherwise).
-    r_u: Rgb,
+    r_u: C,
     /// The channel whose coefficients drive distance sampling in chromatic media.
     hero: usize,
     /// Scattering events so far.
@@ -48,25 +48,25 @@ struct Path {
     eta_scale: f32,
 }
 
-impl Path {
+impl<C: Channels> Path<C> {
     /// Takes on the throughput factor of reaching an event.
     #[inline]
-    fn carry(&mut self, i: &Intersection) {
+    fn carry(&mut self, i: &Intersection<C>) {
         self.beta *= i.beta;
         self.r_u *= i.r_u;
     }
 
     /// Radiance `le` found at the current event, as it reaches the camera.
     #[inline]
-    fn weigh(&self, le: Rgb) -> Rgb {
-        self.beta * le / average(self.r_u)
+    fn weigh(&self, le: C) -> C {
+        self.beta * le / self.r_u.average()
     }
 
     /// Russian roulette; true when the path ends. The sampler value is drawn at every vertex.
     #[inline]
     fn roulette(&mut self, sampler: &mut Sampler) -> bool {
         let u = sampler.get_1d();
-        let rr = (self.beta * self.eta_scale / average(self.r_u)).max_element();
+        let rr = (self.beta * self.eta_scale / self.r_u.average()).max_element();
         if rr < 1.0 && self.depth > 2 {
             let q = (1.0 - rr).max(0.0);
             if u < q {
@@ -81,15 +81,14 @@ impl Path {
 /// x / y per channel, 0 where y is 0 (a channel without extinction has no particles; its
 /// throughput to this event is already 0).
 #[inline]
-fn ratio(x: Rgb, y: Rgb) -> Rgb {
-    let r = |a: f32, b: f32| if b > 0.0 { a / b } else { 0.0 };
-    Rgb::new(r(x.x, y.x), r(x.y, y.y), r(x.z, y.z))
+fn ratio<C: Channels>(x: C, y: C) -> C {
+    x.zip_map(y, |a, b| if b > 0.0 { a / b } else { 0.0 })
 }
 
 /// Radiance the infinite lights send along an escaping ray.
 #[inline]
-fn escaped(scene: &Scene, d: Vec3) -> Rgb {
-    scene.infinite_lights.iter().map(|&i| scene.lights[i as usize].le(d)).sum()
+fn escaped<C: Channels>(scene: &Scene, d: Vec3, lambda: &C::Lambda) -> C {
+    scene.infinite_lights.iter().fold(C::ZERO, |sum, &i| sum + scene.lights[i as usize].le(d, lambda))
 }
 
 /// Point, spot and distant lights, chosen in proportion to power for the one deterministic
@@ -113,32 +112,33 @@ impl DeltaLights {
     /// intersection (1 if it arrives, 0 if anything — a surface or a medium particle — comes
     /// first; with spectral-MIS ratios in chromatic media).
     #[allow(clippy::too_many_arguments)]
-    fn connect(
+    fn connect<C: Channels>(
         &self,
         scene: &Scene,
         x: Vec3,
         hit: Option<&Hit>,
         medium: u32,
-        sc: &Scatterer<'_>,
-        path: &Path,
+        sc: &Scatterer<'_, C>,
+        path: &Path<C>,
+        lambda: &C::Lambda,
         sampler: &mut Sampler,
         stats: &mut RayStats,
-    ) -> Rgb {
-        let Some(table) = &self.table else { return Rgb::ZERO };
+    ) -> C {
+        let Some(table) = &self.table else { return C::ZERO };
         let u_pick = sampler.get_1d();
         let seed = Seed::draw(scene, sampler);
         if !sc.is_non_specular() {
-            return Rgb::ZERO;
+            return C::ZERO;
         }
-        let Some(pick) = table.sample(u_pick) else { return Rgb::ZERO };
+        let Some(pick) = table.sample(u_pick) else { return C::ZERO };
         let light = &scene.lights[pick.index];
         let ctx = LightContext { p: x };
-        let Some(ls) = light.sample_li(&ctx, Vec2::ZERO, &scene.surfaces.shapes, &scene.sphere) else {
-            return Rgb::ZERO;
+        let Some(ls) = light.sample_li::<C>(&ctx, Vec2::ZERO, &scene.surfaces.shapes, &scene.sphere, lambda) else {
+            return C::ZERO;
         };
         let (f, _) = sc.eval(ls.wi);
-        if f == Rgb::ZERO || ls.l == Rgb::ZERO {
-            return Rgb::ZERO;
+        if f.is_zero() || ls.l.is_zero() {
+            return C::ZERO;
         }
         let (origin, mut medium) = match hit {
             Some(h) => (offset_origin(h.surface.p, h.surface.n, ls.wi), medium_after(scene, h, ls.wi, medium)),
@@ -146,10 +146,10 @@ impl DeltaLights {
         };
         let mut ray = Ray::new(origin, ls.wi);
         let mut t_max = if ls.infinite { f32::INFINITY } else { (ls.p - origin).length() };
-        let (mut tr, mut r_u) = (Rgb::ONE, Rgb::ONE);
+        let (mut tr, mut r_u) = (C::ONE, C::ONE);
         let mut seed = seed;
         loop {
-            let i = intersect(scene, ray, medium, t_max, seed, path.hero, &mut stats.shadow);
+            let i = intersect::<C>(scene, ray, medium, t_max, seed, path.hero, lambda, &mut stats.shadow);
             tr *= i.beta;
             r_u *= i.r_u;
             match i.event {
@@ -165,31 +165,34 @@ impl DeltaLights {
                     ray = next;
                     seed = Seed::draw(scene, sampler);
                 }
-                _ => return Rgb::ZERO,
+                _ => return C::ZERO,
             }
         }
-        path.beta * f * ls.l * tr / (pick.pmf * average(path.r_u * r_u))
+        path.beta * f * ls.l * tr / (pick.pmf * (path.r_u * r_u).average())
     }
 }
 
-/// Radiance arriving at the camera along `ray`, one path.
-pub fn trace(
+/// Radiance arriving at the camera along `ray` at the wavelengths `lambda`, one path.
+#[allow(clippy::too_many_arguments)]
+pub fn trace<C: Channels>(
     scene: &Scene,
     mixture: &Mixture,
     delta: &DeltaLights,
     max_depth: u32,
     ray: Ray,
+    lambda: &mut C::Lambda,
     sampler: &mut Sampler,
     stats: &mut RayStats,
-) -> Rgb {
-    let hero = if scene.has_chromatic_media { ((sampler.get_1d() * 3.0) as usize).min(2) } else { 0 };
-    let mut path = Path { beta: Rgb::ONE, r_u: Rgb::ONE, hero, depth: 0, eta_scale: 1.0 };
-    let mut l = Rgb::ZERO;
+) -> C {
+    let hero = if scene.has_chromatic_media { C::hero_channel(sampler.get_1d()) } else { 0 };
+    let mut path = Path { beta: C::ONE, r_u: C::ONE, hero, depth: 0, eta_scale: 1.0 };
+    let mut l = C::ZERO;
     let seed = Seed::draw(scene, sampler);
-    let mut isect = intersect(scene, ray, scene.camera_medium, f32::INFINITY, seed, hero, &mut stats.bounce);
+    let mut isect =
+        intersect::<C>(scene, ray, scene.camera_medium, f32::INFINITY, seed, hero, lambda, &mut stats.bounce);
     path.carry(&isect);
     loop {
-        if path.beta == Rgb::ZERO || !path.beta.is_finite() {
+        if path.beta.is_zero() || !path.beta.is_finite() {
             break;
         }
         let wo = -isect.ray.d;
@@ -197,21 +200,21 @@ pub fn trace(
         let bxdf;
         let (x, hit, sc) = match isect.event {
             Event::Escape => {
-                l += path.weigh(escaped(scene, isect.ray.d));
+                l += path.weigh(escaped(scene, isect.ray.d, lambda));
                 break;
             }
             Event::Surface(hit) => {
                 let s = &hit.surface;
                 if hit.prim.area_light != NONE {
-                    l += path.weigh(scene.lights[hit.prim.area_light as usize].emitted(s, wo));
+                    l += path.weigh(scene.lights[hit.prim.area_light as usize].emitted(s, wo, lambda));
                 }
                 let material = &scene.materials[hit.prim.material as usize];
-                let Some(b) = material.bxdf(&scene.textures, &TexContext { p: s.p, uv: s.uv }) else {
+                let Some(b) = material.bxdf::<C>(&scene.textures, &TexContext { p: s.p, uv: s.uv }, lambda) else {
                     // An emissive `interface`: its light is counted; the ray goes on.
                     let medium = medium_after(scene, &hit, isect.ray.d, isect.medium);
                     let seed = Seed::draw(scene, sampler);
                     let ray = spawn_ray(s.p, s.n, isect.ray.d);
-                    isect = intersect(scene, ray, medium, f32::INFINITY, seed, hero, &mut stats.bounce);
+                    isect = intersect(scene, ray, medium, f32::INFINITY, seed, hero, lambda, &mut stats.bounce);
                     path.carry(&isect);
                     continue;
                 };
@@ -227,7 +230,7 @@ pub fn trace(
                 // The particle emits σa/σt·Le (what a 'hit' with probability ∝ σt sees of the
                 // σa·Le emitted per unit length), counted below maxdepth as pbrt-v4 does.
                 let sigma_t = point.sigma_a + point.sigma_s;
-                if path.depth < max_depth && point.le != Rgb::ZERO {
+                if path.depth < max_depth && !point.le.is_zero() {
                     l += path.weigh(ratio(point.sigma_a, sigma_t) * point.le);
                 }
                 if path.depth == max_depth {
@@ -236,7 +239,7 @@ pub fn trace(
                 path.depth += 1;
                 // Equation 5: the particle reflects the fraction Λ = σs/σt.
                 path.beta *= ratio(point.sigma_s, sigma_t);
-                if path.beta == Rgb::ZERO {
+                if path.beta.is_zero() {
                     break; // a purely absorbing particle
                 }
                 let phase = HenyeyGreenstein::new(scene.media[medium as usize].g);
@@ -246,14 +249,14 @@ pub fn trace(
         if path.roulette(sampler) {
             break;
         }
-        l += delta.connect(scene, x, hit.as_ref(), isect.medium, &sc, &path, sampler, stats);
+        l += delta.connect(scene, x, hit.as_ref(), isect.medium, &sc, &path, lambda, sampler, stats);
 
         // Equation 2: one direction from the mixture density, traced by the probabilistic
         // intersection, weighted by f / p with p evaluated where the ray went.
         let u_comp = sampler.get_1d();
         let u = sampler.get_2d();
-        let Some(s) = mixture.sample(scene, x, &sc, u_comp, u) else { break };
-        if s.f == Rgb::ZERO {
+        let Some(s) = mixture.sample(scene, x, &sc, u_comp, u, lambda) else { break };
+        if s.f.is_zero() {
             break;
         }
         let (ray, medium) = match &hit {
@@ -261,7 +264,7 @@ pub fn trace(
             None => (Ray::new(x, s.wi), isect.medium),
         };
         let seed = Seed::draw(scene, sampler);
-        let next = intersect(scene, ray, medium, f32::INFINITY, seed, hero, &mut stats.bounce);
+        let next = intersect(scene, ray, medium, f32::INFINITY, seed, hero, lambda, &mut stats.bounce);
         let first = match &next.event {
             Event::Surface(h) => Some(h),
             _ => None,

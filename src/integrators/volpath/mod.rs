@@ -5,9 +5,9 @@ mod settings;
 
 pub use settings::{LightSamplerKind, VolPathSettings};
 
-use super::Integrator;
+use super::RayIntegrator;
 use super::common::{NoObserver, PathConfig, RayStats, trace_path};
-use crate::color::Rgb;
+use crate::color::Channels;
 use crate::geometry::Ray;
 use crate::samplers::Sampler;
 use crate::scene::Scene;
@@ -29,12 +29,19 @@ impl VolPath {
     }
 }
 
-impl Integrator for VolPath {
+impl RayIntegrator for VolPath {
     fn name(&self) -> &'static str {
         "volpath"
     }
 
-    fn li(&self, scene: &Scene, ray: Ray, sampler: &mut Sampler, stats: &mut RayStats) -> Rgb {
-        trace_path(scene, ray, scene.camera_medium, sampler, &self.config, &mut NoObserver, stats)
+    fn li<C: Channels>(
+        &self,
+        scene: &Scene,
+        ray: Ray,
+        lambda: &mut C::Lambda,
+        sampler: &mut Sampler,
+        stats: &mut RayStats,
+    ) -> C {
+        trace_path(scene, ray, scene.camera_medium, lambda, sampler, &self.config, &mut NoObserver, stats)
     }
 }

@@ -3,32 +3,32 @@
 
 use glam::{Vec2, Vec3};
 
-use super::fresnel::fr_complex_rgb;
+use super::fresnel::fr_complex_channels;
 use super::microfacet::{TrowbridgeReitz, face_forward};
 use super::{BsdfSample, BxdfFlags, ReflTransFlags, TransportMode};
-use crate::color::Rgb;
+use crate::color::{Channels, Rgb};
 use crate::math::{abs_cos_theta, reflect, same_hemisphere};
 
-/// A conductor with complex index of refraction η + i·k per RGB channel.
+/// A conductor with complex index of refraction η + i·k per channel.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ConductorBxdf {
+pub struct ConductorBxdf<C = Rgb> {
     distrib: TrowbridgeReitz,
-    eta: Rgb,
-    k: Rgb,
+    eta: C,
+    k: C,
     /// Per-channel factor on the Fresnel term: 1 except where an RGB fit of spectral optical
     /// constants needs it (a projected reflectance above 1, e.g. gold's red channel in sRGB).
-    fresnel_scale: Rgb,
+    fresnel_scale: C,
 }
 
-impl ConductorBxdf {
+impl<C: Channels> ConductorBxdf<C> {
     /// A conductor with the given microfacet distribution and optical constants.
-    pub fn new(distrib: TrowbridgeReitz, eta: Rgb, k: Rgb) -> ConductorBxdf {
-        ConductorBxdf { distrib, eta, k, fresnel_scale: Rgb::ONE }
+    pub fn new(distrib: TrowbridgeReitz, eta: C, k: C) -> ConductorBxdf<C> {
+        ConductorBxdf { distrib, eta, k, fresnel_scale: C::ONE }
     }
 
     /// The same conductor with its Fresnel reflectance multiplied by `scale` per channel
     /// (see [`crate::spectra::ConductorFit`]).
-    pub fn with_fresnel_scale(mut self, scale: Rgb) -> ConductorBxdf {
+    pub fn with_fresnel_scale(mut self, scale: C) -> ConductorBxdf<C> {
         self.fresnel_scale = scale;
         self
     }
@@ -36,10 +36,10 @@ impl ConductorBxdf {
     /// A conductor specified by its normal-incidence reflectance `r`, as pbrt-v4's
     /// `ConductorMaterial` does without `eta`/`k`: r is clamped to [0, 0.9999], η = 1 and
     /// k = 2√r / √(1 − r), which reflects exactly r at normal incidence.
-    pub fn from_reflectance(distrib: TrowbridgeReitz, r: Rgb) -> ConductorBxdf {
-        let r = r.clamp(Rgb::ZERO, Rgb::splat(0.9999));
-        let k = 2.0 * r.powf(0.5) / (Rgb::ONE - r).max(Rgb::ZERO).powf(0.5);
-        ConductorBxdf::new(distrib, Rgb::ONE, k)
+    pub fn from_reflectance(distrib: TrowbridgeReitz, r: C) -> ConductorBxdf<C> {
+        let r = r.clamp(0.0, 0.9999);
+        let k = r.map(|r| 2.0 * r.sqrt() / (1.0 - r).max(0.0).sqrt());
+        ConductorBxdf::new(distrib, C::ONE, k)
     }
 
     /// The microfacet distribution.
@@ -49,21 +49,21 @@ impl ConductorBxdf {
 
     /// The Torrance-Sparrow BRDF D(ωm) F(ωo·ωm) G(ωo, ωi) / (4 |cos θo| |cos θi|)
     /// (pbrt-v4 §9.6, Torrance-Sparrow model); zero when smooth.
-    pub fn f(&self, wo: Vec3, wi: Vec3, _mode: TransportMode) -> Rgb {
+    pub fn f(&self, wo: Vec3, wi: Vec3, _mode: TransportMode) -> C {
         if !same_hemisphere(wo, wi) || self.distrib.effectively_smooth() {
-            return Rgb::ZERO;
+            return C::ZERO;
         }
         let (cos_o, cos_i) = (abs_cos_theta(wo), abs_cos_theta(wi));
         if cos_i == 0.0 || cos_o == 0.0 {
-            return Rgb::ZERO;
+            return C::ZERO;
         }
         let wm = wi + wo;
         if wm.length_squared() == 0.0 {
-            return Rgb::ZERO;
+            return C::ZERO;
         }
         let wm = wm.normalize();
-        let fresnel = fr_complex_rgb(wo.dot(wm).abs(), self.eta, self.k) * self.fresnel_scale;
-        self.distrib.d(wm) * fresnel * self.distrib.g(wo, wi) / (4.0 * cos_i * cos_o)
+        let fresnel = fr_complex_channels(wo.dot(wm).abs(), self.eta, self.k) * self.fresnel_scale;
+        fresnel * (self.distrib.d(wm) * self.distrib.g(wo, wi) / (4.0 * cos_i * cos_o))
     }
 
     /// Mirror reflection when smooth, else visible-normal sampling of the microfacets and
@@ -75,14 +75,14 @@ impl ConductorBxdf {
         u: Vec2,
         _mode: TransportMode,
         sample_flags: ReflTransFlags,
-    ) -> Option<BsdfSample> {
+    ) -> Option<BsdfSample<C>> {
         if !sample_flags.reflection() {
             return None;
         }
         if self.distrib.effectively_smooth() {
             let wi = Vec3::new(-wo.x, -wo.y, wo.z);
             let cos_i = abs_cos_theta(wi);
-            let f = fr_complex_rgb(cos_i, self.eta, self.k) * self.fresnel_scale / cos_i;
+            let f = fr_complex_channels(cos_i, self.eta, self.k) * self.fresnel_scale / cos_i;
             return Some(BsdfSample::new(f, wi, 1.0, BxdfFlags::SPECULAR_REFLECTION));
         }
         if wo.z == 0.0 {
@@ -100,8 +100,8 @@ impl ConductorBxdf {
         if cos_i == 0.0 || cos_o == 0.0 {
             return None;
         }
-        let fresnel = fr_complex_rgb(wo.dot(wm).abs(), self.eta, self.k) * self.fresnel_scale;
-        let f = self.distrib.d(wm) * fresnel * self.distrib.g(wo, wi) / (4.0 * cos_i * cos_o);
+        let fresnel = fr_complex_channels(wo.dot(wm).abs(), self.eta, self.k) * self.fresnel_scale;
+        let f = fresnel * (self.distrib.d(wm) * self.distrib.g(wo, wi) / (4.0 * cos_i * cos_o));
         Some(BsdfSample::new(f, wi, pdf, BxdfFlags::GLOSSY_REFLECTION))
     }
 
@@ -180,7 +180,7 @@ mod tests {
             assert_eq!(s.wi, Vec3::new(-wo.x, -wo.y, wo.z));
             assert_eq!((s.pdf, s.flags), (1.0, BxdfFlags::SPECULAR_REFLECTION));
             let albedo = s.f * s.wi.z.abs() / s.pdf;
-            let expected = fr_complex_rgb(wo.z.abs(), eta, k);
+            let expected = fr_complex_channels(wo.z.abs(), eta, k);
             assert!((albedo - expected).abs().max_element() < 1e-6);
             testing::check_all(&b, wo, Check::default());
         }
@@ -204,7 +204,7 @@ mod tests {
                 testing::integrate_sphere(16, 32, |wi| {
                     if wi.z > 0.0 {
                         let a = rough.f(wo, wi, TransportMode::Radiance);
-                        let b = glass.f(wo, wi, TransportMode::Radiance);
+                        let b = glass.f::<Rgb>(wo, wi, TransportMode::Radiance);
                         assert!((a - b).abs().max_element() <= 1e-4 * b.x + 1e-7, "{a} vs {b}");
                     }
                     0.0

@@ -6,7 +6,7 @@ use glam::{Vec2, Vec3};
 use super::fresnel::fr_dielectric;
 use super::microfacet::{TrowbridgeReitz, face_forward};
 use super::{BsdfSample, BxdfFlags, ReflTransFlags, TransportMode};
-use crate::color::Rgb;
+use crate::color::Channels;
 use crate::math::{abs_cos_theta, cos_theta, reflect, refract, same_hemisphere, sqr};
 
 /// An interface with relative index of refraction η = η_inside/η_outside, where the inside
@@ -69,38 +69,38 @@ impl DielectricBxdf {
 
     /// Microfacet reflection and transmission (pbrt-v4 §9.7, Walter et al. 2007); zero when
     /// specular. Transmitted radiance is scaled by 1/η'² in radiance mode.
-    pub fn f(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Rgb {
+    pub fn f<C: Channels>(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> C {
         if self.is_specular() {
-            return Rgb::ZERO;
+            return C::ZERO;
         }
         let Some((wm, etap, reflect)) = generalized_half_vector(self.eta, wo, wi) else {
-            return Rgb::ZERO;
+            return C::ZERO;
         };
         let (cos_o, cos_i) = (cos_theta(wo), cos_theta(wi));
         let fresnel = fr_dielectric(wo.dot(wm), self.eta);
         let d = &self.distrib;
         if reflect {
-            Rgb::splat(d.d(wm) * d.g(wo, wi) * fresnel / (4.0 * cos_i * cos_o).abs())
+            C::splat(d.d(wm) * d.g(wo, wi) * fresnel / (4.0 * cos_i * cos_o).abs())
         } else {
             let denom = sqr(wi.dot(wm) + wo.dot(wm) / etap) * cos_i * cos_o;
             let mut ft = d.d(wm) * (1.0 - fresnel) * d.g(wo, wi) * (wi.dot(wm) * wo.dot(wm) / denom).abs();
             if mode == TransportMode::Radiance {
                 ft /= sqr(etap);
             }
-            Rgb::splat(ft)
+            C::splat(ft)
         }
     }
 
     /// Chooses reflection or transmission with probability proportional to the Fresnel
     /// reflectance (of the macro surface when specular, of a visible microfacet when rough).
-    pub fn sample_f(
+    pub fn sample_f<C: Channels>(
         &self,
         wo: Vec3,
         uc: f32,
         u: Vec2,
         mode: TransportMode,
         sample_flags: ReflTransFlags,
-    ) -> Option<BsdfSample> {
+    ) -> Option<BsdfSample<C>> {
         if self.is_specular() {
             self.sample_specular(wo, uc, mode, sample_flags)
         } else {
@@ -118,19 +118,19 @@ impl DielectricBxdf {
     }
 
     /// Perfect specular reflection or refraction (pbrt-v4 §9.5).
-    fn sample_specular(
+    fn sample_specular<C: Channels>(
         &self,
         wo: Vec3,
         uc: f32,
         mode: TransportMode,
         sample_flags: ReflTransFlags,
-    ) -> Option<BsdfSample> {
+    ) -> Option<BsdfSample<C>> {
         let r = fr_dielectric(cos_theta(wo), self.eta);
         let t = 1.0 - r;
         let (pr, pt) = Self::lobe_probabilities(r, sample_flags)?;
         if uc < pr / (pr + pt) {
             let wi = Vec3::new(-wo.x, -wo.y, wo.z);
-            let f = Rgb::splat(r / abs_cos_theta(wi));
+            let f = C::splat(r / abs_cos_theta(wi));
             Some(BsdfSample::new(f, wi, pr / (pr + pt), BxdfFlags::SPECULAR_REFLECTION))
         } else {
             let (wi, etap) = refract(wo, Vec3::Z, self.eta)?;
@@ -139,19 +139,19 @@ impl DielectricBxdf {
             if mode == TransportMode::Radiance {
                 ft /= sqr(etap);
             }
-            Some(BsdfSample::with_eta(Rgb::splat(ft), wi, pt / (pr + pt), BxdfFlags::SPECULAR_TRANSMISSION, etap))
+            Some(BsdfSample::with_eta(C::splat(ft), wi, pt / (pr + pt), BxdfFlags::SPECULAR_TRANSMISSION, etap))
         }
     }
 
     /// Rough reflection or transmission through a visible microfacet (pbrt-v4 §9.7).
-    fn sample_rough(
+    fn sample_rough<C: Channels>(
         &self,
         wo: Vec3,
         uc: f32,
         u: Vec2,
         mode: TransportMode,
         sample_flags: ReflTransFlags,
-    ) -> Option<BsdfSample> {
+    ) -> Option<BsdfSample<C>> {
         let d = &self.distrib;
         let wm = d.sample_wm(wo, u);
         let r = fr_dielectric(wo.dot(wm), self.eta);
@@ -164,7 +164,7 @@ impl DielectricBxdf {
             }
             let pdf = d.pdf(wo, wm) / (4.0 * wo.dot(wm).abs()) * pr / (pr + pt);
             let f = d.d(wm) * d.g(wo, wi) * r / (4.0 * cos_theta(wi) * cos_theta(wo));
-            Some(BsdfSample::new(Rgb::splat(f), wi, pdf, BxdfFlags::GLOSSY_REFLECTION))
+            Some(BsdfSample::new(C::splat(f), wi, pdf, BxdfFlags::GLOSSY_REFLECTION))
         } else {
             let (wi, etap) = refract(wo, wm, self.eta)?;
             if same_hemisphere(wo, wi) || wi.z == 0.0 {
@@ -179,7 +179,7 @@ impl DielectricBxdf {
             if mode == TransportMode::Radiance {
                 ft /= sqr(etap);
             }
-            Some(BsdfSample::with_eta(Rgb::splat(ft), wi, pdf, BxdfFlags::GLOSSY_TRANSMISSION, etap))
+            Some(BsdfSample::with_eta(C::splat(ft), wi, pdf, BxdfFlags::GLOSSY_TRANSMISSION, etap))
         }
     }
 
@@ -297,27 +297,45 @@ mod tests {
         let b = DielectricBxdf::new(1.5, TrowbridgeReitz::new(0.0, 0.0));
         let wo = Vec3::new(0.6, 0.0, 0.8);
         let r = fr_dielectric(0.8, 1.5);
-        let refl = b.sample_f(wo, 0.0, Vec2::ZERO, TransportMode::Radiance, ReflTransFlags::ALL).unwrap();
+        let refl =
+            b.sample_f::<crate::color::Rgb>(wo, 0.0, Vec2::ZERO, TransportMode::Radiance, ReflTransFlags::ALL).unwrap();
         assert_eq!(refl.wi, Vec3::new(-0.6, 0.0, 0.8));
         assert!((refl.pdf - r).abs() < 1e-6 && refl.flags == BxdfFlags::SPECULAR_REFLECTION);
-        let tr = b.sample_f(wo, 0.99, Vec2::ZERO, TransportMode::Radiance, ReflTransFlags::ALL).unwrap();
+        let tr = b
+            .sample_f::<crate::color::Rgb>(wo, 0.99, Vec2::ZERO, TransportMode::Radiance, ReflTransFlags::ALL)
+            .unwrap();
         // Snell: sin θt = 0.6/1.5 = 0.4.
         assert!((tr.wi - Vec3::new(-0.4, 0.0, -(1.0f32 - 0.16).sqrt())).length() < 1e-6);
         assert_eq!((tr.eta, tr.flags), (1.5, BxdfFlags::SPECULAR_TRANSMISSION));
         assert!((tr.f.x * tr.wi.z.abs() * 2.25 - (1.0 - r)).abs() < 1e-6);
-        let imp = b.sample_f(wo, 0.99, Vec2::ZERO, TransportMode::Importance, ReflTransFlags::ALL).unwrap();
+        let imp = b
+            .sample_f::<crate::color::Rgb>(wo, 0.99, Vec2::ZERO, TransportMode::Importance, ReflTransFlags::ALL)
+            .unwrap();
         assert!((imp.f.x * imp.wi.z.abs() - (1.0 - r)).abs() < 1e-6);
         // Only transmission requested: always transmits, with probability 1.
-        let t = b.sample_f(wo, 0.0, Vec2::ZERO, TransportMode::Radiance, ReflTransFlags::TRANSMISSION).unwrap();
+        let t = b
+            .sample_f::<crate::color::Rgb>(wo, 0.0, Vec2::ZERO, TransportMode::Radiance, ReflTransFlags::TRANSMISSION)
+            .unwrap();
         assert!(t.is_transmission() && t.pdf == 1.0);
         // Total internal reflection from inside beyond the critical angle.
         let inside = Vec3::new(0.9, 0.0, -(1.0f32 - 0.81).sqrt());
-        let s = b.sample_f(inside, 0.999, Vec2::ZERO, TransportMode::Radiance, ReflTransFlags::ALL).unwrap();
+        let s = b
+            .sample_f::<crate::color::Rgb>(inside, 0.999, Vec2::ZERO, TransportMode::Radiance, ReflTransFlags::ALL)
+            .unwrap();
         assert!(s.is_reflection() && s.pdf == 1.0);
-        assert!(b.sample_f(inside, 0.5, Vec2::ZERO, TransportMode::Radiance, ReflTransFlags::TRANSMISSION).is_none());
+        assert!(
+            b.sample_f::<crate::color::Rgb>(
+                inside,
+                0.5,
+                Vec2::ZERO,
+                TransportMode::Radiance,
+                ReflTransFlags::TRANSMISSION
+            )
+            .is_none()
+        );
         // Exiting: η' = 1/1.5 and radiance grows by 2.25.
         let out = b
-            .sample_f(
+            .sample_f::<crate::color::Rgb>(
                 Vec3::new(0.3, 0.0, -(0.91f32).sqrt()),
                 0.999,
                 Vec2::ZERO,
@@ -331,14 +349,14 @@ mod tests {
     #[test]
     fn index_matched_dielectric_passes_light_through() {
         for alpha in [0.0f32, 0.3] {
-            let b = Bxdf::from(DielectricBxdf::new(1.0, TrowbridgeReitz::new(alpha, alpha)));
+            let b: Bxdf = Bxdf::from(DielectricBxdf::new(1.0, TrowbridgeReitz::new(alpha, alpha)));
             assert!(b.flags().is_transmissive() && !b.flags().is_reflective());
             for wo in test_directions() {
                 let s = b.sample_f(wo, 0.2, Vec2::new(0.3, 0.7), TransportMode::Radiance, ReflTransFlags::ALL).unwrap();
                 assert!((s.wi + wo).length() < 1e-6, "{} vs {}", s.wi, -wo);
                 assert!(s.is_specular() && s.is_transmission() && s.pdf == 1.0 && s.eta == 1.0);
                 assert!((s.f.x * wo.z.abs() - 1.0).abs() < 1e-6);
-                assert_eq!(b.f(wo, -wo, TransportMode::Radiance), Rgb::ZERO);
+                assert_eq!(b.f(wo, -wo, TransportMode::Radiance), crate::color::Rgb::ZERO);
                 assert_eq!(b.pdf(wo, -wo, TransportMode::Radiance, ReflTransFlags::ALL), 0.0);
                 // Reflection only: the Fresnel term is zero up to rounding (pbrt-v4 computes it
                 // the same way), so at most a negligible reflection is sampled.

@@ -4,34 +4,34 @@ use std::f32::consts::FRAC_1_PI;
 
 use glam::{Vec2, Vec3};
 
-use super::{BsdfSample, BxdfFlags, ReflTransFlags, TransportMode, nonzero};
-use crate::color::Rgb;
+use super::{BsdfSample, BxdfFlags, ReflTransFlags, TransportMode};
+use crate::color::{Channels, Rgb};
 use crate::math::{abs_cos_theta, same_hemisphere};
 use crate::sampling::warp::{cosine_hemisphere, cosine_hemisphere_pdf};
 
 /// Lambertian reflection with albedo `r`: f = R/π on both sides of the surface.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct DiffuseBxdf {
-    r: Rgb,
+pub struct DiffuseBxdf<C = Rgb> {
+    r: C,
 }
 
-impl DiffuseBxdf {
+impl<C: Channels> DiffuseBxdf<C> {
     /// A diffuse reflector with albedo `r` (pbrt-v4 clamps material reflectances to [0, 1]
     /// before creating it).
-    pub fn new(r: Rgb) -> DiffuseBxdf {
+    pub fn new(r: C) -> DiffuseBxdf<C> {
         DiffuseBxdf { r }
     }
 
     /// The albedo.
-    pub fn reflectance(&self) -> Rgb {
+    pub fn reflectance(&self) -> C {
         self.r
     }
 
     /// f(wo, wi) = R/π in the same hemisphere, else 0.
     #[inline]
-    pub fn f(&self, wo: Vec3, wi: Vec3, _mode: TransportMode) -> Rgb {
+    pub fn f(&self, wo: Vec3, wi: Vec3, _mode: TransportMode) -> C {
         if !same_hemisphere(wo, wi) {
-            return Rgb::ZERO;
+            return C::ZERO;
         }
         self.r * FRAC_1_PI
     }
@@ -45,7 +45,7 @@ impl DiffuseBxdf {
         u: Vec2,
         _mode: TransportMode,
         sample_flags: ReflTransFlags,
-    ) -> Option<BsdfSample> {
+    ) -> Option<BsdfSample<C>> {
         if !sample_flags.reflection() {
             return None;
         }
@@ -69,7 +69,7 @@ impl DiffuseBxdf {
     /// Diffuse reflection, or nothing when R = 0.
     #[inline]
     pub fn flags(&self) -> BxdfFlags {
-        if nonzero(self.r) { BxdfFlags::DIFFUSE_REFLECTION } else { BxdfFlags::UNSET }
+        if !self.r.is_zero() { BxdfFlags::DIFFUSE_REFLECTION } else { BxdfFlags::UNSET }
     }
 }
 

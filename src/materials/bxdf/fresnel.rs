@@ -1,7 +1,7 @@
 //! Fresnel reflectance of dielectric and conducting interfaces (pbrt-v4 §9.3,
 //! `util/scattering.h`: `FrDielectric`, `FrComplex`).
 
-use crate::color::Rgb;
+use crate::color::Channels;
 use crate::math::{safe_sqrt, sqr};
 
 /// Unpolarized Fresnel reflectance of a dielectric interface: the mean of the squared
@@ -113,14 +113,10 @@ pub fn fr_complex(cos_theta_i: f32, eta: f32, k: f32) -> f32 {
     (r_parl.norm() + r_perp.norm()) / 2.0
 }
 
-/// [`fr_complex`] per RGB channel.
+/// [`fr_complex`] per channel (RGB channel or wavelength).
 #[inline]
-pub fn fr_complex_rgb(cos_theta_i: f32, eta: Rgb, k: Rgb) -> Rgb {
-    Rgb::new(
-        fr_complex(cos_theta_i, eta.x, k.x),
-        fr_complex(cos_theta_i, eta.y, k.y),
-        fr_complex(cos_theta_i, eta.z, k.z),
-    )
+pub fn fr_complex_channels<C: Channels>(cos_theta_i: f32, eta: C, k: C) -> C {
+    eta.zip_map(k, |eta, k| fr_complex(cos_theta_i, eta, k))
 }
 
 #[cfg(test)]
@@ -170,7 +166,7 @@ mod tests {
         let expected = ((eta - 1.0).powi(2) + k * k) / ((eta + 1.0).powi(2) + k * k);
         assert!((fr_complex(1.0, eta, k) - expected).abs() < 1e-5);
         assert!((fr_complex(0.0, eta, k) - 1.0).abs() < 1e-5);
-        let rgb = fr_complex_rgb(1.0, Rgb::new(eta, 1.0, 1.5), Rgb::new(k, 0.0, 0.0));
+        let rgb = fr_complex_channels(1.0, glam::Vec3::new(eta, 1.0, 1.5), glam::Vec3::new(k, 0.0, 0.0));
         assert!((rgb.x - expected).abs() < 1e-5 && rgb.y.abs() < 1e-6);
         assert!((rgb.z - 0.04).abs() < 1e-5);
     }

@@ -48,12 +48,12 @@ use std::ops::{BitAnd, BitOr, BitOrAssign, Not};
 
 use glam::{Vec2, Vec3};
 
-use crate::color::Rgb;
+use crate::color::{Channels, Rgb};
 
 pub use conductor::ConductorBxdf;
 pub use dielectric::DielectricBxdf;
 pub use diffuse::DiffuseBxdf;
-pub use fresnel::{fr_complex, fr_complex_rgb, fr_dielectric};
+pub use fresnel::{fr_complex, fr_complex_channels, fr_dielectric};
 pub use layered::CoatedDiffuseBxdf;
 pub use microfacet::TrowbridgeReitz;
 pub use thin_dielectric::ThinDielectricBxdf;
@@ -260,9 +260,9 @@ impl Not for TransportMode {
 
 /// A sampled direction with the BSDF value and density there: pbrt-v4's `BSDFSample`.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct BsdfSample {
+pub struct BsdfSample<C = Rgb> {
     /// BSDF value for (wo, wi); for specular samples the delta's weight divided by |cos θi|.
-    pub f: Rgb,
+    pub f: C,
     /// Sampled incident direction (local frame, pointing away from the surface).
     pub wi: Vec3,
     /// Solid-angle density, or the discrete probability of a specular lobe.
@@ -276,16 +276,16 @@ pub struct BsdfSample {
     pub pdf_is_proportional: bool,
 }
 
-impl BsdfSample {
+impl<C> BsdfSample<C> {
     /// A sample with η = 1 and an exact pdf.
     #[inline]
-    pub fn new(f: Rgb, wi: Vec3, pdf: f32, flags: BxdfFlags) -> BsdfSample {
+    pub fn new(f: C, wi: Vec3, pdf: f32, flags: BxdfFlags) -> BsdfSample<C> {
         BsdfSample { f, wi, pdf, flags, eta: 1.0, pdf_is_proportional: false }
     }
 
     /// A transmission sample that records the relative index of refraction.
     #[inline]
-    pub fn with_eta(f: Rgb, wi: Vec3, pdf: f32, flags: BxdfFlags, eta: f32) -> BsdfSample {
+    pub fn with_eta(f: C, wi: Vec3, pdf: f32, flags: BxdfFlags, eta: f32) -> BsdfSample<C> {
         BsdfSample { eta, ..BsdfSample::new(f, wi, pdf, flags) }
     }
 
@@ -308,12 +308,6 @@ impl BsdfSample {
     }
 }
 
-/// pbrt-v4's `operator bool` on spectra: true when some channel is non-zero.
-#[inline]
-pub(crate) fn nonzero(c: Rgb) -> bool {
-    c != Rgb::ZERO
-}
-
 /// The closed set of BxDFs nimbus supports.
 ///
 /// Its methods dispatch to the models and add the guards of pbrt-v4's `BSDF` wrapper
@@ -322,25 +316,25 @@ pub(crate) fn nonzero(c: Rgb) -> bool {
 /// and samples with zero f, zero pdf or a grazing `wi` are dropped. The models' own methods
 /// keep pbrt-v4's BxDF-level behaviour.
 #[derive(Clone, Debug, PartialEq)]
-pub enum Bxdf {
+pub enum Bxdf<C = Rgb> {
     /// Lambertian reflection.
-    Diffuse(DiffuseBxdf),
+    Diffuse(DiffuseBxdf<C>),
     /// Metal.
-    Conductor(ConductorBxdf),
+    Conductor(ConductorBxdf<C>),
     /// Glass and other dielectric interfaces.
     Dielectric(DielectricBxdf),
     /// A thin dielectric slab.
     ThinDielectric(ThinDielectricBxdf),
     /// A dielectric coating over a diffuse base.
-    CoatedDiffuse(CoatedDiffuseBxdf),
+    CoatedDiffuse(CoatedDiffuseBxdf<C>),
 }
 
-impl Bxdf {
+impl<C: Channels> Bxdf<C> {
     /// The BSDF value f(wo, wi). Zero for specular BxDFs.
     #[inline]
-    pub fn f(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Rgb {
+    pub fn f(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> C {
         if wo.z == 0.0 {
-            return Rgb::ZERO;
+            return C::ZERO;
         }
         match self {
             Bxdf::Diffuse(b) => b.f(wo, wi, mode),
@@ -361,7 +355,7 @@ impl Bxdf {
         u: Vec2,
         mode: TransportMode,
         sample_flags: ReflTransFlags,
-    ) -> Option<BsdfSample> {
+    ) -> Option<BsdfSample<C>> {
         if wo.z == 0.0 || self.flags().bits() & sample_flags.0 == 0 {
             return None;
         }
@@ -372,7 +366,7 @@ impl Bxdf {
             Bxdf::ThinDielectric(b) => b.sample_f(wo, uc, u, mode, sample_flags),
             Bxdf::CoatedDiffuse(b) => b.sample_f(wo, uc, u, mode, sample_flags),
         }?;
-        (nonzero(s.f) && s.pdf != 0.0 && s.wi.z != 0.0).then_some(s)
+        (!s.f.is_zero() && s.pdf != 0.0 && s.wi.z != 0.0).then_some(s)
     }
 
     /// Density with which [`Bxdf::sample_f`] returns `wi` (zero for specular lobes).
@@ -415,32 +409,32 @@ impl Bxdf {
     }
 }
 
-impl From<DiffuseBxdf> for Bxdf {
-    fn from(b: DiffuseBxdf) -> Bxdf {
+impl<C: Channels> From<DiffuseBxdf<C>> for Bxdf<C> {
+    fn from(b: DiffuseBxdf<C>) -> Bxdf<C> {
         Bxdf::Diffuse(b)
     }
 }
 
-impl From<ConductorBxdf> for Bxdf {
-    fn from(b: ConductorBxdf) -> Bxdf {
+impl<C: Channels> From<ConductorBxdf<C>> for Bxdf<C> {
+    fn from(b: ConductorBxdf<C>) -> Bxdf<C> {
         Bxdf::Conductor(b)
     }
 }
 
-impl From<DielectricBxdf> for Bxdf {
-    fn from(b: DielectricBxdf) -> Bxdf {
+impl<C: Channels> From<DielectricBxdf> for Bxdf<C> {
+    fn from(b: DielectricBxdf) -> Bxdf<C> {
         Bxdf::Dielectric(b)
     }
 }
 
-impl From<ThinDielectricBxdf> for Bxdf {
-    fn from(b: ThinDielectricBxdf) -> Bxdf {
+impl<C: Channels> From<ThinDielectricBxdf> for Bxdf<C> {
+    fn from(b: ThinDielectricBxdf) -> Bxdf<C> {
         Bxdf::ThinDielectric(b)
     }
 }
 
-impl From<CoatedDiffuseBxdf> for Bxdf {
-    fn from(b: CoatedDiffuseBxdf) -> Bxdf {
+impl<C: Channels> From<CoatedDiffuseBxdf<C>> for Bxdf<C> {
+    fn from(b: CoatedDiffuseBxdf<C>) -> Bxdf<C> {
         Bxdf::CoatedDiffuse(b)
     }
 }
@@ -484,12 +478,12 @@ mod tests {
         let wo = Vec3::new(-0.6, -0.5, -0.4).normalize();
         let found = stratified_cells(256).find_map(|u| {
             glass
-                .sample_f(wo, 0.99, u, TransportMode::Radiance, ReflTransFlags::ALL)
+                .sample_f::<Rgb>(wo, 0.99, u, TransportMode::Radiance, ReflTransFlags::ALL)
                 .filter(|s| s.pdf == 0.0)
                 .map(|_| u)
         });
         let u = found.expect("some microfacet sample is grazing");
-        let b = Bxdf::from(glass);
+        let b: Bxdf = Bxdf::from(glass);
         assert!(b.sample_f(wo, 0.99, u, TransportMode::Radiance, ReflTransFlags::ALL).is_none());
     }
 

@@ -6,7 +6,7 @@ use glam::{Vec2, Vec3};
 
 use super::fresnel::fr_dielectric;
 use super::{BsdfSample, BxdfFlags, ReflTransFlags, TransportMode};
-use crate::color::Rgb;
+use crate::color::Channels;
 use crate::math::{abs_cos_theta, sqr};
 
 /// A thin slab with index of refraction η relative to its surroundings.
@@ -27,20 +27,20 @@ impl ThinDielectricBxdf {
     }
 
     /// Always zero: both lobes are Dirac deltas.
-    pub fn f(&self, _wo: Vec3, _wi: Vec3, _mode: TransportMode) -> Rgb {
-        Rgb::ZERO
+    pub fn f<C: Channels>(&self, _wo: Vec3, _wi: Vec3, _mode: TransportMode) -> C {
+        C::ZERO
     }
 
     /// Mirror reflection or pass-through, chosen in proportion to the slab's total reflectance
     /// R' = R + T²R/(1 − R²) (the geometric series of the internal reflections).
-    pub fn sample_f(
+    pub fn sample_f<C: Channels>(
         &self,
         wo: Vec3,
         uc: f32,
         _u: Vec2,
         _mode: TransportMode,
         sample_flags: ReflTransFlags,
-    ) -> Option<BsdfSample> {
+    ) -> Option<BsdfSample<C>> {
         let mut r = fr_dielectric(abs_cos_theta(wo), self.eta);
         let mut t = 1.0 - r;
         if r < 1.0 {
@@ -54,11 +54,11 @@ impl ThinDielectricBxdf {
         }
         if uc < pr / (pr + pt) {
             let wi = Vec3::new(-wo.x, -wo.y, wo.z);
-            let f = Rgb::splat(r / abs_cos_theta(wi));
+            let f = C::splat(r / abs_cos_theta(wi));
             Some(BsdfSample::new(f, wi, pr / (pr + pt), BxdfFlags::SPECULAR_REFLECTION))
         } else {
             let wi = -wo;
-            let f = Rgb::splat(t / abs_cos_theta(wi));
+            let f = C::splat(t / abs_cos_theta(wi));
             Some(BsdfSample::new(f, wi, pt / (pr + pt), BxdfFlags::SPECULAR_TRANSMISSION))
         }
     }
@@ -97,11 +97,20 @@ mod tests {
     fn thin_slab_reflects_more_than_one_interface() {
         // Normal incidence at η = 1.5: R = 0.04, R' = R + T²R/(1 − R²) = 2R/(1 + R).
         let b = ThinDielectricBxdf::new(1.5);
-        let s = b.sample_f(Vec3::Z, 0.0, Vec2::ZERO, TransportMode::Radiance, ReflTransFlags::ALL).unwrap();
+        let s = b
+            .sample_f::<crate::color::Rgb>(Vec3::Z, 0.0, Vec2::ZERO, TransportMode::Radiance, ReflTransFlags::ALL)
+            .unwrap();
         let expected = 2.0 * 0.04 / 1.04;
         assert!(s.is_reflection() && (s.pdf - expected).abs() < 1e-6, "{}", s.pdf);
-        let only_t =
-            b.sample_f(Vec3::Z, 0.0, Vec2::ZERO, TransportMode::Radiance, ReflTransFlags::TRANSMISSION).unwrap();
+        let only_t = b
+            .sample_f::<crate::color::Rgb>(
+                Vec3::Z,
+                0.0,
+                Vec2::ZERO,
+                TransportMode::Radiance,
+                ReflTransFlags::TRANSMISSION,
+            )
+            .unwrap();
         assert!(only_t.is_transmission() && only_t.pdf == 1.0);
         assert!((only_t.f.x - (1.0 - expected)).abs() < 1e-6);
     }

@@ -1,0 +1,199 @@
+//! [`Channels`]: what the renderer needs of a light-carrying value, implemented by RGB.
+
+use std::fmt::Debug;
+use std::ops::{Add, AddAssign, Div, DivAssign, Index, Mul, MulAssign, Sub};
+
+use super::Rgb;
+use nimbus_parser::ColorSpace;
+
+use crate::spectra::{BlackbodyRgbTable, RgbRole, SpectrumValue};
+
+/// A value carried along light paths, one float per channel: RGB (three channels in the film's
+/// color space) or sampled spectra (one channel per wavelength of the path). Arithmetic is per
+/// channel. Each representation also says how to sample its wavelengths and how to evaluate
+/// the scene's spectra at them, so code generic over `Channels` never asks which one it has.
+pub trait Channels:
+    Copy
+    + Debug
+    + PartialEq
+    + Send
+    + Sync
+    + 'static
+    + Add<Output = Self>
+    + Sub<Output = Self>
+    + Mul<Output = Self>
+    + Div<Output = Self>
+    + Mul<f32, Output = Self>
+    + Div<f32, Output = Self>
+    + AddAssign
+    + MulAssign
+    + DivAssign
+    + MulAssign<f32>
+    + DivAssign<f32>
+    + Index<usize, Output = f32>
+{
+    /// The wavelengths a path carries (nothing for RGB).
+    type Lambda: Copy + Debug + Send + Sync;
+
+    /// Number of channels.
+    const CHANNELS: usize;
+    /// Zero in every channel.
+    const ZERO: Self;
+    /// One in every channel.
+    const ONE: Self;
+    /// Name of the representation, for `--stats` and image metadata.
+    const NAME: &'static str;
+
+    /// `v` in every channel.
+    fn splat(v: f32) -> Self;
+
+    /// The wavelengths of a new camera path from one uniform sample (pbrt-v4 draws this
+    /// sample first at every pixel sample; RGB draws it too, so both representations see the
+    /// same random numbers after it).
+    fn sample_lambda(u: f32) -> Self::Lambda;
+
+    /// Keeps only the first wavelength (pbrt-v4's `TerminateSecondary`, for dispersion).
+    fn terminate_secondary(lambda: &mut Self::Lambda);
+
+    /// The channel that drives distance sampling in chromatic media (spectral MIS) from a
+    /// uniform sample: a random RGB channel, or pbrt-v4's first wavelength, already random.
+    fn hero_channel(u: f32) -> usize;
+
+    /// The scene spectrum `v` in these channels.
+    fn eval(v: &SpectrumValue, lambda: &Self::Lambda) -> Self;
+
+    /// A real index of refraction from the scene spectrum `eta`: the spectrum's value for RGB
+    /// (pbrt-v3 style, read once at 550 nm), the first wavelength's value for sampled spectra,
+    /// which then drop their other wavelengths if η varies (dispersion; pbrt-v4's
+    /// `TerminateSecondary`). Zero becomes 1, as in pbrt-v4.
+    fn eta(eta: &SpectrumValue, lambda: &mut Self::Lambda) -> f32;
+
+    /// A per-texel or per-voxel RGB of color space `space`, standing for a spectrum of kind
+    /// `role`, in these channels: RGB passes it through, sampled spectra convert it as
+    /// pbrt-v4 does at lookup time.
+    fn from_rgb(rgb: Rgb, role: RgbRole, space: ColorSpace, lambda: &Self::Lambda) -> Self;
+
+    /// The blackbody at `t` K normalised to a peak of 1 (pbrt-v4's `BlackbodySpectrum`), as
+    /// emission: RGB transport reads it from `table`, built for the scene's film.
+    fn blackbody(t: f32, table: &BlackbodyRgbTable, lambda: &Self::Lambda) -> Self;
+
+    /// Mean over channels.
+    fn average(self) -> f32;
+    /// Largest channel.
+    fn max_element(self) -> f32;
+    /// Smallest channel.
+    fn min_element(self) -> f32;
+    /// True when no channel is infinite or NaN.
+    fn is_finite(self) -> bool;
+    /// Per-channel maximum.
+    fn max(self, o: Self) -> Self;
+    /// Per-channel minimum.
+    fn min(self, o: Self) -> Self;
+    /// `f` applied to every channel.
+    fn map(self, f: impl Fn(f32) -> f32) -> Self;
+    /// `f` applied channel by channel to `self` and `o`.
+    fn zip_map(self, o: Self, f: impl Fn(f32, f32) -> f32) -> Self;
+
+    /// Each channel clamped to [lo, hi].
+    #[inline]
+    fn clamp(self, lo: f32, hi: f32) -> Self {
+        self.max(Self::splat(lo)).min(Self::splat(hi))
+    }
+
+    /// e^(−x) per channel: transmittance for an optical depth.
+    #[inline]
+    fn exp_neg(self) -> Self {
+        self.map(|x| (-x).exp())
+    }
+
+    /// True when every channel is zero.
+    #[inline]
+    fn is_zero(self) -> bool {
+        self == Self::ZERO
+    }
+}
+
+impl Channels for Rgb {
+    type Lambda = ();
+
+    const CHANNELS: usize = 3;
+    const ZERO: Rgb = Rgb::ZERO;
+    const ONE: Rgb = Rgb::ONE;
+    const NAME: &'static str = "rgb";
+
+    #[inline]
+    fn splat(v: f32) -> Rgb {
+        Rgb::splat(v)
+    }
+
+    #[inline]
+    fn sample_lambda(_u: f32) {}
+
+    #[inline]
+    fn terminate_secondary(_lambda: &mut ()) {}
+
+    #[inline]
+    fn hero_channel(u: f32) -> usize {
+        ((u * 3.0) as usize).min(2)
+    }
+
+    #[inline]
+    fn eval(v: &SpectrumValue, _lambda: &()) -> Rgb {
+        v.rgb
+    }
+
+    #[inline]
+    fn eta(eta: &SpectrumValue, _lambda: &mut ()) -> f32 {
+        if eta.rgb.x == 0.0 { 1.0 } else { eta.rgb.x }
+    }
+
+    #[inline]
+    fn from_rgb(rgb: Rgb, _role: RgbRole, _space: ColorSpace, _lambda: &()) -> Rgb {
+        rgb
+    }
+
+    #[inline]
+    fn blackbody(t: f32, table: &BlackbodyRgbTable, _lambda: &()) -> Rgb {
+        table.lookup(t)
+    }
+
+    #[inline]
+    fn average(self) -> f32 {
+        (self.x + self.y + self.z) / 3.0
+    }
+
+    #[inline]
+    fn max_element(self) -> f32 {
+        Rgb::max_element(self)
+    }
+
+    #[inline]
+    fn min_element(self) -> f32 {
+        Rgb::min_element(self)
+    }
+
+    #[inline]
+    fn is_finite(self) -> bool {
+        Rgb::is_finite(self)
+    }
+
+    #[inline]
+    fn max(self, o: Rgb) -> Rgb {
+        Rgb::max(self, o)
+    }
+
+    #[inline]
+    fn min(self, o: Rgb) -> Rgb {
+        Rgb::min(self, o)
+    }
+
+    #[inline]
+    fn map(self, f: impl Fn(f32) -> f32) -> Rgb {
+        Rgb::new(f(self.x), f(self.y), f(self.z))
+    }
+
+    #[inline]
+    fn zip_map(self, o: Rgb, f: impl Fn(f32, f32) -> f32) -> Rgb {
+        Rgb::new(f(self.x, o.x), f(self.y, o.y), f(self.z, o.z))
+    }
+}

@@ -143,3 +143,54 @@ fn help_lists_subcommands() {
     assert!(out.status.success());
     assert!(String::from_utf8_lossy(&out.stdout).contains("check"));
 }
+
+/// pbrt-v4 resolves relative paths from the directory of the scene named on the command line,
+/// whichever file names them (San Miguel's included files name `geometry/…` from the top);
+/// for a scene on standard input, from the working directory. A path that only exists
+/// relative to the included file is an error naming where it was written and what was tried.
+#[test]
+fn relative_paths_resolve_from_the_scene_directory() {
+    let dir = scratch_dir("search-dir");
+    let scenes = dir.join("scenes");
+    std::fs::create_dir_all(scenes.join("parts")).unwrap();
+    std::fs::create_dir_all(scenes.join("geometry")).unwrap();
+    let obj = "v -1 -1 0\nv 1 -1 0\nv 0 1 0\nf 1 2 3\n";
+    std::fs::write(scenes.join("geometry/tri.obj"), obj).unwrap();
+    std::fs::write(scenes.join("parts/near.obj"), obj).unwrap();
+    std::fs::write(scenes.join("parts/geo.pbrt"), "Shape \"objmesh\" \"string filename\" \"geometry/tri.obj\"\n")
+        .unwrap();
+    std::fs::write(scenes.join("parts/bad.pbrt"), "Shape \"objmesh\" \"string filename\" \"near.obj\"\n").unwrap();
+    let header = "LookAt 0 0 5  0 0 0  0 1 0\nCamera \"perspective\"\nFilm \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8\nWorldBegin\nLightSource \"infinite\" \"rgb L\" [1 1 1]\n";
+    std::fs::write(scenes.join("main.pbrt"), format!("{header}Include \"parts/geo.pbrt\"\n")).unwrap();
+    std::fs::write(scenes.join("bad.pbrt"), format!("{header}Include \"parts/bad.pbrt\"\n")).unwrap();
+    let run = |cwd: &std::path::Path, args: &[&str], stdin: Option<&str>| {
+        let mut cmd = std::process::Command::new(env!("CARGO_BIN_EXE_nimbus"));
+        cmd.current_dir(cwd).args(args).stdout(std::process::Stdio::piped()).stderr(std::process::Stdio::piped());
+        cmd.stdin(if stdin.is_some() { std::process::Stdio::piped() } else { std::process::Stdio::null() });
+        let mut child = cmd.spawn().unwrap();
+        if let Some(text) = stdin {
+            use std::io::Write;
+            child.stdin.take().unwrap().write_all(text.as_bytes()).unwrap();
+        }
+        child.wait_with_output().unwrap()
+    };
+    // From the parent directory: "scenes/main.pbrt" includes parts/geo.pbrt, whose mesh path
+    // resolves from scenes/.
+    let out = run(&dir, &["render", "scenes/main.pbrt", "--spp", "1", "--quiet", "--outfile", "out.exr"], None);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    // Standard input resolves from the working directory.
+    let text = std::fs::read_to_string(scenes.join("main.pbrt")).unwrap();
+    assert!(run(&scenes, &["check", "-"], Some(&text)).status.success());
+    assert_eq!(run(&dir, &["check", "-"], Some(&text)).status.code(), Some(1));
+    // near.obj sits beside parts/bad.pbrt, not beside the scene.
+    let out = run(&dir, &["check", "scenes/bad.pbrt"], None);
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    let tried = std::path::absolute(dir.join("scenes/near.obj")).unwrap();
+    assert!(
+        stderr.starts_with("scenes/parts/bad.pbrt:1:17: error: objmesh: cannot find file \"near.obj\""),
+        "{stderr}"
+    );
+    assert!(stderr.contains(&format!("(tried {})", tried.display())), "{stderr}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

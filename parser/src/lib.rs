@@ -39,7 +39,7 @@ pub use description::{
 };
 pub use directive::{ActiveTransform, Directive};
 pub use error::{Error, Result, Warning};
-pub use loc::FileLoc;
+pub use loc::{FileLoc, shown as loc_shown};
 pub use params::{
     FloatOrTexture, Param, ParamType, ParamValues, ParameterDictionary, SpectrumOrTexture, SpectrumParam, SpectrumValue,
 };

@@ -118,7 +118,10 @@ fn parse_stream(mut s: TokenStream, target: &mut dyn ParserTarget, import_depth:
                 if target.follow_files() {
                     let path = loc.resolve(&file);
                     let data = read_source(&path).map_err(|e| {
-                        Error::new(&loc, format!("Include \"{file}\": cannot read {}: {e}", path.display()))
+                        Error::new(
+                            &loc,
+                            format!("Include \"{file}\": cannot read it (tried {}): {e}", crate::loc::shown(&path)),
+                        )
                     })?;
                     let name: Arc<str> = Arc::from(path.to_string_lossy());
                     target.file_read(&name);
@@ -135,12 +138,17 @@ fn parse_stream(mut s: TokenStream, target: &mut dyn ParserTarget, import_depth:
                     }
                     let path = loc.resolve(&file);
                     let data = read_source(&path).map_err(|e| {
-                        Error::new(&loc, format!("Import \"{file}\": cannot read {}: {e}", path.display()))
+                        Error::new(
+                            &loc,
+                            format!("Import \"{file}\": cannot read it (tried {}): {e}", crate::loc::shown(&path)),
+                        )
                     })?;
                     let name: Arc<str> = Arc::from(path.to_string_lossy());
                     target.file_read(&name);
                     target.import_begin(&loc)?;
-                    parse_stream(TokenStream::new(name, data)?, target, import_depth + 1)?;
+                    // An imported file's paths resolve from the scene's directory too.
+                    let stream = TokenStream::with_search_dir(name, data, s.search_dir().clone())?;
+                    parse_stream(stream, target, import_depth + 1)?;
                     target.import_end(&loc)?;
                     continue;
                 }

@@ -56,6 +56,8 @@ pub(crate) struct TokenStream {
     sources: Vec<Source>,
     stack: Vec<Cursor>,
     pending: Option<Token>,
+    /// pbrt-v4's search directory: the directory of the scene named on the command line.
+    search_dir: std::sync::Arc<Path>,
 }
 
 /// Reads a whole file, decompressing `.gz`; `-` is standard input.
@@ -73,11 +75,24 @@ pub(crate) fn read_source(path: &Path) -> std::io::Result<Vec<u8>> {
 }
 
 impl TokenStream {
-    /// A stream over `data`, which came from the source called `name`.
+    /// A stream over `data`, the scene file called `name`: relative paths in it and in every
+    /// file it includes resolve against its directory.
     pub fn new(name: Arc<str>, data: Vec<u8>) -> Result<TokenStream> {
-        let mut stream = TokenStream { sources: Vec::new(), stack: Vec::new(), pending: None };
+        let dir: Arc<Path> = Arc::from(FileLoc::directory_of(&name).as_path());
+        Self::with_search_dir(name, data, dir)
+    }
+
+    /// A stream over `data` (the source called `name`) whose relative paths resolve against
+    /// `search_dir`: for files that a scene imports.
+    pub fn with_search_dir(name: Arc<str>, data: Vec<u8>, search_dir: Arc<Path>) -> Result<TokenStream> {
+        let mut stream = TokenStream { sources: Vec::new(), stack: Vec::new(), pending: None, search_dir };
         stream.push(name, data)?;
         Ok(stream)
+    }
+
+    /// The directory relative paths resolve against.
+    pub fn search_dir(&self) -> &Arc<Path> {
+        &self.search_dir
     }
 
     /// Pushes an included source: its tokens come next, then the includer's resume.
@@ -110,7 +125,12 @@ impl TokenStream {
 
     /// The location of a token.
     pub fn loc(&self, t: &Token) -> FileLoc {
-        FileLoc::new(self.sources[t.source as usize].name.clone(), t.line, t.column)
+        FileLoc {
+            file: self.sources[t.source as usize].name.clone(),
+            line: t.line,
+            column: t.column,
+            search_dir: Some(self.search_dir.clone()),
+        }
     }
 
     /// The location where the stream stopped (for "premature end of file").

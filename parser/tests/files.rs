@@ -49,20 +49,46 @@ fn a_parameter_list_continues_after_the_included_file_ends() {
     assert!(scene.shapes[1].entity.params.is_empty());
 }
 
+/// pbrt-v4 resolves every relative path from the directory of the scene file named on the
+/// command line (its search directory), not from the file that names it: scenes such as San
+/// Miguel include `geometry/x.pbrt`, which names `geometry/y.ply` relative to the top.
 #[test]
-fn include_paths_resolve_relative_to_the_including_file() {
+fn include_paths_resolve_from_the_scene_directory() {
     let dir = TempDir::new();
-    // scene.pbrt includes sub/a.pbrt, which includes b.pbrt: that is sub/b.pbrt, not the
-    // b.pbrt beside scene.pbrt (which would fail to parse).
-    dir.write("b.pbrt", "this is not a scene");
-    dir.write("sub/a.pbrt", "Include \"b.pbrt\"\nShape \"sphere\" \"float radius\" 1\n");
-    dir.write("sub/b.pbrt", "Shape \"sphere\" \"float radius\" 2\n");
+    // scene.pbrt includes sub/a.pbrt, which includes b.pbrt: that is the b.pbrt beside
+    // scene.pbrt, not sub/b.pbrt (which would fail to parse); and sub/c.pbrt by its path
+    // from the top.
+    dir.write("b.pbrt", "Shape \"sphere\" \"float radius\" 2\n");
+    dir.write("sub/b.pbrt", "this is not a scene");
+    dir.write("sub/c.pbrt", "Shape \"sphere\" \"float radius\" 4\n");
+    dir.write("sub/a.pbrt", "Include \"b.pbrt\"\nInclude \"sub/c.pbrt\"\nShape \"sphere\" \"float radius\" 1\n");
     let main = dir.write("scene.pbrt", "WorldBegin\nInclude \"sub/a.pbrt\"\nShape \"sphere\" \"float radius\" 3\n");
     let scene = load_file(&main).unwrap();
     let radii: Vec<f32> = scene.shapes.iter().map(radius).collect();
-    assert_eq!(radii, [2.0, 1.0, 3.0]);
-    let b = dir.path().join("sub").join("b.pbrt");
+    assert_eq!(radii, [2.0, 4.0, 1.0, 3.0]);
+    let b = dir.path().join("b.pbrt");
     assert_eq!(scene.shapes[0].entity.loc.to_string(), format!("{}:1:1", b.display()));
+    // Every location carries the scene's directory, however deep the include.
+    assert_eq!(scene.shapes[1].entity.loc.directory(), dir.path());
+    // A path relative only to the included file's directory is not found, and the error
+    // names where it was written and the path tried.
+    dir.write("sub/d.pbrt", "Include \"e.pbrt\"\n");
+    dir.write("sub/e.pbrt", "Shape \"sphere\"\n");
+    let main = dir.write("scene2.pbrt", "WorldBegin\nInclude \"sub/d.pbrt\"\n");
+    let e = load_file(&main).unwrap_err().to_string();
+    let tried = std::path::absolute(dir.path().join("e.pbrt")).unwrap();
+    assert!(e.starts_with(&format!("{}:1:1: Include \"e.pbrt\"", dir.path().join("sub/d.pbrt").display())), "{e}");
+    assert!(e.contains(&format!("(tried {})", tried.display())), "{e}");
+}
+
+/// Imported files resolve their paths from the scene's directory too.
+#[test]
+fn import_paths_resolve_from_the_scene_directory() {
+    let dir = TempDir::new();
+    dir.write("parts/lib.pbrt", "Include \"parts/shape.pbrt\"\n");
+    dir.write("parts/shape.pbrt", "Shape \"sphere\" \"float radius\" 6\n");
+    let main = dir.write("scene.pbrt", "WorldBegin\nImport \"parts/lib.pbrt\"\n");
+    assert_eq!(radius(&load_file(&main).unwrap().shapes[0]), 6.0);
 }
 
 #[test]
@@ -111,15 +137,18 @@ fn missing_include_file() {
     assert_eq!(
         e.to_string(),
         format!(
-            "{}:3:3: Include \"missing.pbrt\": cannot read {}: No such file or directory (os error 2)",
+            "{}:3:3: Include \"missing.pbrt\": cannot read it (tried {}): No such file or directory (os error 2)",
             main.display(),
-            dir.path().join("missing.pbrt").display()
+            std::path::absolute(dir.path().join("missing.pbrt")).unwrap().display()
         )
     );
     // From a string, relative paths resolve against the current directory.
     assert_eq!(
         load_str("Include \"no/such/file.pbrt\"", "t.pbrt").unwrap_err().to_string(),
-        "t.pbrt:1:1: Include \"no/such/file.pbrt\": cannot read ./no/such/file.pbrt: No such file or directory (os error 2)"
+        format!(
+            "t.pbrt:1:1: Include \"no/such/file.pbrt\": cannot read it (tried {}): No such file or directory (os error 2)",
+            std::path::absolute("no/such/file.pbrt").unwrap().display()
+        )
     );
 }
 
@@ -130,9 +159,9 @@ fn missing_import_file() {
     assert_eq!(
         load_file(&main).unwrap_err().to_string(),
         format!(
-            "{}:2:1: Import \"gone.pbrt\": cannot read {}: No such file or directory (os error 2)",
+            "{}:2:1: Import \"gone.pbrt\": cannot read it (tried {}): No such file or directory (os error 2)",
             main.display(),
-            dir.path().join("gone.pbrt").display()
+            std::path::absolute(dir.path().join("gone.pbrt")).unwrap().display()
         )
     );
 }

@@ -4,6 +4,7 @@
 
 use std::path::PathBuf;
 
+use nimbus_parser::loc_shown as shown;
 use nimbus_parser::{Entity, Error, LightEntity};
 
 use super::values::{SpectrumSpec, checked_float, spectrum};
@@ -133,7 +134,7 @@ impl LightSettings {
                         if !path.is_file() {
                             return Err(Error::new(
                                 loc,
-                                format!("infinite light: cannot find image \"{name}\" ({})", path.display()),
+                                format!("infinite light: cannot find image \"{name}\" (tried {})", shown(&path)),
                             ));
                         }
                         Some(path)

@@ -3,6 +3,7 @@
 
 use std::path::PathBuf;
 
+use nimbus_parser::loc_shown as shown;
 use nimbus_parser::{Error, MediumEntity, ParameterDictionary};
 
 use super::values::{SpectrumSpec, spectrum};
@@ -281,7 +282,7 @@ impl<'a> MediumSettings<'a> {
                 if !filename.is_file() {
                     return Err(Error::new(
                         loc,
-                        format!("{}: cannot find \"{name}\" ({})", e.name, filename.display()),
+                        format!("{}: cannot find \"{name}\" (tried {})", e.name, shown(&filename)),
                     ));
                 }
                 let (offset, tscale) = temperature_params(p)?;

@@ -3,6 +3,7 @@
 
 use std::path::PathBuf;
 
+use nimbus_parser::loc_shown as shown;
 use nimbus_parser::{Error, FileLoc, ShapeEntity};
 
 use super::values::{FloatInput, checked_float, float_input};
@@ -85,7 +86,7 @@ fn file_param(shape: &ShapeEntity, kind: &str) -> Result<PathBuf, Error> {
     let loc: &FileLoc = p.loc("filename").unwrap_or(&shape.entity.loc);
     let path = loc.resolve(name);
     if !path.is_file() {
-        return Err(Error::new(loc, format!("{kind}: cannot find file \"{name}\" ({})", path.display())));
+        return Err(Error::new(loc, format!("{kind}: cannot find file \"{name}\" (tried {})", shown(&path))));
     }
     Ok(path)
 }

@@ -3,6 +3,7 @@
 
 use std::path::PathBuf;
 
+use nimbus_parser::loc_shown as shown;
 use nimbus_parser::{Error, TextureEntity, TextureValue, Warning};
 
 use super::values::{FloatInput, SpectrumInput, SpectrumSpec, float_input, spectrum_input};
@@ -178,7 +179,7 @@ impl TextureSettings {
                 if !filename.is_file() {
                     return Err(Error::new(
                         loc,
-                        format!("imagemap: cannot find image \"{name}\" ({})", filename.display()),
+                        format!("imagemap: cannot find image \"{name}\" (tried {})", shown(&filename)),
                     ));
                 }
                 p.get_one_string("filter", "bilinear")?;

@@ -49,8 +49,8 @@ impl SpectrumSpec {
                     return Err(Error::new(
                         p.loc,
                         format!(
-                            "spectrum \"{name}\": \"{s}\" is neither a named spectrum nor a readable file ({})",
-                            path.display()
+                            "spectrum \"{name}\": \"{s}\" is neither a named spectrum nor a readable file (tried {})",
+                            nimbus_parser::loc_shown(&path)
                         ),
                     ));
                 }

@@ -76,8 +76,14 @@ fn write_exr(path: &Path, image: &crate::imageio::Image) -> Result<(), String> {
     let (w, h) = (image.width, image.height);
     let mut attributes = LayerAttributes::named("");
     attributes.software_name = Some(Text::from("nimbus"));
+    // EXR text holds single bytes: characters beyond Latin-1 (a σ in a message, a path in
+    // another script) become '?' rather than failing the write.
+    let text = |s: &str| {
+        let latin1: String = s.chars().map(|c| if (c as u32) < 256 { c } else { '?' }).collect();
+        Text::new_or_none(latin1.as_str()).unwrap_or_else(|| Text::from("?"))
+    };
     for (k, v) in &image.metadata {
-        attributes.other.insert(Text::from(k.as_str()), AttributeValue::Text(Text::from(v.as_str())));
+        attributes.other.insert(text(k), AttributeValue::Text(text(v)));
     }
     let layer = Layer::new(
         (w, h),
@@ -200,5 +206,10 @@ mod tests {
         assert_eq!(srgb_encode(1.0), 255);
         assert_eq!(srgb_encode(0.0), 0);
         assert_eq!(srgb_encode(0.5), 188);
+        // Metadata beyond Latin-1 is written with '?' in its place, not a panic.
+        img.metadata.insert("nimbus:scene".into(), "сцены/σ.pbrt".into());
+        write_image(&path, &img).unwrap();
+        assert_eq!(read_exr(&path).unwrap().metadata.get("nimbus:scene").map(String::as_str), Some("?????/?.pbrt"));
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

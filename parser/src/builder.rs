@@ -326,6 +326,16 @@ impl SceneBuilder {
                         Error::new(loc, format!("Option \"{name}\": expected an integer, found {value}"))
                     })?)
             }
+            "spectral" => {
+                let v = quoted(value)?;
+                if !matches!(v.as_str(), "auto" | "on" | "off") {
+                    return Err(Error::new(
+                        loc,
+                        format!("Option \"{name}\": unknown transport \"{v}\" (auto, on or off)"),
+                    ));
+                }
+                o.spectral = Some(v);
+            }
             "msereferenceimage" => o.mse_reference_image = Some(quoted(value)?),
             "msereferenceout" => o.mse_reference_out = Some(quoted(value)?),
             "rendercoordsys" => {

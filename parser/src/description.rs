@@ -246,6 +246,9 @@ pub struct SceneOptions {
     pub pixel_stats: bool,
     /// `Option "wavefront"`
     pub wavefront: bool,
+    /// `Option "string spectral"`: nimbus's choice of light transport, `auto` (RGB when it
+    /// gives the same answer, sampled spectra otherwise), `on` or `off`.
+    pub spectral: Option<String>,
 }
 
 /// Everything a scene file describes.

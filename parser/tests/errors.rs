@@ -347,6 +347,10 @@ fn option_errors() {
             "Option \"string rendercoordsys\" \"screen\"",
             "Option \"string rendercoordsys\": unknown rendering coordinate system \"screen\" (camera, cameraworld or world)",
         ),
+        (
+            "Option \"string spectral\" \"yes\"",
+            "Option \"string spectral\": unknown transport \"yes\" (auto, on or off)",
+        ),
     ];
     for (text, expected) in cases {
         assert_eq!(load_err_string(&format!("{text}\nWorldBegin")), format!("t.pbrt:1:1: {expected}"), "{text}");

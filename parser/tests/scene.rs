@@ -253,6 +253,7 @@ fn options_set_scene_options() {
          Option \"string msereferenceimage\" \"ref.exr\"\n\
          Option \"string msereferenceout\" \"mse.txt\"\n\
          Option \"string rendercoordsys\" \"world\"\n\
+         Option \"string spectral\" \"on\"\n\
          WorldBegin\n\
          Option \"bool wavefront\" false",
     );
@@ -270,6 +271,7 @@ fn options_set_scene_options() {
             force_diffuse: true,
             pixel_stats: true,
             wavefront: false,
+            spectral: Some("on".into()),
         }
     );
 }

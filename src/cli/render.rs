@@ -7,6 +7,7 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 use anyhow::{Context, Result};
+use nimbus::scene::transport::SpectralMode;
 use nimbus::scene::{BuildOptions, build_scene, unused_parameters};
 
 /// Arguments of `nimbus render`.
@@ -51,6 +52,11 @@ pub struct RenderArgs {
     /// Fail on warnings (unused parameters, unsupported features with stand-ins).
     #[arg(long)]
     strict: bool,
+    /// Light transport: `auto` (RGB where it gives the same answer, pbrt-v4's sampled
+    /// spectra otherwise), `on` (always spectral) or `off` (always RGB); overrides the
+    /// scene's `Option "spectral"`.
+    #[arg(long, value_name = "auto|on|off")]
+    spectral: Option<SpectralMode>,
 }
 
 fn scene_error(e: &nimbus::parser::Error) {
@@ -86,6 +92,7 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
         quick: args.quick,
         crop_window: args.cropwindow.as_ref().map(|v| [v[0], v[1], v[2], v[3]]),
         pixel_bounds: args.pixelbounds.as_ref().map(|v| [v[0], v[1], v[2], v[3]]),
+        spectral: args.spectral,
     };
     let scene = match build_scene(&desc, &opts) {
         Ok(s) => s,
@@ -120,6 +127,9 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
     image.metadata.insert("nimbus:integrator".into(), integrator.name().to_string());
     image.metadata.insert("nimbus:seed".into(), scene.sampler.seed.to_string());
     image.metadata.insert("nimbus:scene".into(), args.scene.display().to_string());
+    image.metadata.insert("nimbus:transport".into(), scene.transport.transport.name().to_string());
+    image.metadata.insert("nimbus:transport-reason".into(), scene.transport.reason.clone());
+    image.metadata.insert("nimbus:sensor".into(), scene.sensor.name().to_string());
     let out = args.outfile.clone().unwrap_or_else(|| PathBuf::from(&scene.film.filename));
     nimbus::imageio::write_image(&out, &image).map_err(anyhow::Error::msg)?;
     let t_written = Instant::now();
@@ -160,12 +170,22 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
             scene.stats.mesh_bytes as f64 / (1 << 20) as f64,
             if scene.surfaces.top.is_some() { "BVH built" } else { "no surfaces, no BVH" }
         );
+        println!(
+            "transport   {} ({}); sensor {}, imaging ratio {}",
+            match scene.transport.transport {
+                nimbus::scene::transport::Transport::Rgb => "rgb (3 channels)",
+                nimbus::scene::transport::Transport::Spectral => "spectral (4 sampled wavelengths)",
+            },
+            scene.transport.reason,
+            scene.sensor.name(),
+            scene.sensor.imaging_ratio()
+        );
         println!("lights      {}", scene.lights.len());
         for m in &scene.media {
             println!(
                 "medium      \"{}\": {}, {:.2} MiB",
                 m.name,
-                m.representation(),
+                m.representation(scene.transport.transport == nimbus::scene::transport::Transport::Spectral),
                 m.memory_bytes() as f64 / (1 << 20) as f64
             );
         }

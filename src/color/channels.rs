@@ -1,4 +1,5 @@
-//! [`Channels`]: what the renderer needs of a light-carrying value, implemented by RGB.
+//! [`Channels`]: what the renderer needs of a light-carrying value, implemented by RGB and
+//! by pbrt-v4's sampled spectra.
 
 use std::fmt::Debug;
 use std::ops::{Add, AddAssign, Div, DivAssign, Index, Mul, MulAssign, Sub};
@@ -6,7 +7,10 @@ use std::ops::{Add, AddAssign, Div, DivAssign, Index, Mul, MulAssign, Sub};
 use super::Rgb;
 use nimbus_parser::ColorSpace;
 
-use crate::spectra::{BlackbodyRgbTable, RgbRole, SpectrumValue};
+use crate::spectra::{
+    BlackbodyRgbTable, CIE_Y_INTEGRAL, N_SPECTRUM_SAMPLES, RgbRole, Sampled, SampledSpectrum, SampledWavelengths,
+    SigmoidPolynomial, SigmoidTable, SpectrumValue, illuminant_table,
+};
 
 /// A value carried along light paths, one float per channel: RGB (three channels in the film's
 /// color space) or sampled spectra (one channel per wavelength of the path). Arithmetic is per
@@ -195,5 +199,128 @@ impl Channels for Rgb {
     #[inline]
     fn zip_map(self, o: Rgb, f: impl Fn(f32, f32) -> f32) -> Rgb {
         Rgb::new(f(self.x, o.x), f(self.y, o.y), f(self.z, o.z))
+    }
+}
+
+impl Channels for SampledSpectrum {
+    type Lambda = SampledWavelengths;
+
+    const CHANNELS: usize = N_SPECTRUM_SAMPLES;
+    const ZERO: SampledSpectrum = SampledSpectrum::ZERO;
+    const ONE: SampledSpectrum = SampledSpectrum::ONE;
+    const NAME: &'static str = "spectral";
+
+    #[inline]
+    fn splat(v: f32) -> SampledSpectrum {
+        SampledSpectrum::splat(v)
+    }
+
+    #[inline]
+    fn sample_lambda(u: f32) -> SampledWavelengths {
+        SampledWavelengths::sample_visible(u)
+    }
+
+    #[inline]
+    fn terminate_secondary(lambda: &mut SampledWavelengths) {
+        lambda.terminate_secondary();
+    }
+
+    /// pbrt-v4's hero is the first wavelength, itself random.
+    #[inline]
+    fn hero_channel(_u: f32) -> usize {
+        0
+    }
+
+    #[inline]
+    fn eval(v: &SpectrumValue, lambda: &SampledWavelengths) -> SampledSpectrum {
+        v.sampled.sample(lambda)
+    }
+
+    #[inline]
+    fn eta(eta: &SpectrumValue, lambda: &mut SampledWavelengths) -> f32 {
+        let e = eta.sampled.sample(lambda).x;
+        if !eta.is_constant() {
+            lambda.terminate_secondary();
+        }
+        if e == 0.0 { 1.0 } else { e }
+    }
+
+    #[inline]
+    fn from_rgb(rgb: Rgb, role: RgbRole, space: ColorSpace, lambda: &SampledWavelengths) -> SampledSpectrum {
+        rgb_spectrum(rgb, role, space).sample(lambda)
+    }
+
+    #[inline]
+    fn blackbody(t: f32, _table: &BlackbodyRgbTable, lambda: &SampledWavelengths) -> SampledSpectrum {
+        Sampled::blackbody(t).sample(lambda)
+    }
+
+    #[inline]
+    fn average(self) -> f32 {
+        self.element_sum() * 0.25
+    }
+
+    #[inline]
+    fn max_element(self) -> f32 {
+        SampledSpectrum::max_element(self)
+    }
+
+    #[inline]
+    fn min_element(self) -> f32 {
+        SampledSpectrum::min_element(self)
+    }
+
+    #[inline]
+    fn is_finite(self) -> bool {
+        SampledSpectrum::is_finite(self)
+    }
+
+    #[inline]
+    fn max(self, o: SampledSpectrum) -> SampledSpectrum {
+        SampledSpectrum::max(self, o)
+    }
+
+    #[inline]
+    fn min(self, o: SampledSpectrum) -> SampledSpectrum {
+        SampledSpectrum::min(self, o)
+    }
+
+    #[inline]
+    fn map(self, f: impl Fn(f32) -> f32) -> SampledSpectrum {
+        SampledSpectrum::new(f(self.x), f(self.y), f(self.z), f(self.w))
+    }
+
+    #[inline]
+    fn zip_map(self, o: SampledSpectrum, f: impl Fn(f32, f32) -> f32) -> SampledSpectrum {
+        SampledSpectrum::new(f(self.x, o.x), f(self.y, o.y), f(self.z, o.z), f(self.w, o.w))
+    }
+}
+
+/// The spectrum pbrt-v4 makes of a per-texel or per-voxel RGB (`RGBAlbedoSpectrum`,
+/// `RGBUnboundedSpectrum`, `RGBIlluminantSpectrum`), its coefficients from the color space's
+/// table. Illuminants are normalised so their film RGB is `rgb`, as RGB transport reads them.
+#[inline]
+pub fn rgb_spectrum(rgb: Rgb, role: RgbRole, space: ColorSpace) -> Sampled {
+    let table = SigmoidTable::get(space);
+    match role {
+        RgbRole::Albedo => {
+            Sampled::Sigmoid { poly: table.lookup(rgb.clamp(Rgb::ZERO, Rgb::ONE).to_array()), scale: 1.0 }
+        }
+        RgbRole::Unbounded | RgbRole::Illuminant => {
+            let m = rgb.max_element();
+            let poly = if m > 0.0 {
+                table.lookup((rgb / (2.0 * m)).max(Rgb::ZERO).to_array())
+            } else {
+                SigmoidPolynomial::constant(0.0)
+            };
+            match role {
+                RgbRole::Unbounded => Sampled::Sigmoid { poly, scale: 2.0 * m },
+                _ => Sampled::Illuminant {
+                    poly,
+                    scale: 2.0 * m / CIE_Y_INTEGRAL as f32,
+                    illuminant: illuminant_table(space),
+                },
+            }
+        }
     }
 }

@@ -5,7 +5,7 @@
 
 mod channels;
 
-pub use channels::Channels;
+pub use channels::{Channels, rgb_spectrum};
 
 use glam::Vec3;
 

@@ -11,6 +11,7 @@ use crate::color::{Channels, Rgb};
 use crate::geometry::Ray;
 use crate::samplers::Sampler;
 use crate::scene::Scene;
+use crate::spectra::{SampledSpectrum, SampledWavelengths};
 use common::RayStats;
 
 /// Settings of the integrator a scene asks for.
@@ -68,6 +69,16 @@ pub trait Integrator: Sync {
 
     /// Radiance arriving at the camera along `ray` as RGB, one sample.
     fn li_rgb(&self, scene: &Scene, ray: Ray, lambda: &mut (), sampler: &mut Sampler, stats: &mut RayStats) -> Rgb;
+
+    /// Radiance arriving at the camera along `ray` at the wavelengths `lambda`, one sample.
+    fn li_spectral(
+        &self,
+        scene: &Scene,
+        ray: Ray,
+        lambda: &mut SampledWavelengths,
+        sampler: &mut Sampler,
+        stats: &mut RayStats,
+    ) -> SampledSpectrum;
 }
 
 /// A method that estimates radiance one camera ray at a time, written once for every
@@ -94,5 +105,16 @@ impl<T: RayIntegrator> Integrator for T {
 
     fn li_rgb(&self, scene: &Scene, ray: Ray, lambda: &mut (), sampler: &mut Sampler, stats: &mut RayStats) -> Rgb {
         self.li::<Rgb>(scene, ray, lambda, sampler, stats)
+    }
+
+    fn li_spectral(
+        &self,
+        scene: &Scene,
+        ray: Ray,
+        lambda: &mut SampledWavelengths,
+        sampler: &mut Sampler,
+        stats: &mut RayStats,
+    ) -> SampledSpectrum {
+        self.li::<SampledSpectrum>(scene, ray, lambda, sampler, stats)
     }
 }

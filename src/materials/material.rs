@@ -99,6 +99,32 @@ impl Material {
         matches!(self, Material::Interface)
     }
 
+    /// The first input that varies with wavelength, by parameter name, or `None` when RGB
+    /// transport carries the material exactly (every input gray, η constant).
+    pub fn chromatic_input(&self, textures: &Textures) -> Option<&'static str> {
+        let chromatic = |t: &Tex| textures.is_chromatic(*t);
+        match self {
+            Material::Diffuse { reflectance } => chromatic(reflectance).then_some("reflectance"),
+            Material::Conductor { input: ConductorInput::EtaK { eta, k, scale }, .. } => {
+                (chromatic(eta) || chromatic(k) || !scale.is_constant()).then_some("eta/k")
+            }
+            Material::Conductor { input: ConductorInput::Reflectance(r), .. } => chromatic(r).then_some("reflectance"),
+            Material::Dielectric { eta, .. } | Material::ThinDielectric { eta } => {
+                (!eta.is_constant()).then_some("eta (dispersion)")
+            }
+            Material::CoatedDiffuse { reflectance, eta, albedo, .. } => {
+                if chromatic(reflectance) {
+                    Some("reflectance")
+                } else if chromatic(albedo) {
+                    Some("albedo")
+                } else {
+                    (!eta.is_constant()).then_some("eta (dispersion)")
+                }
+            }
+            Material::Interface => None,
+        }
+    }
+
     /// The BxDF at a hit (`None` for interfaces), in the path's channels. A dispersive
     /// index of refraction keeps only the path's first wavelength (pbrt-v4's dielectric
     /// materials call `TerminateSecondary`).

@@ -36,6 +36,11 @@ impl<T: GridValue> DenseGrid<T> {
             .then_some(DenseGrid { n, values })
     }
 
+    /// The samples, x fastest.
+    pub fn values(&self) -> &[T] {
+        &self.values
+    }
+
     /// Resolution.
     pub fn resolution(&self) -> UVec3 {
         self.n

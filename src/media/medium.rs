@@ -292,6 +292,11 @@ impl Medium {
                 + sigma_s.as_ref().map_or(1.0, |s| s.max_value_by(lo, hi, &voxel_max))
         });
         let emissive = le.is_some();
+        // Gray voxels are constant spectra too: only colored ones need spectral MIS.
+        let colored = |g: &Option<DenseGrid<Vec3>>| {
+            g.as_ref().is_some_and(|g| g.values().iter().any(|v| v.x != v.y || v.y != v.z))
+        };
+        let chromatic = colored(&sigma_a) || colored(&sigma_s);
         Medium {
             name,
             kind: MediumKind::RgbGrid(Box::new(RgbGridMedium {
@@ -305,7 +310,7 @@ impl Medium {
                 majorant,
             })),
             g,
-            chromatic: true,
+            chromatic,
             emissive,
         }
     }
@@ -331,9 +336,11 @@ impl Medium {
         }
     }
 
-    /// A one-line description of how the medium is represented, for `--stats`.
-    pub fn representation(&self) -> String {
-        let channels = if self.chromatic { "chromatic (3-channel MIS)" } else { "gray (1 channel)" };
+    /// A one-line description of how the medium is represented, for `--stats`; `spectral`
+    /// says whether paths carry sampled wavelengths (else RGB channels).
+    pub fn representation(&self, spectral: bool) -> String {
+        let mis = if spectral { "chromatic (hero-wavelength MIS over 4)" } else { "chromatic (3-channel MIS)" };
+        let channels = if self.chromatic { mis } else { "gray (1 channel)" };
         match &self.kind {
             MediumKind::Homogeneous { .. } => format!("homogeneous, closed-form, {channels}"),
             MediumKind::Grid(g) => {
@@ -354,7 +361,7 @@ impl Medium {
             }
             MediumKind::RgbGrid(g) => {
                 let r = g.majorant.res;
-                format!("rgb grid, majorant {}x{}x{}, chromatic (3-channel MIS)", r.x, r.y, r.z)
+                format!("rgb grid, majorant {}x{}x{}, {mis}", r.x, r.y, r.z)
             }
         }
     }

@@ -16,6 +16,8 @@ use crate::integrators::common::RayStats;
 use crate::samplers::{Sampler, get_camera_sample};
 use crate::scene::Scene;
 use crate::scene::sampler::SamplerSettings;
+use crate::scene::transport::Transport;
+use crate::spectra::{SampledSpectrum, SampledWavelengths};
 
 /// Side of a square tile in pixels.
 const TILE: u32 = 16;
@@ -70,12 +72,14 @@ impl Accumulator {
         }
     }
 
-    fn image(&self, imaging_ratio: f32) -> Image {
+    /// The image: each pixel's weighted mean, through `output` (the film's conversion to the
+    /// output color space).
+    fn image(&self, output: glam::DMat3) -> Image {
         let mut img = Image::new(self.width as usize, self.height as usize);
         for (o, p) in img.pixels.iter_mut().zip(&self.pixels) {
             if p.weight != 0.0 {
-                let s = imaging_ratio as f64 / p.weight;
-                *o = Rgb::new((p.rgb[0] * s) as f32, (p.rgb[1] * s) as f32, (p.rgb[2] * s) as f32);
+                let mean = glam::DVec3::from_array(p.rgb) / p.weight;
+                *o = (output * mean).as_vec3();
             }
         }
         img
@@ -118,6 +122,26 @@ impl FilmChannels for Rgb {
     }
 }
 
+impl FilmChannels for SampledSpectrum {
+    #[inline]
+    fn li(
+        integrator: &dyn Integrator,
+        scene: &Scene,
+        ray: Ray,
+        lambda: &mut SampledWavelengths,
+        sampler: &mut Sampler,
+        stats: &mut RayStats,
+    ) -> SampledSpectrum {
+        integrator.li_spectral(scene, ray, lambda, sampler, stats)
+    }
+
+    /// pbrt-v4's RGB film: the sample's sensor RGB (imaging ratio included).
+    #[inline]
+    fn to_film(self, lambda: &SampledWavelengths, scene: &Scene) -> Rgb {
+        scene.sensor.to_sensor_rgb(self, lambda)
+    }
+}
+
 /// Renders samples `[first, first + count)` of every pixel in one tile.
 #[allow(clippy::too_many_arguments)]
 fn render_tile<C: FilmChannels>(
@@ -141,7 +165,8 @@ fn render_tile<C: FilmChannels>(
                 sampler.start_pixel_sample(pixel, s, 0);
                 // pbrt-v4 draws the wavelengths first; RGB draws the same dimension so the
                 // two representations see the same samples afterwards.
-                let mut lambda = C::sample_lambda(sampler.get_1d());
+                let u = sampler.get_1d();
+                let mut lambda = C::sample_lambda(if scene.disable_wavelength_jitter { 0.5 } else { u });
                 let cs = get_camera_sample(sampler, pixel, &scene.filter);
                 let ray = scene.camera.generate_ray(cs.p_film, cs.p_lens);
                 stats.camera += 1;
@@ -190,13 +215,13 @@ pub struct Pass<'a> {
     /// Whether this is the last pass.
     pub last: bool,
     acc: &'a Accumulator,
-    imaging_ratio: f32,
+    output: glam::DMat3,
 }
 
 impl Pass<'_> {
     /// The image so far (what [`render`] would return if it stopped here).
     pub fn image(&self) -> Image {
-        self.acc.image(self.imaging_ratio)
+        self.acc.image(self.output)
     }
 }
 
@@ -285,7 +310,11 @@ pub fn render_with_passes(
                 let mut sampler = base_sampler.clone();
                 let mut out = Vec::with_capacity(((tile[2] - tile[0]) * (tile[3] - tile[1])) as usize);
                 let mut stats = RayStats::default();
-                render_tile::<Rgb>(
+                let tile_fn = match scene.transport.transport {
+                    Transport::Rgb => render_tile::<Rgb>,
+                    Transport::Spectral => render_tile::<SampledSpectrum>,
+                };
+                tile_fn(
                     scene,
                     integrator,
                     &mut sampler,
@@ -322,7 +351,7 @@ pub fn render_with_passes(
             None => spp_done >= target_spp,
         };
         let before = Instant::now();
-        on_pass(&Pass { spp: spp_done, seconds, last, acc: &acc, imaging_ratio: scene.imaging_ratio });
+        on_pass(&Pass { spp: spp_done, seconds, last, acc: &acc, output: scene.film_output() });
         paused += before.elapsed();
         if last {
             break;
@@ -332,7 +361,7 @@ pub fn render_with_passes(
         pb.finish_and_clear();
     }
     RenderResult {
-        image: acc.image(scene.imaging_ratio),
+        image: acc.image(scene.film_output()),
         spp: spp_done,
         seconds: (start.elapsed() - paused).as_secs_f64(),
         rays: total_stats,

@@ -7,7 +7,7 @@ use std::path::Path;
 use std::sync::Arc;
 use std::time::Instant;
 
-use glam::{Affine3A, DMat4, UVec2, Vec2, Vec3};
+use glam::{Affine3A, DMat4, Vec2, Vec3};
 use nimbus_parser::{
     AnimatedTransform, ColorSpace, Error, FileLoc, MaterialRef, SceneDescription, ShapeEntity, TextureValue, Warning,
 };
@@ -22,6 +22,7 @@ use super::sampler::SamplerSettings;
 use super::shapes::{ShapeKind, ShapeSettings};
 use super::spectra::SpectrumResolver;
 use super::textures::{Mapping, TexInput, TextureKind, TextureSettings};
+use super::transport::{SpectralMode, Transport, TransportChoice};
 use super::values::{FloatInput, SpectrumInput, SpectrumSpec};
 use crate::accel::{Accel, Geometry, Instance, NONE, Primitive, ShapeStore, Surfaces};
 use crate::camera::Camera;
@@ -37,7 +38,7 @@ use crate::media::dense::DenseGrid;
 use crate::media::grid::VdbFile;
 use crate::media::{Density, Emission, Field, Medium};
 use crate::shapes::{Cylinder, Disk, Mesh, Sphere, uniform_scale};
-use crate::spectra::{BlackbodyRgbTable, SpectrumValue};
+use crate::spectra::{BlackbodyRgbTable, PixelSensor, SpectrumValue};
 use crate::textures::{Tex, TexMapping, TexNode, Textures, Wrap};
 
 /// Command-line choices that override the scene file (pbrt-v4's flags).
@@ -55,6 +56,8 @@ pub struct BuildOptions {
     pub crop_window: Option<[f32; 4]>,
     /// `--pixelbounds x0 x1 y0 y1`
     pub pixel_bounds: Option<[i32; 4]>,
+    /// `--spectral auto|on|off`: overrides the scene's `Option "spectral"`.
+    pub spectral: Option<SpectralMode>,
 }
 
 /// Time and memory spent building, for `--stats`.
@@ -110,12 +113,71 @@ pub struct Scene {
     pub camera_medium: u32,
     /// Whether any medium is chromatic (paths then pick a hero channel).
     pub has_chromatic_media: bool,
-    /// Imaging ratio: exposure time × ISO / 100 (pbrt-v4's cie1931 sensor).
-    pub imaging_ratio: f32,
+    /// The film's sensor (its imaging ratio, response curves and output matrix).
+    pub sensor: PixelSensor,
+    /// RGB or spectral transport, and why.
+    pub transport: TransportChoice,
+    /// pbrt-v4's `Option "disablewavelengthjitter"`: every path gets the wavelengths of u = ½.
+    pub disable_wavelength_jitter: bool,
     /// Build statistics.
     pub stats: BuildStats,
     /// Warnings found while building.
     pub warnings: Vec<Warning>,
+}
+
+impl Scene {
+    /// The matrix from what the film accumulates to output RGB: for RGB transport samples are
+    /// output RGB already and only the imaging ratio is left; for spectral transport they are
+    /// sensor RGB (imaging ratio included), converted as pbrt-v4's RGB film does.
+    pub fn film_output(&self) -> glam::DMat3 {
+        match self.transport.transport {
+            Transport::Rgb => glam::DMat3::from_diagonal(glam::DVec3::splat(f64::from(self.sensor.imaging_ratio()))),
+            Transport::Spectral => self.sensor.output_rgb_from_sensor_rgb(),
+        }
+    }
+}
+
+/// The first quantity of the scene that varies with wavelength, named with its location:
+/// a material that a shape uses, or a medium the camera, a light or a boundary uses.
+fn first_chromatic(
+    desc: &SceneDescription,
+    materials: &[Material],
+    textures: &Textures,
+    material_ids: &dyn Fn(&MaterialRef) -> u32,
+    used_media: &std::collections::HashSet<&str>,
+    spectra: &SpectrumResolver<'_>,
+) -> Result<Option<String>, Error> {
+    let shapes = desc.shapes.iter().chain(desc.instance_definitions.iter().flat_map(|d| d.shapes.iter()));
+    for shape in shapes {
+        let id = material_ids(&shape.material) as usize;
+        if let Some(input) = materials.get(id).and_then(|m| m.chromatic_input(textures)) {
+            let loc = match &shape.material {
+                MaterialRef::Index(i) => desc.materials.get(*i).map(|m| &m.loc),
+                MaterialRef::Named(n) => desc.named_materials.iter().find(|m| &m.name == n).map(|m| &m.entity.loc),
+            }
+            .unwrap_or(&shape.entity.loc);
+            return Ok(Some(format!("{loc}: material {input} varies with wavelength")));
+        }
+    }
+    for m in desc.media.iter().filter(|m| used_media.contains(m.name.as_str())) {
+        let settings = MediumSettings::from_entity(m)?;
+        let cs = m.entity.color_space;
+        let chromatic = match &settings.kind {
+            MediumSpec::RgbGrid { sigma_a, sigma_s, .. } => [sigma_a, sigma_s]
+                .iter()
+                .filter_map(|g| g.as_ref())
+                .any(|g| g.iter().any(|c| c[0] != c[1] || c[1] != c[2])),
+            _ => {
+                let unbounded =
+                    |s: &SpectrumSpec| spectra.unbounded(s, cs).map_err(|x| err(&m.entity.loc, x.to_string()));
+                !unbounded(&settings.sigma_a)?.is_constant() || !unbounded(&settings.sigma_s)?.is_constant()
+            }
+        };
+        if chromatic {
+            return Ok(Some(format!("{}: medium \"{}\" has chromatic sigma_a or sigma_s", m.entity.loc, m.name)));
+        }
+    }
+    Ok(None)
 }
 
 fn err(loc: &FileLoc, message: impl Into<String>) -> Error {
@@ -147,14 +209,14 @@ fn affine(m: &DMat4, loc: &FileLoc) -> Result<Affine3A, Error> {
 }
 
 /// Builds textures and remembers which name maps to which node.
-struct TextureBuilder {
+struct TextureBuilder<'a> {
     textures: Textures,
     float_names: HashMap<String, u32>,
     spectrum_names: HashMap<String, u32>,
-    spectra: SpectrumResolver,
+    spectra: SpectrumResolver<'a>,
 }
 
-impl TextureBuilder {
+impl TextureBuilder<'_> {
     fn float(&self, input: &FloatInput, loc: &FileLoc) -> Result<Tex, Error> {
         Ok(match input {
             FloatInput::Value(v) => Tex::Const(SpectrumValue::constant(*v)),
@@ -241,6 +303,7 @@ impl TextureBuilder {
                         ));
                     }
                 };
+                let gray = image.pixels.iter().all(|p| p.x == p.y && p.y == p.z);
                 TexNode::Image {
                     image: Arc::new(image),
                     mapping: mapping(m),
@@ -248,6 +311,7 @@ impl TextureBuilder {
                     invert: *invert,
                     wrap,
                     space: cs,
+                    gray,
                 }
             }
             TextureKind::Unsupported(_) => TexNode::Scale {
@@ -352,7 +416,7 @@ fn area_light_radiance(
     settings: &AreaLightSettings,
     e: &nimbus_parser::Entity,
     area: f32,
-    spectra: &SpectrumResolver,
+    spectra: &SpectrumResolver<'_>,
 ) -> Result<SpectrumValue, Error> {
     let l = spectra.illuminant(&settings.radiance, e.color_space).map_err(|m| err(&e.loc, m.to_string()))?;
     let mut scale = settings.scale;
@@ -365,7 +429,7 @@ fn area_light_radiance(
 
 struct ShapeBuilder<'a> {
     store: ShapeStore,
-    spectra: SpectrumResolver,
+    spectra: SpectrumResolver<'a>,
     material_ids: &'a dyn Fn(&MaterialRef) -> u32,
     interface_ids: &'a dyn Fn(&nimbus_parser::MediumInterface) -> Result<u32, Error>,
     lights: Vec<Light>,
@@ -497,7 +561,12 @@ impl ShapeBuilder<'_> {
     }
 }
 
-fn light(l: &nimbus_parser::LightEntity, spectra: &SpectrumResolver, medium: u32) -> Result<Light, Error> {
+fn light(
+    l: &nimbus_parser::LightEntity,
+    spectra: &SpectrumResolver<'_>,
+    transport: Transport,
+    medium: u32,
+) -> Result<Light, Error> {
     let e = &l.entity;
     let settings = LightSettings::from_entity(l)?;
     let world = fixed_transform(&l.world_from_light, &e.loc, "light")?;
@@ -550,6 +619,12 @@ fn light(l: &nimbus_parser::LightEntity, spectra: &SpectrumResolver, medium: u32
                         EnvironmentMap::load(path, cs, world, settings.scale * ev / k_e).map_err(|m| err(&e.loc, m))?;
                 }
             }
+            // RGB transport sees each texel's film RGB; through a camera sensor that is the
+            // texel's illuminant spectrum seen by the sensor (spectral transport converts at
+            // lookup).
+            if transport == Transport::Rgb && !spectra.sensor.is_passthrough() {
+                map.map_pixels(|p| spectra.emitted_texel(p, cs));
+            }
             LightKind::ImageInfinite(Box::new(map))
         }
         LightSpec::Infinite { .. } => {
@@ -574,7 +649,8 @@ fn used_media(desc: &SceneDescription) -> std::collections::HashSet<&str> {
 fn build_medium(
     m: &nimbus_parser::MediumEntity,
     settings: &MediumSettings<'_>,
-    spectra: &SpectrumResolver,
+    spectra: &SpectrumResolver<'_>,
+    transport: Transport,
 ) -> Result<Medium, Error> {
     let e = &m.entity;
     let cs = e.color_space;
@@ -606,7 +682,7 @@ fn build_medium(
                     scale: t.scale,
                     le_scale: settings.le_scale,
                     scale_grid: Some(scale_grid()?),
-                    table: Box::new(BlackbodyRgbTable::new(film_cs)),
+                    table: Box::new(BlackbodyRgbTable::for_sensor(spectra.sensor)),
                 },
                 None if !le.is_zero() => Emission::Radiance { le, scale: scale_grid()? },
                 None => Emission::None,
@@ -636,12 +712,28 @@ fn build_medium(
                 DenseGrid::new(glam::UVec3::from(*n), v.iter().map(|c| f(Rgb::from(*c))).collect())
                     .ok_or_else(|| err(&e.loc, "grid size mismatch"))
             };
-            let sa = ga.map(|v| rgb_grid(v, &|c| spectra.grid_coefficient(c, cs) * scale)).transpose()?;
-            let ss = gs.map(|v| rgb_grid(v, &|c| spectra.grid_coefficient(c, cs) * scale)).transpose()?;
-            // pbrt-v4 does not normalise rgbgrid emission: RGB illuminant spectra in film units.
-            let le_grid = gl.map(|v| rgb_grid(v, &|c| spectra.grid_emission(c, cs))).transpose()?;
+            // RGB transport stores film RGB; spectral transport the scene's RGB, turned into
+            // spectra at lookup (pbrt-v4's SampledGrid of RGB spectra).
+            let spectral = transport == Transport::Spectral;
+            let coefficient = |c: Rgb| if spectral { c * scale } else { spectra.grid_coefficient(c, cs) * scale };
+            let sa = ga.map(|v| rgb_grid(v, &coefficient)).transpose()?;
+            let ss = gs.map(|v| rgb_grid(v, &coefficient)).transpose()?;
+            let le_grid =
+                gl.map(|v| rgb_grid(v, &|c| if spectral { c } else { spectra.emitted_texel(c, cs) })).transpose()?;
             let b = Bounds3::new(Vec3::from(bounds[0]), Vec3::from(bounds[1]));
-            Medium::rgb_grid(m.name.clone(), world, b, sa, ss, le_grid, settings.le_scale, cs, g, |v| v.max_element())
+            // pbrt-v4 does not normalise rgbgrid emission: an RGB illuminant spectrum whose film
+            // RGB is ∫ȳ times the voxel's.
+            let le_scale = settings.le_scale * crate::spectra::CIE_Y_INTEGRAL as f32;
+            let space = if spectral { cs } else { film_cs };
+            // A voxel's largest value over the channels: of its spectrum for spectral transport.
+            let voxel_max = |v: Vec3| {
+                if spectral {
+                    crate::color::rgb_spectrum(v, crate::spectra::RgbRole::Unbounded, cs).max_value()
+                } else {
+                    v.max_element()
+                }
+            };
+            Medium::rgb_grid(m.name.clone(), world, b, sa, ss, le_grid, le_scale, space, g, voxel_max)
         }
         MediumSpec::Vdb { openvdb, filename, grid_name, temperature_name, temperature } => {
             let loc = e.params.loc("filename").unwrap_or(&e.loc);
@@ -656,7 +748,7 @@ fn build_medium(
                     scale: temperature.scale,
                     le_scale: settings.le_scale,
                     scale_grid: None,
-                    table: Box::new(BlackbodyRgbTable::new(film_cs)),
+                    table: Box::new(BlackbodyRgbTable::for_sensor(spectra.sensor)),
                 }
             } else {
                 Emission::None
@@ -729,8 +821,13 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions) -> Result<Scene
     let filter = Filter::new(&FilterSettings::from_entity(&desc.filter)?);
     let integrator = IntegratorSettings::from_entity(&desc.integrator, opts.integrator.as_deref())?;
 
+    // The film's sensor (pbrt-v4's imaging ratio: exposure time × ISO / 100).
+    let exposure = camera_settings.shutter_close - camera_settings.shutter_open;
+    let sensor = PixelSensor::new(&film.sensor, film.white_balance, film.iso, exposure, film_cs)
+        .map_err(|m| err(desc.film.params.loc("sensor").unwrap_or(&desc.film.loc), m))?;
+
     // Textures, in definition order (a texture may use those defined before it).
-    let spectra = SpectrumResolver { film: film_cs };
+    let spectra = SpectrumResolver { film: film_cs, sensor: &sensor };
     let mut tb = TextureBuilder {
         textures: Textures::default(),
         float_names: HashMap::new(),
@@ -760,15 +857,25 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions) -> Result<Scene
         }
     };
 
-    // Media: only those the camera, lights or boundary surfaces use are built.
+    // RGB or spectral transport: the first quantity of the scene that varies with
+    // wavelength, among the materials shapes use and the media, decides `auto`.
     let used = used_media(desc);
+    let mode = match (&opts.spectral, &desc.options.spectral) {
+        (Some(m), _) => *m,
+        (None, Some(s)) => s.parse().map_err(|m: String| err(&desc.film.loc, m))?,
+        (None, None) => SpectralMode::Auto,
+    };
+    let chromatic = first_chromatic(desc, &materials, &tb.textures, &material_ids, &used, &spectra)?;
+    let transport = TransportChoice::new(mode, chromatic.as_deref());
+
+    // Media: only those the camera, lights or boundary surfaces use are built.
     let mut media = Vec::new();
     let mut media_ids: HashMap<String, u32> = HashMap::new();
     for m in &desc.media {
         let settings = MediumSettings::from_entity(m)?;
         if used.contains(m.name.as_str()) {
             media_ids.insert(m.name.clone(), media.len() as u32);
-            media.push(build_medium(m, &settings, &spectra)?);
+            media.push(build_medium(m, &settings, &spectra, transport.transport)?);
         }
     }
     let interfaces = std::cell::RefCell::new(Vec::<[u32; 2]>::new());
@@ -857,14 +964,11 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions) -> Result<Scene
     };
     for l in &desc.lights {
         let medium = l.medium.as_deref().map_or(NONE, |n| media_ids.get(n).copied().unwrap_or(NONE));
-        lights.push(light(l, &spectra, medium)?);
+        lights.push(light(l, &spectra, transport.transport, medium)?);
     }
     let infinite_lights = lights.iter().enumerate().filter(|(_, l)| l.is_infinite()).map(|(i, _)| i as u32).collect();
     let by_power = !matches!(&integrator, IntegratorSettings::VolPath(v) if v.light_sampler == crate::integrators::volpath::LightSamplerKind::Uniform);
     let light_sampler = LightSampler::new(&lights, &sphere, by_power);
-    let camera_settings_exposure = camera_settings.shutter_close - camera_settings.shutter_open;
-    let imaging_ratio = camera_settings_exposure * film.iso / 100.0;
-    let _ = UVec2::ZERO;
     Ok(Scene {
         camera,
         film,
@@ -884,7 +988,9 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions) -> Result<Scene
         interfaces,
         camera_medium,
         has_chromatic_media,
-        imaging_ratio,
+        sensor,
+        transport,
+        disable_wavelength_jitter: desc.options.disable_wavelength_jitter,
         stats: BuildStats {
             geometry_seconds,
             other_seconds: t0.elapsed().as_secs_f64() - geometry_seconds,

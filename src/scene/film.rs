@@ -23,14 +23,16 @@ pub struct FilmSettings {
     pub save_fp16: bool,
     /// Sensor ISO: the imaging ratio is exposure time × ISO / 100.
     pub iso: f32,
-    /// White balance temperature (0: none).
+    /// White balance temperature (0: none for `cie1931`, 6500 K for a camera).
     pub white_balance: f32,
+    /// The sensor: `cie1931` or one of pbrt-v4's camera sensors.
+    pub sensor: String,
     /// Color space of the output.
     pub color_space: ColorSpace,
 }
 
 impl FilmSettings {
-    /// Reads a film entity. Only the `rgb` film is supported; `sensor` must be `cie1931`.
+    /// Reads a film entity. Only the `rgb` film is supported.
     pub fn from_entity(e: &Entity) -> Result<FilmSettings, Error> {
         if e.name != "rgb" {
             return Err(Error::new(&e.loc, format!("film \"{}\" is not supported by nimbus (it has \"rgb\")", e.name)));
@@ -89,18 +91,15 @@ impl FilmSettings {
             checked_float(p, "maxcomponentvalue", f32::INFINITY, |v| v > 0.0, "must be positive")?;
         let save_fp16 = p.get_one_bool("savefp16", true)?;
         let iso = checked_float(p, "iso", 100.0, |v| v > 0.0, "ISO must be positive")?;
-        let white_balance = p.get_one_float("whitebalance", 0.0)?;
-        let sensor = p.get_one_string("sensor", "cie1931")?;
-        if sensor != "cie1931" {
+        let white_balance = checked_float(p, "whitebalance", 0.0, |v| v >= 0.0, "must not be negative")?;
+        let sensor = p.get_one_string("sensor", "cie1931")?.to_string();
+        if sensor != "cie1931" && !crate::spectra::CAMERA_SENSORS.contains(&sensor.as_str()) {
             return Err(Error::new(
                 p.loc("sensor").unwrap_or(&e.loc),
-                format!("sensor \"{sensor}\" is not supported by nimbus (it has \"cie1931\")"),
-            ));
-        }
-        if white_balance != 0.0 {
-            return Err(Error::new(
-                p.loc("whitebalance").unwrap_or(&e.loc),
-                "white balancing (\"whitebalance\") is not supported by nimbus",
+                format!(
+                    "unknown sensor \"{sensor}\" (pbrt-v4's sensors: cie1931, {})",
+                    crate::spectra::CAMERA_SENSORS.join(", ")
+                ),
             ));
         }
         Ok(FilmSettings {
@@ -113,6 +112,7 @@ impl FilmSettings {
             save_fp16,
             iso,
             white_balance,
+            sensor,
             color_space: e.color_space,
         })
     }

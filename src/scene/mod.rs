@@ -11,6 +11,7 @@ pub mod media;
 pub mod sampler;
 pub mod shapes;
 pub mod textures;
+pub mod transport;
 pub mod values;
 
 mod build;

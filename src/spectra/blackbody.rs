@@ -72,6 +72,8 @@ fn blackbody_xyz(t: f64) -> DVec3 {
 pub struct BlackbodyRgbTable {
     rgb_from_xyz: glam::DMat3,
     ln_xyz: Vec<DVec3>,
+    /// Sensor RGB instead of XYZ when built for a camera sensor.
+    sensor: Option<Box<super::PixelSensor>>,
 }
 
 impl BlackbodyRgbTable {
@@ -81,16 +83,39 @@ impl BlackbodyRgbTable {
 
     /// Builds the table for a film in color space `film` (a few milliseconds).
     pub fn new(film: ColorSpace) -> BlackbodyRgbTable {
+        Self::build(rgb_color_space(film).rgb_from_xyz, None)
+    }
+
+    /// Builds the table for the film of `sensor` (its output space and response curves).
+    pub fn for_sensor(sensor: &super::PixelSensor) -> BlackbodyRgbTable {
+        if sensor.is_passthrough() {
+            return Self::build(sensor.output_rgb_from_sensor_rgb(), None);
+        }
+        Self::build(sensor.output_rgb_from_sensor_rgb(), Some(Box::new(sensor.clone())))
+    }
+
+    fn build(rgb_from_xyz: glam::DMat3, sensor: Option<Box<super::PixelSensor>>) -> BlackbodyRgbTable {
         let step = (Self::T_MAX / Self::T_MIN).ln() / (Self::N - 1) as f64;
         let ln_xyz = (0..Self::N)
             .map(|i| {
                 let t = Self::T_MIN * (step * i as f64).exp();
                 // XYZ are positive sums; the floor keeps ln finite where f64 underflows.
-                let xyz = blackbody_xyz(t).max(DVec3::splat(1e-300));
+                let xyz = Self::project(&sensor, t).max(DVec3::splat(1e-300));
                 DVec3::new(xyz.x.ln(), xyz.y.ln(), xyz.z.ln())
             })
             .collect();
-        BlackbodyRgbTable { rgb_from_xyz: rgb_color_space(film).rgb_from_xyz, ln_xyz }
+        BlackbodyRgbTable { rgb_from_xyz, ln_xyz, sensor }
+    }
+
+    /// XYZ (or the sensor's RGB) of the peak-normalised blackbody at `t`.
+    fn project(sensor: &Option<Box<super::PixelSensor>>, t: f64) -> DVec3 {
+        match sensor {
+            None => blackbody_xyz(t),
+            Some(s) => {
+                let b = BlackbodySpectrum::new(t);
+                s.project(|l| b.eval(l))
+            }
+        }
     }
 
     /// Film RGB of the peak-normalised blackbody at `t` Kelvin; black at or below 100 K
@@ -101,7 +126,7 @@ impl BlackbodyRgbTable {
             return Rgb::ZERO;
         }
         if t >= Self::T_MAX {
-            return (self.rgb_from_xyz * blackbody_xyz(t)).as_vec3();
+            return (self.rgb_from_xyz * Self::project(&self.sensor, t)).as_vec3();
         }
         let step = (Self::T_MAX / Self::T_MIN).ln() / (Self::N - 1) as f64;
         let u = (t / Self::T_MIN).ln() / step;

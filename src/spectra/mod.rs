@@ -17,6 +17,9 @@ mod convert;
 mod error;
 mod named;
 mod piecewise;
+mod sampled;
+mod sensor;
+mod sigmoid;
 mod spectrum;
 mod value;
 
@@ -33,5 +36,10 @@ pub use convert::{
 pub use error::SpectrumError;
 pub use named::{is_named_spectrum, named_spectrum, named_spectrum_names};
 pub use piecewise::PiecewiseLinearSpectrum;
+pub use sampled::{
+    N_SPECTRUM_SAMPLES, SampledSpectrum, SampledWavelengths, sample_visible_wavelength, visible_wavelength_pdf,
+};
+pub use sensor::{CAMERA_SENSORS, PixelSensor, daylight_spectrum, white_balance};
+pub use sigmoid::{SigmoidPolynomial, SigmoidTable, fit_sigmoid};
 pub use spectrum::{ResolvedSpectrum, Spectrum, resolve, resolve_spectral};
-pub use value::{RgbRole, SpectrumValue};
+pub use value::{DenseSpectrum, RgbRole, Sampled, SpectrumValue, illuminant_table};

@@ -146,6 +146,8 @@ pub enum TexNode {
         wrap: Wrap,
         /// Color space of the texels.
         space: ColorSpace,
+        /// True when every texel is gray (RGB transport then carries it exactly).
+        gray: bool,
     },
 }
 
@@ -180,6 +182,22 @@ impl Textures {
         self.eval_rgb(t, ctx).x
     }
 
+    /// True when the input varies with wavelength somewhere: a non-constant spectrum or an
+    /// image with a colored texel (RGB transport then only approximates it).
+    pub fn is_chromatic(&self, t: Tex) -> bool {
+        match t {
+            Tex::Const(c) => !c.is_constant(),
+            Tex::Node(i) => match &self.nodes[i as usize] {
+                TexNode::Scale { tex, scale } => self.is_chromatic(*tex) || self.is_chromatic(*scale),
+                TexNode::Mix { a, b, amount } => {
+                    self.is_chromatic(*a) || self.is_chromatic(*b) || self.is_chromatic(*amount)
+                }
+                TexNode::Checkerboard { a, b, .. } => self.is_chromatic(*a) || self.is_chromatic(*b),
+                TexNode::Image { gray, .. } => !gray,
+            },
+        }
+    }
+
     fn eval_node<C: Channels>(&self, node: &TexNode, ctx: &TexContext, lambda: &C::Lambda, role: RgbRole) -> C {
         match node {
             TexNode::Scale { tex, scale } => {
@@ -200,7 +218,7 @@ impl Textures {
                     self.eval(*b, ctx, lambda, role)
                 }
             }
-            TexNode::Image { image, mapping, scale, invert, wrap, space } => {
+            TexNode::Image { image, mapping, scale, invert, wrap, space, .. } => {
                 let mut st = mapping.map(ctx);
                 // pbrt-v4 flips t so that images are not upside down.
                 st.y = 1.0 - st.y;
@@ -275,6 +293,7 @@ mod tests {
             invert: false,
             wrap: Wrap::Clamp,
             space: ColorSpace::Srgb,
+            gray: true,
         });
         let v = t.eval_rgb(Tex::Node(0), &TexContext { p: Vec3::ZERO, uv: Vec2::new(0.5, 0.5) });
         assert!((v.x - 0.5).abs() < 1e-6);

@@ -105,6 +105,24 @@ pub fn assert_channels(img: &Image, expected: [f64; 3], what: &str) {
     }
 }
 
+/// The film RGB (pbrt-v4's default `cie1931` sensor, sRGB output) of radiance spectrum `f`:
+/// the analytic answer for spectral transport where a light's spectrum reaches the camera
+/// through known spectral factors.
+pub fn film_rgb(f: impl Fn(f32) -> f32) -> [f64; 3] {
+    let sensor = nimbus::spectra::PixelSensor::new("cie1931", 0.0, 100.0, 1.0, nimbus::parser::ColorSpace::Srgb)
+        .expect("the default sensor exists");
+    sensor.film_rgb(|l| f64::from(f(l as f32))).as_dvec3().to_array()
+}
+
+/// Build options forcing RGB (`false`) or spectral (`true`) transport.
+pub fn transport(spectral: bool) -> nimbus::scene::BuildOptions {
+    use nimbus::scene::transport::SpectralMode;
+    nimbus::scene::BuildOptions {
+        spectral: Some(if spectral { SpectralMode::On } else { SpectralMode::Off }),
+        ..Default::default()
+    }
+}
+
 /// pbrt-v4's four samplers at 16 spp.
 pub const SAMPLERS: [&str; 4] = [
     r#"Sampler "independent" "integer pixelsamples" 16"#,

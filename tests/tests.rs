@@ -1,5 +1,6 @@
 //! End-to-end tests of the `nimbus` binary and library.
 
+mod bench;
 mod check;
 mod common;
 mod compare;

@@ -1,32 +1,25 @@
-//! `nimbus bench`: render throughput on the parity scenes, as a ratio to pbrt-v4's own
-//! times for the same scenes on this kind of machine (`--nthreads 2 --spp 64`, wall seconds,
-//! from ../shared/pbrt-v4-references/README.md), plus a CPU baseline measured in the same run
-//! so figures from different machines can be compared.
+//! `nimbus bench`: speed on the parity scenes against pbrt-v4's own figures for them
+//! (`../shared/pbrt-v4-references/speed.json`: wall seconds at `--nthreads 2 --spp 64` and the
+//! MSE against the reference images at that spp), at equal spp and at equal error, for each
+//! transport; plus a CPU baseline measured in the same run so figures from different machines
+//! can be compared.
+//!
+//! Equal error: for an unbiased Monte Carlo estimator MSE ∝ 1/time, so nimbus needs
+//! `t × mse / mse_pbrt` seconds to reach pbrt-v4's MSE, and its speed-up at equal error is
+//! `(t_pbrt × mse_pbrt) / (t × mse)`.
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Instant;
 
-use anyhow::Result;
+use anyhow::{Context, Result, bail};
+use nimbus::scene::transport::SpectralMode;
 use nimbus::scene::{BuildOptions, build_scene};
-
-/// pbrt-v4's wall-clock seconds at `--nthreads 2 --spp 64` (median of 2-3 runs), per scene.
-const PBRT_V4_SECONDS: &[(&str, f64)] = &[
-    ("homogeneous-sphere", 6.5),
-    ("wax-dielectric", 7.0),
-    ("grid-cloud", 6.5),
-    ("graph-cloud", 4.5),
-    ("fog-spotlight", 11.2),
-    ("rgbgrid-smoke", 6.3),
-    ("emissive-grid", 3.0),
-    ("cornell-surfaces", 6.0),
-    ("vdb-cloud", 7.8),
-];
 
 /// Arguments of `nimbus bench`.
 #[derive(clap::Args)]
 pub struct BenchArgs {
-    /// Scenes to time (default: the pbrt-v4 parity scenes and pbrt-scenes/default.pbrt).
+    /// Scenes to time (default: every scene of speed.json, and pbrt-scenes/default.pbrt).
     scenes: Vec<PathBuf>,
     /// Samples per pixel.
     #[arg(long, default_value_t = 64)]
@@ -34,9 +27,49 @@ pub struct BenchArgs {
     /// Worker threads (pbrt-v4's figures use 2).
     #[arg(long, default_value_t = 2)]
     nthreads: usize,
-    /// Runs per scene; the median is reported.
+    /// Runs per scene and transport; the median time is reported.
     #[arg(long, default_value_t = 2)]
     repeat: usize,
+    /// The pbrt-v4 references folder (scenes/, images/, speed.json).
+    #[arg(long)]
+    references: Option<PathBuf>,
+    /// Transports to time, comma separated (`off` = RGB, `on` = spectral, `auto`).
+    #[arg(long, value_delimiter = ',', default_value = "off,on")]
+    spectral: Vec<SpectralMode>,
+    /// Also write the results as JSON.
+    #[arg(long)]
+    json: Option<PathBuf>,
+}
+
+/// pbrt-v4's figures for one scene.
+#[derive(Clone, Copy, Debug)]
+struct PbrtFigures {
+    seconds: f64,
+    mse: f64,
+}
+
+/// Reads speed.json: `{"spp": .., "scenes": {"name": {"seconds": .., "mse": ..}}}`.
+fn read_speed(path: &Path) -> Result<(u32, Vec<(String, PbrtFigures)>)> {
+    let text = std::fs::read_to_string(path).with_context(|| format!("{}: cannot read", path.display()))?;
+    let v: serde_json::Value =
+        serde_json::from_str(&text).with_context(|| format!("{}: not valid JSON", path.display()))?;
+    let spp =
+        v.get("spp").and_then(|s| s.as_u64()).with_context(|| format!("{}: no integer \"spp\"", path.display()))?;
+    let scenes = v
+        .get("scenes")
+        .and_then(|s| s.as_object())
+        .with_context(|| format!("{}: no \"scenes\" object", path.display()))?;
+    let mut out = Vec::new();
+    for (name, f) in scenes {
+        let num = |key: &str| {
+            f.get(key)
+                .and_then(|x| x.as_f64())
+                .filter(|x| x.is_finite() && *x > 0.0)
+                .with_context(|| format!("{}: scenes.{name}.{key} must be a positive number", path.display()))
+        };
+        out.push((name.clone(), PbrtFigures { seconds: num("seconds")?, mse: num("mse")? }));
+    }
+    Ok((spp as u32, out))
 }
 
 /// A fixed scalar workload (a tiny ray-sphere loop) to calibrate machine speed.
@@ -55,66 +88,148 @@ fn baseline_seconds() -> f64 {
     t.elapsed().as_secs_f64()
 }
 
-fn default_scenes() -> Vec<PathBuf> {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/pbrt-v4-references/scenes");
-    let mut v: Vec<PathBuf> = PBRT_V4_SECONDS.iter().map(|(n, _)| dir.join(format!("{n}.pbrt"))).collect();
-    v.push(Path::new(env!("CARGO_MANIFEST_DIR")).join("pbrt-scenes/default.pbrt"));
-    v
+/// The build options of one timed run.
+fn options(spp: u32, seed: i32, mode: SpectralMode) -> BuildOptions {
+    BuildOptions { spp: Some(spp), seed: Some(seed), spectral: Some(mode), ..Default::default() }
 }
 
-/// Times each scene (parse + build + render, as pbrt-v4's wall time includes) and prints a
-/// table.
+/// One run: parse, build and render (pbrt-v4's wall time includes them all).
+fn run_once(path: &Path, opts: &BuildOptions) -> Result<(f64, nimbus::imageio::Image, &'static str), String> {
+    let t = Instant::now();
+    let desc = nimbus::parser::load_file(path).map_err(|e| e.to_string())?;
+    let scene = build_scene(&desc, opts).map_err(|e| e.to_string())?;
+    let integrator = scene.integrator.create(&scene);
+    let r = nimbus::render::render(
+        &scene,
+        integrator.as_ref(),
+        &nimbus::render::RenderOptions { time_budget: None, quiet: true },
+    );
+    Ok((t.elapsed().as_secs_f64(), r.image, scene.transport.transport.name()))
+}
+
+/// One scene and transport, measured.
+#[derive(Debug)]
+struct Row {
+    scene: String,
+    mode: String,
+    transport: String,
+    seconds: f64,
+    mse: Option<f64>,
+    pbrt_seconds: Option<f64>,
+    pbrt_mse: Option<f64>,
+    speedup_equal_spp: Option<f64>,
+    speedup_equal_error: Option<f64>,
+}
+
+impl Row {
+    fn to_json(&self) -> serde_json::Value {
+        serde_json::json!({
+            "scene": self.scene, "mode": self.mode, "transport": self.transport, "seconds": self.seconds,
+            "mse": self.mse, "pbrt_seconds": self.pbrt_seconds, "pbrt_mse": self.pbrt_mse,
+            "speedup_equal_spp": self.speedup_equal_spp, "speedup_equal_error": self.speedup_equal_error,
+        })
+    }
+}
+
+/// Times each scene in each transport and prints a Markdown table.
 pub fn run(args: &BenchArgs) -> Result<ExitCode> {
+    let refs = args
+        .references
+        .clone()
+        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/pbrt-v4-references"));
+    let (pbrt_spp, pbrt) = read_speed(&refs.join("speed.json"))?;
+    if args.spp != pbrt_spp {
+        eprintln!(
+            "note: speed.json holds pbrt-v4's figures at {pbrt_spp} spp; ratios at {} spp are not comparable",
+            args.spp
+        );
+    }
+    let scenes = if args.scenes.is_empty() {
+        let mut v: Vec<PathBuf> = pbrt.iter().map(|(n, _)| refs.join(format!("scenes/{n}.pbrt"))).collect();
+        v.push(Path::new(env!("CARGO_MANIFEST_DIR")).join("pbrt-scenes/default.pbrt"));
+        v
+    } else {
+        args.scenes.clone()
+    };
+    if args.spectral.is_empty() {
+        bail!("--spectral needs at least one of off, on, auto");
+    }
     let pool = rayon::ThreadPoolBuilder::new().num_threads(args.nthreads.max(1)).build()?;
     let base = baseline_seconds();
-    println!("baseline (fixed CPU workload): {:.3} s", base);
-    println!("| scene | spp | nimbus s | Msamples/s | pbrt-v4 s | speed-up vs pbrt-v4 |");
-    println!("|---|---|---|---|---|---|");
-    let scenes = if args.scenes.is_empty() { default_scenes() } else { args.scenes.clone() };
-    for path in scenes {
+    println!("baseline (fixed CPU workload): {base:.3} s; {} threads, {} spp", args.nthreads, args.spp);
+    println!("equal error: speed-up = (pbrt-v4 s × pbrt-v4 MSE) / (nimbus s × nimbus MSE), as MSE ∝ 1/time");
+    println!(
+        "| scene | transport | nimbus s | pbrt-v4 s | speed-up (equal spp) | nimbus MSE | pbrt-v4 MSE | speed-up (equal error) |"
+    );
+    println!("|---|---|--:|--:|--:|--:|--:|--:|");
+    let mut rows = Vec::new();
+    for path in &scenes {
         let name = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
-        let mut times = Vec::new();
-        let mut samples = 0u64;
-        let mut failed = None;
-        for _ in 0..args.repeat.max(1) {
-            let t = Instant::now();
-            let result = pool.install(|| -> Result<u64, String> {
-                let desc = nimbus::parser::load_file(&path).map_err(|e| e.to_string())?;
-                let scene = build_scene(&desc, &BuildOptions { spp: Some(args.spp), ..Default::default() })
-                    .map_err(|e| e.to_string())?;
-                let integrator = scene.integrator.create(&scene);
-                let r = nimbus::render::render(
-                    &scene,
-                    integrator.as_ref(),
-                    &nimbus::render::RenderOptions { time_budget: None, quiet: true },
-                );
-                Ok(r.rays.camera)
-            });
-            match result {
-                Ok(n) => {
-                    samples = n;
-                    times.push(t.elapsed().as_secs_f64());
-                }
-                Err(e) => {
-                    failed = Some(e);
-                    break;
+        let figures = pbrt.iter().find(|(n, _)| *n == name).map(|(_, f)| *f);
+        let reference = nimbus::imageio::read_exr(&refs.join(format!("images/{name}.exr"))).ok();
+        for &mode in &args.spectral {
+            // Seeds 1 and 2 as pbrt-v4's MSE figure; the timed runs alternate them.
+            let mut times = Vec::new();
+            let mut images = Vec::new();
+            let mut transport = "";
+            let mut failed = None;
+            for k in 0..args.repeat.max(2) {
+                match pool.install(|| run_once(path, &options(args.spp, 1 + (k % 2) as i32, mode))) {
+                    Ok((t, img, tr)) => {
+                        times.push(t);
+                        transport = tr;
+                        if k < 2 {
+                            images.push(img);
+                        }
+                    }
+                    Err(e) => {
+                        failed = Some(e);
+                        break;
+                    }
                 }
             }
+            if let Some(e) = failed {
+                println!("| {name} | {mode} | failed: {e} | | | | | |");
+                continue;
+            }
+            times.sort_by(f64::total_cmp);
+            let seconds = times[times.len() / 2];
+            let mse = reference.as_ref().and_then(|r| {
+                let m: Option<Vec<f64>> =
+                    images.iter().map(|i| nimbus::metrics::error_metrics(i, r).ok().map(|e| e.mse)).collect();
+                m.map(|m| m.iter().sum::<f64>() / m.len() as f64)
+            });
+            let equal_spp = figures.map(|f| f.seconds / seconds);
+            let equal_error = figures.zip(mse).map(|(f, m)| (f.seconds * f.mse) / (seconds * m));
+            let fmt = |v: Option<f64>, p: usize| v.map_or("-".to_string(), |v| format!("{v:.p$}"));
+            let fmte = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.3e}"));
+            println!(
+                "| {name} | {transport} ({mode}) | {seconds:.2} | {} | {} | {} | {} | {} |",
+                fmt(figures.map(|f| f.seconds), 2),
+                equal_spp.map_or("-".into(), |v| format!("{v:.2}x")),
+                fmte(mse),
+                fmte(figures.map(|f| f.mse)),
+                equal_error.map_or("-".into(), |v| format!("{v:.2}x")),
+            );
+            rows.push(Row {
+                scene: name.clone(),
+                mode: mode.to_string(),
+                transport: transport.to_string(),
+                seconds,
+                mse,
+                pbrt_seconds: figures.map(|f| f.seconds),
+                pbrt_mse: figures.map(|f| f.mse),
+                speedup_equal_spp: equal_spp,
+                speedup_equal_error: equal_error,
+            });
         }
-        if let Some(e) = failed {
-            println!("| {name} | {} | failed: {e} | | | |", args.spp);
-            continue;
-        }
-        times.sort_by(f64::total_cmp);
-        let median = times[times.len() / 2];
-        let pbrt = PBRT_V4_SECONDS.iter().find(|(n, _)| *n == name).map(|(_, s)| *s);
-        println!(
-            "| {name} | {} | {median:.2} | {:.3} | {} | {} |",
-            args.spp,
-            samples as f64 / median / 1e6,
-            pbrt.map_or("-".into(), |s| format!("{s:.1}")),
-            pbrt.map_or("-".into(), |s| format!("{:.2}x", s / median)),
-        );
+    }
+    if let Some(path) = &args.json {
+        let rows: Vec<serde_json::Value> = rows.iter().map(Row::to_json).collect();
+        let doc =
+            serde_json::json!({ "baseline_seconds": base, "spp": args.spp, "threads": args.nthreads, "rows": rows });
+        std::fs::write(path, serde_json::to_string_pretty(&doc)?)
+            .with_context(|| format!("{}: cannot write", path.display()))?;
     }
     Ok(ExitCode::SUCCESS)
 }

@@ -1,0 +1,66 @@
+//! `nimbus bench`: figures from speed.json, equal-error arithmetic, bad input.
+
+use crate::common::{nimbus, scratch_dir};
+
+/// A one-pixel-per-sample scene bench can time in a moment, against its own image as
+/// reference: the JSON's equal-error ratio must be (t_pbrt·mse_pbrt)/(t·mse) of its own
+/// columns, and a malformed speed.json an error naming the file.
+#[test]
+fn bench_reports_equal_spp_and_equal_error_ratios() {
+    let dir = scratch_dir("bench");
+    std::fs::create_dir_all(dir.join("scenes")).unwrap();
+    std::fs::create_dir_all(dir.join("images")).unwrap();
+    let scene = dir.join("scenes/tiny.pbrt");
+    std::fs::write(
+        &scene,
+        "LookAt 0 0 4  0 0 0  0 1 0\nCamera \"perspective\"\nFilm \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8\nWorldBegin\nLightSource \"infinite\" \"rgb L\" [1 1 1]\nMaterial \"diffuse\" \"rgb reflectance\" [0.7 0.2 0.1]\nShape \"sphere\"\n",
+    )
+    .unwrap();
+    let reference = dir.join("images/tiny.exr");
+    let out = nimbus(&[
+        "render",
+        scene.to_str().unwrap(),
+        "--spp",
+        "64",
+        "--quiet",
+        "--outfile",
+        reference.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    std::fs::write(dir.join("speed.json"), r#"{"spp": 4, "scenes": {"tiny": {"seconds": 2.0, "mse": 0.001}}}"#)
+        .unwrap();
+    let json = dir.join("out.json");
+    let out = nimbus(&[
+        "bench",
+        "--references",
+        dir.to_str().unwrap(),
+        "--spp",
+        "4",
+        "--repeat",
+        "2",
+        "--nthreads",
+        "1",
+        "--json",
+        json.to_str().unwrap(),
+        scene.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains("| tiny | rgb (off) |") && stdout.contains("| tiny | spectral (on) |"), "{stdout}");
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let rows = v["rows"].as_array().unwrap();
+    assert_eq!(rows.len(), 2);
+    for r in rows {
+        let (t, mse) = (r["seconds"].as_f64().unwrap(), r["mse"].as_f64().unwrap());
+        assert!(t > 0.0 && mse > 0.0, "{r}");
+        let want = 2.0 * 0.001 / (t * mse);
+        assert!((r["speedup_equal_error"].as_f64().unwrap() / want - 1.0).abs() < 1e-9, "{r}");
+        assert!((r["speedup_equal_spp"].as_f64().unwrap() - 2.0 / t).abs() < 1e-9, "{r}");
+    }
+    std::fs::write(dir.join("speed.json"), r#"{"spp": 4, "scenes": {"tiny": {"seconds": "fast"}}}"#).unwrap();
+    let out = nimbus(&["bench", "--references", dir.to_str().unwrap(), "--spp", "4", scene.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("speed.json") && stderr.contains("scenes.tiny.seconds"), "{stderr}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

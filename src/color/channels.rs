@@ -66,6 +66,11 @@ pub trait Channels:
     /// The scene spectrum `v` in these channels.
     fn eval(v: &SpectrumValue, lambda: &Self::Lambda) -> Self;
 
+    /// A voxel's spectrum packed in four floats for this representation (see
+    /// [`pack_voxel`]): RGB reads its first three, sampled spectra its sigmoid polynomial and
+    /// scale.
+    fn from_voxel(v: glam::Vec4, role: RgbRole, space: ColorSpace, lambda: &Self::Lambda) -> Self;
+
     /// A real index of refraction from the scene spectrum `eta`: the spectrum's value for RGB
     /// (pbrt-v3 style, read once at 550 nm), the first wavelength's value for sampled spectra,
     /// which then drop their other wavelengths if η varies (dispersion; pbrt-v4's
@@ -154,6 +159,11 @@ impl Channels for Rgb {
     #[inline]
     fn from_rgb(rgb: Rgb, _role: RgbRole, _space: ColorSpace, _lambda: &()) -> Rgb {
         rgb
+    }
+
+    #[inline]
+    fn from_voxel(v: glam::Vec4, _role: RgbRole, _space: ColorSpace, _lambda: &()) -> Rgb {
+        v.truncate()
     }
 
     #[inline]
@@ -251,6 +261,20 @@ impl Channels for SampledSpectrum {
     }
 
     #[inline]
+    fn from_voxel(v: glam::Vec4, role: RgbRole, space: ColorSpace, lambda: &SampledWavelengths) -> SampledSpectrum {
+        // Empty voxels (most of a smoke grid) cost nothing.
+        if v.w == 0.0 {
+            return SampledSpectrum::ZERO;
+        }
+        let poly = SigmoidPolynomial { c0: v.x, c1: v.y, c2: v.z };
+        let s = poly.eval4(lambda.lambda) * v.w;
+        match role {
+            RgbRole::Illuminant => s * illuminant_table(space).sample(lambda.lambda) * (1.0 / CIE_Y_INTEGRAL as f32),
+            _ => s,
+        }
+    }
+
+    #[inline]
     fn blackbody(t: f32, _table: &BlackbodyRgbTable, lambda: &SampledWavelengths) -> SampledSpectrum {
         Sampled::blackbody(t).sample(lambda)
     }
@@ -322,5 +346,22 @@ pub fn rgb_spectrum(rgb: Rgb, role: RgbRole, space: ColorSpace) -> Sampled {
                 },
             }
         }
+    }
+}
+
+/// A voxel's RGB `rgb` (color space `space`, kind `role`) packed in four floats for one
+/// representation: `(r, g, b, 0)` for RGB transport (`rgb` already in film RGB), the sigmoid
+/// polynomial and scale of its spectrum for sampled spectra, fitted once so lookups need no
+/// table ([`Channels::from_voxel`] unpacks it).
+pub fn pack_voxel(rgb: Rgb, role: RgbRole, space: ColorSpace, spectral: bool) -> glam::Vec4 {
+    if !spectral {
+        return rgb.extend(0.0);
+    }
+    match rgb_spectrum(rgb, role, space) {
+        Sampled::Sigmoid { poly, scale } => glam::Vec4::new(poly.c0, poly.c1, poly.c2, scale),
+        Sampled::Illuminant { poly, scale, .. } => {
+            glam::Vec4::new(poly.c0, poly.c1, poly.c2, scale * CIE_Y_INTEGRAL as f32)
+        }
+        other => unreachable!("rgb_spectrum makes sigmoid spectra, not {other:?}"),
     }
 }

@@ -5,7 +5,7 @@
 
 mod channels;
 
-pub use channels::{Channels, rgb_spectrum};
+pub use channels::{Channels, pack_voxel, rgb_spectrum};
 
 use glam::Vec3;
 

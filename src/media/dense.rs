@@ -29,6 +29,13 @@ impl GridValue for Vec3 {
     }
 }
 
+impl GridValue for glam::Vec4 {
+    /// The largest of the first three components (an RGB with a spare lane).
+    fn max_component(self) -> f32 {
+        self.truncate().max_element()
+    }
+}
+
 impl<T: GridValue> DenseGrid<T> {
     /// A grid of `n.x * n.y * n.z` values (x fastest). Returns `None` on a size mismatch.
     pub fn new(n: UVec3, values: Vec<T>) -> Option<DenseGrid<T>> {

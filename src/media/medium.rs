@@ -2,7 +2,7 @@
 //! medium stores what it needs: a homogeneous medium no grid, a density grid one float
 //! channel, an `rgbgrid` three.
 
-use glam::{Affine3A, UVec3, Vec3};
+use glam::{Affine3A, UVec3, Vec3, Vec4};
 
 use super::cloud::Cloud;
 use super::dense::DenseGrid;
@@ -130,9 +130,11 @@ pub struct GridMedium {
     pub majorant: MajorantGrid,
 }
 
-/// Per-voxel RGB coefficients (pbrt-v4's `rgbgrid`). For RGB transport the voxels hold
-/// film RGB; for spectral transport they hold the scene's RGB, and each lookup turns the eight
-/// voxels around the point into spectra before interpolating, as pbrt-v4 does.
+/// Per-voxel RGB coefficients (pbrt-v4's `rgbgrid`). Each voxel's spectrum is four floats:
+/// for RGB transport its film RGB (and a spare lane), for spectral transport the sigmoid
+/// polynomial and scale of its RGB spectrum, fitted once at build time, so a lookup evaluates
+/// the eight voxels around the point at the path's wavelengths and interpolates, as pbrt-v4's
+/// `SampledGrid` of RGB spectra does.
 #[derive(Clone, Debug)]
 pub struct RgbGridMedium {
     /// Medium-from-world transform.
@@ -140,11 +142,11 @@ pub struct RgbGridMedium {
     /// The box the grids cover.
     pub bounds: Bounds3,
     /// σa per voxel (scale applied), or 1 everywhere when absent.
-    pub sigma_a: Option<DenseGrid<Vec3>>,
+    pub sigma_a: Option<DenseGrid<Vec4>>,
     /// σs per voxel (scale applied), or 1 everywhere when absent.
-    pub sigma_s: Option<DenseGrid<Vec3>>,
-    /// Le per voxel: film units for RGB transport, illuminant RGB for spectral.
-    pub le: Option<DenseGrid<Vec3>>,
+    pub sigma_s: Option<DenseGrid<Vec4>>,
+    /// Le per voxel (an illuminant spectrum for spectral transport).
+    pub le: Option<DenseGrid<Vec4>>,
     /// Multiplier on `le`.
     pub le_scale: f32,
     /// Color space of the voxels' RGB.
@@ -271,32 +273,30 @@ impl Medium {
         }
     }
 
-    /// An `rgbgrid` medium; builds its 16³ majorant grid from `voxel_max`, the largest value
-    /// over the channels of a voxel's coefficient (the largest RGB component, or for spectral
-    /// transport the maximum of the voxel's spectrum, which can exceed it).
+    /// An `rgbgrid` medium (voxels packed for the transport, see [`RgbGridMedium`]); builds its
+    /// 16³ majorant grid from `voxel_max`, the largest value over the channels of a voxel's
+    /// coefficient (the largest RGB component, or for spectral transport the maximum of the
+    /// voxel's spectrum, which can exceed it). `chromatic` says whether any voxel's σ is
+    /// colored.
     #[allow(clippy::too_many_arguments)] // mirrors pbrt-v4's RGBGridMedium constructor
     pub fn rgb_grid(
         name: String,
         world_from_medium: Affine3A,
         bounds: Bounds3,
-        sigma_a: Option<DenseGrid<Vec3>>,
-        sigma_s: Option<DenseGrid<Vec3>>,
-        le: Option<DenseGrid<Vec3>>,
+        sigma_a: Option<DenseGrid<Vec4>>,
+        sigma_s: Option<DenseGrid<Vec4>>,
+        le: Option<DenseGrid<Vec4>>,
         le_scale: f32,
         space: ColorSpace,
         g: f32,
-        voxel_max: impl Fn(Vec3) -> f32,
+        chromatic: bool,
+        voxel_max: impl Fn(Vec4) -> f32,
     ) -> Medium {
         let majorant = MajorantGrid::new(bounds, UVec3::splat(16), |lo, hi| {
             sigma_a.as_ref().map_or(1.0, |s| s.max_value_by(lo, hi, &voxel_max))
                 + sigma_s.as_ref().map_or(1.0, |s| s.max_value_by(lo, hi, &voxel_max))
         });
         let emissive = le.is_some();
-        // Gray voxels are constant spectra too: only colored ones need spectral MIS.
-        let colored = |g: &Option<DenseGrid<Vec3>>| {
-            g.as_ref().is_some_and(|g| g.values().iter().any(|v| v.x != v.y || v.y != v.z))
-        };
-        let chromatic = colored(&sigma_a) || colored(&sigma_s);
         Medium {
             name,
             kind: MediumKind::RgbGrid(Box::new(RgbGridMedium {
@@ -330,7 +330,7 @@ impl Medium {
                 g.density.memory_bytes() + g.majorant.memory_bytes() + e
             }
             MediumKind::RgbGrid(g) => {
-                let s = |x: &Option<DenseGrid<Vec3>>| x.as_ref().map_or(0, |g| g.memory_bytes());
+                let s = |x: &Option<DenseGrid<Vec4>>| x.as_ref().map_or(0, |g| g.memory_bytes());
                 s(&g.sigma_a) + s(&g.sigma_s) + s(&g.le) + g.majorant.memory_bytes()
             }
         }
@@ -397,12 +397,14 @@ impl Medium {
             MediumKind::RgbGrid(g) => {
                 let pm = g.medium_from_world.transform_point3(p);
                 let pu = (pm - g.bounds.min) / (g.bounds.max - g.bounds.min);
-                let coefficient = |grid: &Option<DenseGrid<Vec3>>| match grid {
-                    Some(s) => s.lookup_map(pu, |v| C::from_rgb(v, RgbRole::Unbounded, g.space, lambda)),
+                let coefficient = |grid: &Option<DenseGrid<Vec4>>| match grid {
+                    Some(s) => s.lookup_map(pu, |v| C::from_voxel(v, RgbRole::Unbounded, g.space, lambda)),
                     None => C::ONE,
                 };
                 let le = match &g.le {
-                    Some(l) => l.lookup_map(pu, |v| C::from_rgb(v, RgbRole::Illuminant, g.space, lambda)) * g.le_scale,
+                    Some(l) => {
+                        l.lookup_map(pu, |v| C::from_voxel(v, RgbRole::Illuminant, g.space, lambda)) * g.le_scale
+                    }
                     None => C::ZERO,
                 };
                 MediumPoint { sigma_a: coefficient(&g.sigma_a), sigma_s: coefficient(&g.sigma_s), le }

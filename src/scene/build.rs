@@ -7,7 +7,7 @@ use std::path::Path;
 use std::sync::Arc;
 use std::time::Instant;
 
-use glam::{Affine3A, DMat4, Vec2, Vec3};
+use glam::{Affine3A, DMat4, Vec2, Vec3, Vec4};
 use nimbus_parser::{
     AnimatedTransform, ColorSpace, Error, FileLoc, MaterialRef, SceneDescription, ShapeEntity, TextureValue, Warning,
 };
@@ -26,7 +26,7 @@ use super::transport::{SpectralMode, Transport, TransportChoice};
 use super::values::{FloatInput, SpectrumInput, SpectrumSpec};
 use crate::accel::{Accel, Geometry, Instance, NONE, Primitive, ShapeStore, Surfaces};
 use crate::camera::Camera;
-use crate::color::Rgb;
+use crate::color::{Rgb, pack_voxel};
 use crate::film::filter::Filter;
 use crate::geometry::Bounds3;
 use crate::geometry::ply::read_ply;
@@ -38,6 +38,7 @@ use crate::media::dense::DenseGrid;
 use crate::media::grid::VdbFile;
 use crate::media::{Density, Emission, Field, Medium};
 use crate::shapes::{Cylinder, Disk, Mesh, Sphere, uniform_scale};
+use crate::spectra::RgbRole;
 use crate::spectra::{BlackbodyRgbTable, PixelSensor, SpectrumValue};
 use crate::textures::{Tex, TexMapping, TexNode, Textures, Wrap};
 
@@ -654,7 +655,6 @@ fn build_medium(
 ) -> Result<Medium, Error> {
     let e = &m.entity;
     let cs = e.color_space;
-    let film_cs = spectra.film;
     let unbounded = |s: &SpectrumSpec| spectra.unbounded(s, cs).map_err(|x| err(&e.loc, x.to_string()));
     let sigma_a = unbounded(&settings.sigma_a)?.scaled(settings.scale);
     let sigma_s = unbounded(&settings.sigma_s)?.scaled(settings.scale);
@@ -708,32 +708,45 @@ fn build_medium(
         }
         MediumSpec::RgbGrid { n, bounds, sigma_a: ga, sigma_s: gs, le: gl } => {
             let scale = settings.scale;
-            let rgb_grid = |v: &[[f32; 3]], f: &dyn Fn(Rgb) -> Rgb| {
-                DenseGrid::new(glam::UVec3::from(*n), v.iter().map(|c| f(Rgb::from(*c))).collect())
+            // Voxels packed for the transport: film RGB, or the sigmoid polynomial and scale of
+            // the scene's RGB as a spectrum (pbrt-v4's SampledGrid of RGB spectra).
+            let spectral = transport == Transport::Spectral;
+            if spectral {
+                // Built once per color space; first here, not inside the parallel loop below
+                // (whose workers would wait on it instead of building it).
+                crate::spectra::SigmoidTable::get(cs);
+            }
+            let rgb_grid = |v: &[[f32; 3]], f: &(dyn Fn(Rgb) -> Vec4 + Sync)| {
+                use rayon::prelude::*;
+                DenseGrid::new(glam::UVec3::from(*n), v.par_iter().map(|c| f(Rgb::from(*c))).collect())
                     .ok_or_else(|| err(&e.loc, "grid size mismatch"))
             };
-            // RGB transport stores film RGB; spectral transport the scene's RGB, turned into
-            // spectra at lookup (pbrt-v4's SampledGrid of RGB spectra).
-            let spectral = transport == Transport::Spectral;
-            let coefficient = |c: Rgb| if spectral { c * scale } else { spectra.grid_coefficient(c, cs) * scale };
+            let coefficient = |c: Rgb| {
+                let c = if spectral { c } else { spectra.grid_coefficient(c, cs) };
+                pack_voxel(c * scale, RgbRole::Unbounded, cs, spectral)
+            };
+            let emitted = |c: Rgb| {
+                let c = if spectral { c } else { spectra.emitted_texel(c, cs) };
+                pack_voxel(c, RgbRole::Illuminant, cs, spectral)
+            };
+            let chromatic =
+                [ga, gs].iter().filter_map(|g| g.as_ref()).any(|g| g.iter().any(|c| c[0] != c[1] || c[1] != c[2]));
             let sa = ga.map(|v| rgb_grid(v, &coefficient)).transpose()?;
             let ss = gs.map(|v| rgb_grid(v, &coefficient)).transpose()?;
-            let le_grid =
-                gl.map(|v| rgb_grid(v, &|c| if spectral { c } else { spectra.emitted_texel(c, cs) })).transpose()?;
+            let le_grid = gl.map(|v| rgb_grid(v, &emitted)).transpose()?;
             let b = Bounds3::new(Vec3::from(bounds[0]), Vec3::from(bounds[1]));
             // pbrt-v4 does not normalise rgbgrid emission: an RGB illuminant spectrum whose film
             // RGB is ∫ȳ times the voxel's.
             let le_scale = settings.le_scale * crate::spectra::CIE_Y_INTEGRAL as f32;
-            let space = if spectral { cs } else { film_cs };
             // A voxel's largest value over the channels: of its spectrum for spectral transport.
-            let voxel_max = |v: Vec3| {
+            let voxel_max = |v: Vec4| {
                 if spectral {
-                    crate::color::rgb_spectrum(v, crate::spectra::RgbRole::Unbounded, cs).max_value()
+                    crate::spectra::SigmoidPolynomial { c0: v.x, c1: v.y, c2: v.z }.max_value() * v.w
                 } else {
-                    v.max_element()
+                    v.truncate().max_element()
                 }
             };
-            Medium::rgb_grid(m.name.clone(), world, b, sa, ss, le_grid, le_scale, space, g, voxel_max)
+            Medium::rgb_grid(m.name.clone(), world, b, sa, ss, le_grid, le_scale, cs, g, chromatic, voxel_max)
         }
         MediumSpec::Vdb { openvdb, filename, grid_name, temperature_name, temperature } => {
             let loc = e.params.loc("filename").unwrap_or(&e.loc);

@@ -245,15 +245,24 @@ mod heterogeneous_tests {
             assert!((mp.sigma_s.x - 0.8 * d).abs() < 1e-5 && (mp.sigma_a.y - 0.4 * d).abs() < 1e-5, "{x},{y},{z}");
         }
         // An rgbgrid returns its per-voxel RGB coefficients.
-        let sa = DenseGrid::new(UVec3::new(2, 1, 1), vec![Vec3::new(0.1, 0.2, 0.3), Vec3::new(0.4, 0.5, 0.6)]).unwrap();
-        let bounds = Bounds3::new(Vec3::ZERO, Vec3::ONE);
+        // Spectrally, each voxel's packed sigmoid spectrum is evaluated at the wavelengths.
         let space = nimbus_parser::ColorSpace::Srgb;
-        let rgb =
-            Medium::rgb_grid("r".into(), Affine3A::IDENTITY, bounds, Some(sa), None, None, 1.0, space, 0.0, |v| {
-                v.max_element()
-            });
-        let mp = rgb.sample_point::<Rgb>(Vec3::new(0.75, 0.5, 0.5), &());
-        assert!((mp.sigma_a - Vec3::new(0.4, 0.5, 0.6)).abs().max_element() < 1e-6);
+        let (c0, c1) = (Vec3::new(0.1, 0.2, 0.3), Vec3::new(0.4, 0.5, 0.6));
+        let grid = |spectral| {
+            let v = [c0, c1].map(|c| crate::color::pack_voxel(c, crate::spectra::RgbRole::Unbounded, space, spectral));
+            let sa = DenseGrid::new(UVec3::new(2, 1, 1), v.to_vec()).unwrap();
+            let bounds = Bounds3::new(Vec3::ZERO, Vec3::ONE);
+            Medium::rgb_grid("r".into(), Affine3A::IDENTITY, bounds, Some(sa), None, None, 1.0, space, 0.0, true, |v| {
+                v.truncate().max_element()
+            })
+        };
+        let p = Vec3::new(0.75, 0.5, 0.5);
+        let mp = grid(false).sample_point::<Rgb>(p, &());
+        assert!((mp.sigma_a - c1).abs().max_element() < 1e-6);
         assert_eq!(mp.sigma_s, Rgb::ONE);
+        let lambda = crate::spectra::SampledWavelengths::sample_visible(0.3);
+        let mp = grid(true).sample_point::<crate::spectra::SampledSpectrum>(p, &lambda);
+        let want = crate::color::rgb_spectrum(c1, crate::spectra::RgbRole::Unbounded, space).sample(&lambda);
+        assert!((mp.sigma_a - want).abs().max_element() < 1e-6, "{} vs {want}", mp.sigma_a);
     }
 }

@@ -200,9 +200,11 @@ mod tests {
     use crate::color::average;
     use crate::scene::{BuildOptions, build_scene};
 
+    /// The scene built for RGB transport (these tests trace RGB channels).
     fn scene(text: &str) -> Scene {
         let desc = nimbus_parser::load_str(text, "intersection.pbrt").unwrap_or_else(|e| panic!("{e}"));
-        build_scene(&desc, &BuildOptions::default()).unwrap_or_else(|e| panic!("{e}"))
+        let opts = BuildOptions { spectral: Some(crate::scene::transport::SpectralMode::Off), ..Default::default() };
+        build_scene(&desc, &opts).unwrap_or_else(|e| panic!("{e}"))
     }
 
     /// The cube [-1, 1]³ bounding medium "m".

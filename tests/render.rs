@@ -249,3 +249,23 @@ Shape "trianglemesh" "integer indices" [0 1 2 0 2 3] "point3 P" [-5 -1 -5  5 -1 
     let sd = (diff.iter().map(|d| (d - md) * (d - md)).sum::<f64>() / (n - 1.0) / n).sqrt();
     assert!(md.abs() < 4.0 * sd + 1e-4, "difference {md} ± {sd}");
 }
+
+/// An unknown camera sensor is an error at its parameter, listing pbrt-v4's sensors; a known
+/// one sets the imaging ratio from ISO and the shutter interval.
+#[test]
+fn film_sensors_are_read_with_their_parameters() {
+    let film = |params: &str| {
+        format!(
+            "Camera \"perspective\" \"float shutterclose\" 0.5\nFilm \"rgb\" {params}\nWorldBegin\nShape \"sphere\""
+        )
+    };
+    let desc = nimbus::parser::load_str(&film(r#""string sensor" "leica_m11""#), "s.pbrt").unwrap();
+    let e = build_scene(&desc, &BuildOptions::default()).err().expect("an unknown sensor is refused").to_string();
+    assert!(
+        e.starts_with("s.pbrt:2:12:") && e.contains("unknown sensor \"leica_m11\"") && e.contains("nikon_d850"),
+        "{e}"
+    );
+    let s = scene(&film(r#""string sensor" "nikon_d850" "float iso" 400"#), &BuildOptions::default());
+    assert_eq!(s.sensor.name(), "nikon_d850");
+    assert_eq!(s.sensor.imaging_ratio(), 2.0);
+}

@@ -93,12 +93,12 @@ impl FilmSettings {
         let iso = checked_float(p, "iso", 100.0, |v| v > 0.0, "ISO must be positive")?;
         let white_balance = checked_float(p, "whitebalance", 0.0, |v| v >= 0.0, "must not be negative")?;
         let sensor = p.get_one_string("sensor", "cie1931")?.to_string();
-        if sensor != "cie1931" && !crate::spectra::CAMERA_SENSORS.contains(&sensor.as_str()) {
+        if sensor != "cie1931" && !crate::spectra::camera_sensors().any(|c| c == sensor) {
             return Err(Error::new(
                 p.loc("sensor").unwrap_or(&e.loc),
                 format!(
                     "unknown sensor \"{sensor}\" (pbrt-v4's sensors: cie1931, {})",
-                    crate::spectra::CAMERA_SENSORS.join(", ")
+                    crate::spectra::camera_sensors().collect::<Vec<_>>().join(", ")
                 ),
             ));
         }

@@ -39,7 +39,7 @@ pub use piecewise::PiecewiseLinearSpectrum;
 pub use sampled::{
     N_SPECTRUM_SAMPLES, SampledSpectrum, SampledWavelengths, sample_visible_wavelength, visible_wavelength_pdf,
 };
-pub use sensor::{CAMERA_SENSORS, PixelSensor, daylight_spectrum, white_balance};
+pub use sensor::{PixelSensor, camera_sensors, daylight_spectrum, white_balance};
 pub use sigmoid::{SigmoidPolynomial, SigmoidTable, fit_sigmoid};
 pub use spectrum::{ResolvedSpectrum, Spectrum, resolve, resolve_spectral};
 pub use value::{DenseSpectrum, RgbRole, Sampled, SpectrumValue, illuminant_table};

@@ -23,27 +23,6 @@ use super::sampled::SampledWavelengths;
 /// Integer wavelengths pbrt-v4's sensors are tabulated at (360–830 nm).
 const N: usize = 471;
 
-/// The camera sensors pbrt-v4 knows besides `cie1931`.
-pub const CAMERA_SENSORS: [&str; 17] = [
-    "canon_eos_100d",
-    "canon_eos_1dx_mkii",
-    "canon_eos_200d",
-    "canon_eos_200d_mkii",
-    "canon_eos_5d",
-    "canon_eos_5d_mkii",
-    "canon_eos_5d_mkiii",
-    "canon_eos_5d_mkiv",
-    "canon_eos_5ds",
-    "canon_eos_m",
-    "hasselblad_l1d_20c",
-    "nikon_d810",
-    "nikon_d850",
-    "sony_ilce_6400",
-    "sony_ilce_7m3",
-    "sony_ilce_7rm3",
-    "sony_ilce_9",
-];
-
 macro_rules! curves {
     ($($name:literal),* $(,)?) => {
         &[$(($name, [
@@ -54,6 +33,7 @@ macro_rules! curves {
     };
 }
 
+/// The camera sensors pbrt-v4 knows besides `cie1931`, with their curves' data files.
 const CURVE_DATA: &[(&str, [&str; 3])] = curves![
     "canon_eos_100d",
     "canon_eos_1dx_mkii",
@@ -73,6 +53,11 @@ const CURVE_DATA: &[(&str, [&str; 3])] = curves![
     "sony_ilce_7rm3",
     "sony_ilce_9",
 ];
+
+/// The names of the camera sensors pbrt-v4 knows besides `cie1931`.
+pub fn camera_sensors() -> impl Iterator<Item = &'static str> {
+    CURVE_DATA.iter().map(|(name, _)| *name)
+}
 
 /// A response curve tabulated at every integer wavelength (pbrt-v4's `DenselySampledSpectrum`,
 /// which a sample at λ reads at the nearest integer).
@@ -195,7 +180,7 @@ pub struct PixelSensor {
 
 impl PixelSensor {
     /// pbrt-v4's `PixelSensor::Create`: sensor `name` (`cie1931` or one of
-    /// [`CAMERA_SENSORS`]), white balance temperature `white_balance` K (0: none for
+    /// [`camera_sensors`]), white balance temperature `white_balance` K (0: none for
     /// `cie1931`, 6500 K for cameras), `iso` and exposure time, for output space `output`.
     pub fn new(
         name: &str,
@@ -230,7 +215,10 @@ impl PixelSensor {
             });
         }
         let [r, g, b] = camera_curves(name).ok_or_else(|| {
-            format!("unknown sensor \"{name}\" (pbrt-v4's sensors: cie1931, {})", CAMERA_SENSORS.join(", "))
+            format!(
+                "unknown sensor \"{name}\" (pbrt-v4's sensors: cie1931, {})",
+                camera_sensors().collect::<Vec<_>>().join(", ")
+            )
         })?;
         let curves = [dense(|l| r.eval(l)), dense(|l| g.eval(l)), dense(|l| b.eval(l))];
         let at = |c: &Dense, l: f64| f64::from(c[(l - LAMBDA_MIN) as usize]);
@@ -362,7 +350,8 @@ mod tests {
 
     #[test]
     fn every_sensor_builds_and_unknown_names_are_refused() {
-        for name in CAMERA_SENSORS {
+        assert_eq!(camera_sensors().count(), 17);
+        for name in camera_sensors() {
             let s = PixelSensor::new(name, 0.0, 100.0, 1.0, ColorSpace::Srgb).unwrap();
             assert!(s.xyz_from_sensor_rgb().determinant().abs() > 0.0, "{name}");
             assert!(!s.is_passthrough());

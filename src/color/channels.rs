@@ -71,6 +71,17 @@ pub trait Channels:
     /// scale.
     fn from_voxel(v: glam::Vec4, role: RgbRole, space: ColorSpace, lambda: &Self::Lambda) -> Self;
 
+    /// The key under which voxel values converted by [`Channels::from_voxel`] may be
+    /// memoised (the path's wavelengths as four lanes), or `None` where a conversion is just a
+    /// load and memoising it would cost more than it saves.
+    fn voxel_memo_key(lambda: &Self::Lambda) -> Option<glam::Vec4>;
+
+    /// The channels in four lanes (the last ones zero), for memoised values.
+    fn to_lanes(self) -> glam::Vec4;
+
+    /// The inverse of [`Channels::to_lanes`].
+    fn from_lanes(v: glam::Vec4) -> Self;
+
     /// A real index of refraction from the scene spectrum `eta`: the spectrum's value for RGB
     /// (pbrt-v3 style, read once at 550 nm), the first wavelength's value for sampled spectra,
     /// which then drop their other wavelengths if η varies (dispersion; pbrt-v4's
@@ -163,6 +174,21 @@ impl Channels for Rgb {
 
     #[inline]
     fn from_voxel(v: glam::Vec4, _role: RgbRole, _space: ColorSpace, _lambda: &()) -> Rgb {
+        v.truncate()
+    }
+
+    #[inline]
+    fn voxel_memo_key(_lambda: &()) -> Option<glam::Vec4> {
+        None
+    }
+
+    #[inline]
+    fn to_lanes(self) -> glam::Vec4 {
+        self.extend(0.0)
+    }
+
+    #[inline]
+    fn from_lanes(v: glam::Vec4) -> Rgb {
         v.truncate()
     }
 
@@ -272,6 +298,23 @@ impl Channels for SampledSpectrum {
             RgbRole::Illuminant => s * illuminant_table(space).sample(lambda.lambda) * (1.0 / CIE_Y_INTEGRAL as f32),
             _ => s,
         }
+    }
+
+    /// A voxel's value depends on the wavelengths only (not on their densities, which change
+    /// when secondary wavelengths terminate).
+    #[inline]
+    fn voxel_memo_key(lambda: &SampledWavelengths) -> Option<glam::Vec4> {
+        Some(lambda.lambda)
+    }
+
+    #[inline]
+    fn to_lanes(self) -> glam::Vec4 {
+        self
+    }
+
+    #[inline]
+    fn from_lanes(v: glam::Vec4) -> SampledSpectrum {
+        v
     }
 
     #[inline]

@@ -2,7 +2,7 @@
 //! `rgbgrid` data: sample (i, j, k) sits at ((i + ½)/nx, (j + ½)/ny, (k + ½)/nz), lookups
 //! interpolate trilinearly and are zero outside the samples.
 
-use glam::{UVec3, Vec3};
+use glam::{IVec3, UVec3, Vec3};
 
 /// A dense grid of `T` values, x fastest.
 #[derive(Clone, Debug, PartialEq)]
@@ -66,6 +66,26 @@ impl<T: GridValue> DenseGrid<T> {
         self.values[(z as usize * self.n.y as usize + y as usize) * self.n.x as usize + x as usize]
     }
 
+    /// The cell of samples around `p` ∈ [0, 1]³: the index of its lowest corner and `p`'s
+    /// position inside it (the trilinear weights).
+    #[inline]
+    pub fn cell(&self, p: Vec3) -> (IVec3, Vec3) {
+        let ps = p * self.n.as_vec3() - Vec3::splat(0.5);
+        let pf = ps.floor();
+        (pf.as_ivec3(), ps - pf)
+    }
+
+    /// The eight samples of the cell whose lowest corner is `c` (zero outside), mapped by `f`,
+    /// x fastest, then y, then z.
+    #[inline]
+    pub fn corners<U>(&self, c: IVec3, f: impl Fn(T) -> U) -> [U; 8] {
+        std::array::from_fn(|i| {
+            let o = IVec3::new((i & 1) as i32, ((i >> 1) & 1) as i32, (i >> 2) as i32);
+            let q = c + o;
+            f(self.at(q.x, q.y, q.z))
+        })
+    }
+
     /// Trilinear interpolation at `p` in [0, 1]³ of the samples mapped by `f` (zero outside):
     /// pbrt-v4's `SampledGrid::Lookup` with a conversion, which interpolates the converted
     /// values (e.g. sampled spectra of RGB voxels), not the raw samples.
@@ -74,17 +94,8 @@ impl<T: GridValue> DenseGrid<T> {
     where
         U: Copy + std::ops::Add<Output = U> + std::ops::Mul<f32, Output = U>,
     {
-        let ps = p * self.n.as_vec3() - Vec3::splat(0.5);
-        let pf = ps.floor();
-        let d = ps - pf;
-        let (x, y, z) = (pf.x as i32, pf.y as i32, pf.z as i32);
-        let at = |x, y, z| f(self.at(x, y, z));
-        let lerp = |t: f32, a: U, b: U| a * (1.0 - t) + b * t;
-        let d00 = lerp(d.x, at(x, y, z), at(x + 1, y, z));
-        let d10 = lerp(d.x, at(x, y + 1, z), at(x + 1, y + 1, z));
-        let d01 = lerp(d.x, at(x, y, z + 1), at(x + 1, y, z + 1));
-        let d11 = lerp(d.x, at(x, y + 1, z + 1), at(x + 1, y + 1, z + 1));
-        lerp(d.z, lerp(d.y, d00, d10), lerp(d.y, d01, d11))
+        let (c, d) = self.cell(p);
+        trilinear(&self.corners(c, f), d)
     }
 
     /// Trilinear interpolation at `p` in [0, 1]³.
@@ -127,6 +138,20 @@ impl<T: GridValue> DenseGrid<T> {
         }
         if m == f32::NEG_INFINITY { 0.0 } else { m }
     }
+}
+
+/// Trilinear interpolation of a cell's corners ([`DenseGrid::corners`] order) at `d` ∈ [0, 1]³.
+#[inline]
+pub fn trilinear<U>(v: &[U; 8], d: Vec3) -> U
+where
+    U: Copy + std::ops::Add<Output = U> + std::ops::Mul<f32, Output = U>,
+{
+    let lerp = |t: f32, a: U, b: U| a * (1.0 - t) + b * t;
+    let d00 = lerp(d.x, v[0], v[1]);
+    let d10 = lerp(d.x, v[2], v[3]);
+    let d01 = lerp(d.x, v[4], v[5]);
+    let d11 = lerp(d.x, v[6], v[7]);
+    lerp(d.z, lerp(d.y, d00, d10), lerp(d.y, d01, d11))
 }
 
 #[cfg(test)]

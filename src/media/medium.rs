@@ -8,11 +8,12 @@ use super::cloud::Cloud;
 use super::dense::DenseGrid;
 use super::grid::SparseGrid;
 use super::majorant::{DdaIterator, MajorantGrid, Segment};
+use super::rgbgrid::RgbGridMedium;
 use nimbus_parser::ColorSpace;
 
 use crate::color::{Channels, Rgb};
 use crate::geometry::{Bounds3, Ray};
-use crate::spectra::{BlackbodyRgbTable, RgbRole, SpectrumValue};
+use crate::spectra::{BlackbodyRgbTable, SpectrumValue};
 
 /// Scattering properties at a point, in the path's channels.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -127,31 +128,6 @@ pub struct GridMedium {
     /// Emission.
     pub emission: Emission,
     /// Majorant grid over `bounds`.
-    pub majorant: MajorantGrid,
-}
-
-/// Per-voxel RGB coefficients (pbrt-v4's `rgbgrid`). Each voxel's spectrum is four floats:
-/// for RGB transport its film RGB (and a spare lane), for spectral transport the sigmoid
-/// polynomial and scale of its RGB spectrum, fitted once at build time, so a lookup evaluates
-/// the eight voxels around the point at the path's wavelengths and interpolates, as pbrt-v4's
-/// `SampledGrid` of RGB spectra does.
-#[derive(Clone, Debug)]
-pub struct RgbGridMedium {
-    /// Medium-from-world transform.
-    pub medium_from_world: Affine3A,
-    /// The box the grids cover.
-    pub bounds: Bounds3,
-    /// σa per voxel (scale applied), or 1 everywhere when absent.
-    pub sigma_a: Option<DenseGrid<Vec4>>,
-    /// σs per voxel (scale applied), or 1 everywhere when absent.
-    pub sigma_s: Option<DenseGrid<Vec4>>,
-    /// Le per voxel (an illuminant spectrum for spectral transport).
-    pub le: Option<DenseGrid<Vec4>>,
-    /// Multiplier on `le`.
-    pub le_scale: f32,
-    /// Color space of the voxels' RGB.
-    pub space: ColorSpace,
-    /// Majorant grid (of max σt over channels).
     pub majorant: MajorantGrid,
 }
 
@@ -308,6 +284,7 @@ impl Medium {
                 le_scale,
                 space,
                 majorant,
+                id: super::rgbgrid::new_id(),
             })),
             g,
             chromatic,
@@ -394,21 +371,7 @@ impl Medium {
                 };
                 MediumPoint { sigma_a: C::eval(&g.sigma_a, lambda) * d, sigma_s: C::eval(&g.sigma_s, lambda) * d, le }
             }
-            MediumKind::RgbGrid(g) => {
-                let pm = g.medium_from_world.transform_point3(p);
-                let pu = (pm - g.bounds.min) / (g.bounds.max - g.bounds.min);
-                let coefficient = |grid: &Option<DenseGrid<Vec4>>| match grid {
-                    Some(s) => s.lookup_map(pu, |v| C::from_voxel(v, RgbRole::Unbounded, g.space, lambda)),
-                    None => C::ONE,
-                };
-                let le = match &g.le {
-                    Some(l) => {
-                        l.lookup_map(pu, |v| C::from_voxel(v, RgbRole::Illuminant, g.space, lambda)) * g.le_scale
-                    }
-                    None => C::ZERO,
-                };
-                MediumPoint { sigma_a: coefficient(&g.sigma_a), sigma_s: coefficient(&g.sigma_s), le }
-            }
+            MediumKind::RgbGrid(g) => g.sample_point(p, lambda),
         }
     }
 

@@ -7,5 +7,7 @@ pub mod grid;
 pub mod majorant;
 mod medium;
 pub mod phase;
+mod rgbgrid;
 
-pub use medium::{Density, Emission, Field, GridMedium, Medium, MediumKind, MediumPoint, RgbGridMedium, Segments};
+pub use medium::{Density, Emission, Field, GridMedium, Medium, MediumKind, MediumPoint, Segments};
+pub use rgbgrid::RgbGridMedium;

@@ -155,7 +155,9 @@ mod tests {
         std::fs::create_dir_all(&dir).unwrap();
         let path = dir.join("tri.gltf");
         std::fs::write(&path, json).unwrap();
-        let meshes = read_gltf(&path).unwrap();
+        let meshes = read_gltf(&path);
+        std::fs::remove_dir_all(&dir).unwrap();
+        let meshes = meshes.unwrap();
         assert_eq!(meshes[0].positions[1], [1.0, 0.0, 2.0]);
         assert_eq!(meshes[0].indices, vec![0, 1, 2]);
     }

@@ -1,6 +1,6 @@
 //! Helpers shared by the end-to-end tests.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 use nimbus::imageio::Image;
@@ -26,12 +26,35 @@ pub fn nimbus(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_nimbus")).args(args).output().expect("nimbus runs")
 }
 
+/// A test's scratch directory, removed with everything in it when the test ends (also when
+/// it fails).
+pub struct Scratch(PathBuf);
+
+impl std::ops::Deref for Scratch {
+    type Target = Path;
+    fn deref(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl AsRef<Path> for Scratch {
+    fn as_ref(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
 /// A fresh directory for one test's files.
-pub fn scratch_dir(test: &str) -> PathBuf {
+pub fn scratch_dir(test: &str) -> Scratch {
     let dir = std::env::temp_dir().join(format!("nimbus-test-{}-{test}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
-    dir
+    Scratch(dir)
 }
 
 /// A cube [-1, 1]³ bounding medium `name` through an `interface` surface, in its own attribute

@@ -280,6 +280,7 @@ mod tests {
             let svg = std::fs::read_to_string(dir.join(base).with_extension("svg")).unwrap();
             assert!(svg.contains("othermethod"), "{base}");
         }
+        std::fs::remove_dir_all(&dir).unwrap();
         assert_eq!(short(0.25), "0.25");
         assert_eq!(short(3.0), "3");
         assert_eq!(short(120.0), "120");

@@ -194,3 +194,19 @@ fn relative_paths_resolve_from_the_scene_directory() {
     assert!(stderr.contains(&format!("(tried {})", tried.display())), "{stderr}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// The radiance-graph thesis's scenes name their VolPath reference `volpathcustom`.
+#[test]
+fn volpathcustom_is_volpath() {
+    let dir = scratch_dir("volpathcustom");
+    let scene = dir.join("s.pbrt");
+    std::fs::write(
+        &scene,
+        "Integrator \"volpathcustom\" \"integer maxdepth\" 10\nWorldBegin\nLightSource \"distant\"\n",
+    )
+    .unwrap();
+    let out = nimbus(&["check", scene.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains("integrator  volpath (as \"volpathcustom\") maxdepth 10"), "{stdout}");
+}

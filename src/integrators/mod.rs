@@ -2,6 +2,7 @@
 //! scenes and `--integrator` use to settings readers and implementations.
 
 pub mod common;
+pub mod radiancegraph;
 pub mod simplevolpath;
 pub mod volpath;
 
@@ -23,6 +24,16 @@ pub enum IntegratorSettings {
     SimpleVolPath(simplevolpath::SimpleVolPathSettings),
 }
 
+/// The integrator a scene's name stands for: the radiance-graph thesis's scenes name their
+/// VolPath reference `volpathcustom` (pbrt-v4's volpath with the thesis's analysis hooks and
+/// the same parameters).
+pub fn canonical_name(name: &str) -> &str {
+    match name {
+        "volpathcustom" => "volpath",
+        other => other,
+    }
+}
+
 /// Names of the integrators nimbus has.
 pub const INTEGRATOR_NAMES: &[&str] = &["volpath", "simplevolpath"];
 
@@ -30,7 +41,7 @@ impl IntegratorSettings {
     /// Reads the integrator entity; `name_override` replaces the scene's choice (the
     /// parameters that method shares with the scene's, such as `maxdepth`, are kept).
     pub fn from_entity(e: &Entity, name_override: Option<&str>) -> Result<IntegratorSettings, Error> {
-        match name_override.unwrap_or(&e.name) {
+        match canonical_name(name_override.unwrap_or(&e.name)) {
             "volpath" => Ok(IntegratorSettings::VolPath(volpath::VolPathSettings::from_entity(e)?)),
             "simplevolpath" => {
                 Ok(IntegratorSettings::SimpleVolPath(simplevolpath::SimpleVolPathSettings::from_entity(e)?))

@@ -220,7 +220,10 @@ pub fn check_scene(scene: &SceneDescription) -> Result<SceneCheck, Error> {
         filename: film.filename,
         sampler: scene.sampler.name.clone(),
         spp: sampler.pixel_samples,
-        integrator: scene.integrator.name.clone(),
+        integrator: match crate::integrators::canonical_name(&scene.integrator.name) {
+            name if name == scene.integrator.name => name.to_string(),
+            name => format!("{name} (as \"{}\")", scene.integrator.name),
+        },
         integrator_params: scene.integrator.params.iter().map(describe_param).collect(),
         shapes,
         triangles,

@@ -191,7 +191,7 @@ fn difference_image_is_green_where_brighter_and_red_where_darker() {
 fn pass_checkpoints_cost_no_extra_rendering() {
     let desc = nimbus::parser::load_str(TINY, "tiny.pbrt").unwrap();
     let scene = build_scene(&desc, &BuildOptions { spp: Some(8), ..Default::default() }).unwrap();
-    let integrator = scene.integrator.create(&scene);
+    let integrator = scene.integrator.create(&scene).unwrap();
     let options = RenderOptions { time_budget: None, quiet: true };
     let plain = render(&scene, integrator.as_ref(), &options);
     let mut passes = Vec::new();

@@ -299,7 +299,7 @@ LightSource "infinite" "rgb L" [1 1 1]"#;
         other => panic!("{other:?}"),
     }
     assert!(nimbus::integrators::INTEGRATOR_NAMES.contains(&"simplevolpath"));
-    assert_eq!(s.integrator.create(&s).name(), "simplevolpath");
+    assert_eq!(s.integrator.create(&s).unwrap().name(), "simplevolpath");
     let bad = text.replace(r#""volpath" "integer maxdepth" 7"#, r#""simplevolpath" "float envfraction" -1"#);
     let desc = nimbus::parser::load_str(&bad, "t.pbrt").unwrap();
     let e = build_scene(&desc, &BuildOptions::default()).err().expect("a negative weight is an error");

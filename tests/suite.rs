@@ -47,7 +47,7 @@ fn every_scene_matches_its_reference() {
                     ..Default::default()
                 };
                 let scene = build_scene(&desc, &opts).unwrap_or_else(|e| panic!("{name}/{integrator}: {e}"));
-                let i = scene.integrator.create(&scene);
+                let i = scene.integrator.create(&scene).unwrap();
                 render(&scene, i.as_ref(), &RenderOptions { time_budget: None, quiet: true }).image
             };
             let (a, b) = (render_seed(101), render_seed(202));

@@ -5,6 +5,7 @@ mod check;
 mod common;
 mod compare;
 mod media;
+mod radiancegraph;
 mod render;
 mod render_cli;
 mod simplevolpath;

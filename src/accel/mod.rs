@@ -147,6 +147,11 @@ impl Accel {
         self.bounds
     }
 
+    /// The primitives, in BVH leaf order.
+    pub fn primitives(&self) -> &[Primitive] {
+        &self.prims
+    }
+
     fn closest(&self, scene: &Surfaces, ray: &Ray, t_max: f32, instance: u32, best: &mut Option<Candidate>) {
         let bvh_ray = bvh_ray(ray, t_max);
         let mut hit = RayHit::none();

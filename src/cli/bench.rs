@@ -98,7 +98,7 @@ fn run_once(path: &Path, opts: &BuildOptions) -> Result<(f64, nimbus::imageio::I
     let t = Instant::now();
     let desc = nimbus::parser::load_file(path).map_err(|e| e.to_string())?;
     let scene = build_scene(&desc, opts).map_err(|e| e.to_string())?;
-    let integrator = scene.integrator.create(&scene);
+    let integrator = scene.integrator.create(&scene)?;
     let r = nimbus::render::render(
         &scene,
         integrator.as_ref(),

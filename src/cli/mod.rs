@@ -5,6 +5,7 @@ mod check;
 mod compare;
 mod convert;
 mod diff;
+mod graph;
 mod parity;
 mod render;
 
@@ -35,6 +36,8 @@ enum Command {
     Compare(compare::CompareArgs),
     /// Compare an image with a reference: MSE, relMSE, MAE, MPE/MNE, means, error image.
     Diff(diff::DiffArgs),
+    /// The radiance-graph method's precomputation: `graph build` (the thesis's graph_maker).
+    Graph(graph::GraphArgs),
     /// Judge two renders (different seeds) against a reference as the pbrt-v4 parity suite
     /// does: relative mean difference and block-noise excess.
     Parity(parity::ParityArgs),
@@ -52,6 +55,7 @@ pub fn run() -> ExitCode {
         Command::Compare(args) => compare::run(&args),
         Command::Convert(args) => convert::run(&args),
         Command::Bench(args) => bench::run(&args),
+        Command::Graph(args) => graph::run(&args),
     };
     match result {
         Ok(code) => code,

@@ -43,6 +43,10 @@ pub struct RenderArgs {
     /// Render with this integrator instead of the scene's (drop-in comparison).
     #[arg(long)]
     integrator: Option<String>,
+    /// Graph file for `radiancegraph` (from `nimbus graph build`); without it the graph is
+    /// built first, with the scene's `.json` config if there is one.
+    #[arg(long, value_name = "FILE")]
+    graph_data: Option<PathBuf>,
     /// Render progressively for this many seconds instead of to the scene's spp.
     #[arg(long)]
     time: Option<f64>,
@@ -87,6 +91,8 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
     let t_parsed = Instant::now();
     let opts = BuildOptions {
         integrator: args.integrator.clone(),
+        scene_file: (args.scene.as_os_str() != "-").then(|| args.scene.clone()),
+        graph_data: args.graph_data.clone(),
         spp: args.spp,
         seed: args.seed,
         quick: args.quick,
@@ -114,7 +120,13 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
         return Ok(ExitCode::FAILURE);
     }
     let t_built = Instant::now();
-    let integrator = scene.integrator.create(&scene);
+    let integrator = match scene.integrator.create(&scene) {
+        Ok(i) => i,
+        Err(e) => {
+            eprintln!("{}: error: {e}", args.scene.display());
+            return Ok(ExitCode::FAILURE);
+        }
+    };
     let result = nimbus::render::render(
         &scene,
         integrator.as_ref(),

@@ -22,20 +22,23 @@ pub enum IntegratorSettings {
     VolPath(volpath::VolPathSettings),
     /// `simplevolpath`
     SimpleVolPath(simplevolpath::SimpleVolPathSettings),
+    /// `radiancegraph` (`graph` in the thesis's scenes)
+    RadianceGraph(radiancegraph::RadianceGraphSettings),
 }
 
 /// The integrator a scene's name stands for: the radiance-graph thesis's scenes name their
 /// VolPath reference `volpathcustom` (pbrt-v4's volpath with the thesis's analysis hooks and
-/// the same parameters).
+/// the same parameters) and its method `graph`.
 pub fn canonical_name(name: &str) -> &str {
     match name {
         "volpathcustom" => "volpath",
+        "graph" => "radiancegraph",
         other => other,
     }
 }
 
 /// Names of the integrators nimbus has.
-pub const INTEGRATOR_NAMES: &[&str] = &["volpath", "simplevolpath"];
+pub const INTEGRATOR_NAMES: &[&str] = &["volpath", "simplevolpath", "radiancegraph"];
 
 impl IntegratorSettings {
     /// Reads the integrator entity; `name_override` replaces the scene's choice (the
@@ -46,6 +49,7 @@ impl IntegratorSettings {
             "simplevolpath" => {
                 Ok(IntegratorSettings::SimpleVolPath(simplevolpath::SimpleVolPathSettings::from_entity(e)?))
             }
+            "radiancegraph" => Ok(IntegratorSettings::RadianceGraph(radiancegraph::RadianceGraphSettings::default())),
             other => Err(Error::new(
                 &e.loc,
                 format!("integrator \"{other}\" is not available in nimbus (it has: {})", INTEGRATOR_NAMES.join(", ")),
@@ -58,16 +62,20 @@ impl IntegratorSettings {
         match self {
             IntegratorSettings::VolPath(_) => "volpath",
             IntegratorSettings::SimpleVolPath(_) => "simplevolpath",
+            IntegratorSettings::RadianceGraph(_) => "radiancegraph",
         }
     }
 
     /// Creates the integrator for `scene` (as pbrt-v4's `Integrator::Create` receives the
-    /// scene's lights: methods may build per-scene tables here).
-    pub fn create(&self, scene: &Scene) -> Box<dyn Integrator> {
-        match self {
+    /// scene's lights: methods may build per-scene tables here, and methods that precompute
+    /// do it here: the radiance graph loads or builds its graph). Fails with a message for
+    /// the user when the precomputation cannot run.
+    pub fn create(&self, scene: &Scene) -> Result<Box<dyn Integrator>, String> {
+        Ok(match self {
             IntegratorSettings::VolPath(s) => Box::new(volpath::VolPath::new(s)),
             IntegratorSettings::SimpleVolPath(s) => Box::new(simplevolpath::SimpleVolPath::new(s, scene)),
-        }
+            IntegratorSettings::RadianceGraph(s) => Box::new(radiancegraph::create(s, scene)?),
+        })
     }
 }
 

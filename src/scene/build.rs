@@ -47,6 +47,11 @@ use crate::textures::{Tex, TexMapping, TexNode, Textures, Wrap};
 pub struct BuildOptions {
     /// `--integrator`: render with this method instead of the scene's.
     pub integrator: Option<String>,
+    /// The scene file named on the command line (the radiance graph looks for its `.json`
+    /// config beside it).
+    pub scene_file: Option<std::path::PathBuf>,
+    /// `--graph-data`: a graph file for the radiance-graph method.
+    pub graph_data: Option<std::path::PathBuf>,
     /// `--spp`
     pub spp: Option<u32>,
     /// `--seed`
@@ -832,7 +837,12 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions) -> Result<Scene
         sampler.seed = seed;
     }
     let filter = Filter::new(&FilterSettings::from_entity(&desc.filter)?);
-    let integrator = IntegratorSettings::from_entity(&desc.integrator, opts.integrator.as_deref())?;
+    let mut integrator = IntegratorSettings::from_entity(&desc.integrator, opts.integrator.as_deref())?;
+    if let IntegratorSettings::RadianceGraph(s) = &mut integrator {
+        s.graph_data = opts.graph_data.clone();
+        // graph_maker's default config: the scene's name with `.json`.
+        s.config = opts.scene_file.as_ref().map(|f| f.with_extension("json")).filter(|c| c.exists());
+    }
 
     // The film's sensor (pbrt-v4's imaging ratio: exposure time × ISO / 100).
     let exposure = camera_settings.shutter_close - camera_settings.shutter_open;

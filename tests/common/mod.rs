@@ -102,7 +102,7 @@ pub fn render_with(scene: &nimbus::scene::Scene, integrator: &dyn nimbus::integr
 
 /// Renders `scene` with its own integrator.
 pub fn render_scene(scene: &nimbus::scene::Scene) -> Image {
-    render_with(scene, scene.integrator.create(scene).as_ref())
+    render_with(scene, scene.integrator.create(scene).unwrap().as_ref())
 }
 
 /// Per-channel image mean and its standard error from the pixel spread.

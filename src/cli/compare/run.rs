@@ -157,7 +157,7 @@ impl Reference {
             say(format!("reference: not reusing {}: {}", path.display(), why_not.unwrap_or_default()));
         }
         say(format!("reference: rendering volpath at {spp} spp, seed {seed} -> {}", path.display()));
-        let integrator = scene.integrator.create(&scene);
+        let integrator = scene.integrator.create(&scene).map_err(anyhow::Error::msg)?;
         let result = render(&scene, integrator.as_ref(), &RenderOptions { time_budget: None, quiet });
         let mut image = result.image;
         image.metadata.insert("nimbus:integrator".into(), "volpath".into());
@@ -233,7 +233,7 @@ pub fn run_integrator(s: &RunSetup<'_>) -> Result<Run> {
     };
     let opts = BuildOptions { integrator: Some(s.integrator.into()), spp, seed: Some(s.seed), ..Default::default() };
     let scene = build_scene(s.desc, &opts).map_err(scene_error)?;
-    let integrator = scene.integrator.create(&scene);
+    let integrator = scene.integrator.create(&scene).map_err(anyhow::Error::msg)?;
     let setup_seconds = t0.elapsed().as_secs_f64();
     let (w, h) = film_size(&scene);
     let reference = &s.reference.image;

@@ -3,9 +3,212 @@
 //! and rendering from the nodes' radiance. See this folder's README for the map from the
 //! thesis's sections and equations to files.
 //!
-//! Under construction: the parts here are complete and tested, but the method has no name in
-//! the CLI until graph building and rendering land.
 
+pub mod build;
 pub mod config;
+pub mod file;
+pub mod graph;
+pub mod lighting;
+pub mod render;
 pub mod search_range;
 pub mod transport;
+pub mod volume;
+
+use std::time::Instant;
+
+use config::GraphConfig;
+use render::RadianceCache;
+use volume::Volume;
+
+use crate::scene::Scene;
+
+/// What `Integrator "radiancegraph"` (or the thesis's `"graph"`) renders from.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct RadianceGraphSettings {
+    /// `--graph-data`: a graph built by `nimbus graph build`.
+    pub graph_data: Option<std::path::PathBuf>,
+    /// The config to build with when there is no graph file (the scene's `.json`).
+    pub config: Option<std::path::PathBuf>,
+}
+
+/// The integrator for `scene`: from the graph file, or from a graph built now with the
+/// scene's config (or the defaults), keeping the largest bounce count it asks for.
+pub fn create(settings: &RadianceGraphSettings, scene: &Scene) -> Result<render::RadianceGraphIntegrator, String> {
+    let volume = Volume::new(scene)?;
+    let cache = match &settings.graph_data {
+        Some(path) => {
+            let f = file::GraphFile::read(path, Some(file::scene_hash(&volume)))?;
+            if f.radiance.len() != volume.lights.len() {
+                return Err(format!(
+                    "{}: the graph has {} lights, the scene {}",
+                    path.display(),
+                    f.radiance.len(),
+                    volume.lights.len()
+                ));
+            }
+            RadianceCache::new(f.positions, f.ranges, f.radiance)
+        }
+        None => {
+            let config = match &settings.config {
+                Some(path) => GraphConfig::from_file(path).map_err(|e| e.to_string())?,
+                None => GraphConfig::default(),
+            };
+            let (graphs, _) = build(scene, &config, None, scene.sampler.seed as u64)?;
+            graphs.into_iter().max_by_key(|g| g.bounces).expect("bounces has an entry").cache
+        }
+    };
+    Ok(render_integrator(&volume, cache))
+}
+
+/// The integrator over `cache` for `volume`'s lights.
+pub fn render_integrator(volume: &Volume, cache: RadianceCache) -> render::RadianceGraphIntegrator {
+    let lights = volume.lights.iter().map(|l| *l.radiance()).collect();
+    let sky = volume
+        .lights
+        .iter()
+        .filter(|l| matches!(l, volume::GraphLight::Uniform { .. }))
+        .map(|l| *l.radiance())
+        .collect();
+    render::RadianceGraphIntegrator::new(cache, lights, sky)
+}
+
+/// Time and memory of one stage of the build.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Stage {
+    /// Stage name.
+    pub name: &'static str,
+    /// Wall-clock seconds.
+    pub seconds: f64,
+    /// Largest bytes the stage's own structures held.
+    pub peak_bytes: usize,
+}
+
+/// The thesis's graph statistics (its `<cfg>_stats.json`) and nimbus's own.
+#[derive(Clone, Debug)]
+pub struct GraphStats {
+    /// Nodes.
+    pub vertices: usize,
+    /// Edges.
+    pub edges: usize,
+    /// Edges sampled more than once.
+    pub edges_more_than_once: usize,
+    /// Mean and standard deviation of path runs inside one node.
+    pub in_node_path_length: (f64, f64),
+    /// Mean and standard deviation of the render search ranges.
+    pub render_search_range: Option<(f64, f64)>,
+    /// Node radius.
+    pub node_radius: f32,
+    /// Scene radius (half the medium's bounds diagonal).
+    pub scene_radius: f32,
+    /// Light paths and reinforcement paths traced, reinforcement rounds.
+    pub paths: (u64, u64, u32),
+    /// Per stage.
+    pub stages: Vec<Stage>,
+    /// At the build's peak: bytes of per-node structures and of edge lists.
+    pub build_peak: (usize, usize),
+}
+
+/// One graph per requested bounce count.
+pub struct BuiltGraph {
+    /// Bounces asked for.
+    pub bounces: u32,
+    /// Bounces reached (fewer at the numerical limit).
+    pub bounces_done: u32,
+    /// The radiance cache to render from.
+    pub cache: RadianceCache,
+}
+
+/// Builds the graphs of `scene` (thesis Ch. 4: build, direct light, transport) for every
+/// entry of `lightingCalculator.bounces`. `node_radius` overrides the config's.
+pub fn build(
+    scene: &Scene,
+    config: &GraphConfig,
+    node_radius: Option<f32>,
+    seed: u64,
+) -> Result<(Vec<BuiltGraph>, GraphStats), String> {
+    let volume = Volume::new(scene)?;
+    // Sec. 4.3.1: the default radius is the scene's diameter / 1000 (the thesis's code).
+    let radius = node_radius.unwrap_or(volume.radius * 2.0 / 1000.0 * config.graph_builder.radius_modifier);
+    if !(radius > 0.0 && radius.is_finite()) {
+        return Err(format!("the node radius must be positive (it is {radius})"));
+    }
+    let mut stages = Vec::new();
+    let t = Instant::now();
+    let (graph, report) = build::build_graph(&volume, &config.graph_builder, radius, seed);
+    let edges_more_than_once = graph.edges_more_than_once();
+    stages.push(Stage { name: "build", seconds: t.elapsed().as_secs_f64(), peak_bytes: report.peak.0 + report.peak.1 });
+    if graph.is_empty() {
+        return Err("no light path scattered in the medium: the graph is empty".into());
+    }
+    let t = Instant::now();
+    let (positions, transport, runs) = graph.into_parts();
+    let rsr = &config.graph_builder.render_search_range;
+    let ranges = if rsr.active {
+        search_range::search_ranges(&positions, rsr.neighbours_to_use as usize)?
+    } else {
+        vec![radius; positions.len()]
+    };
+    stages.push(Stage {
+        name: "search ranges",
+        seconds: t.elapsed().as_secs_f64(),
+        peak_bytes: positions.len() * (12 + 4) + transport.memory_bytes(),
+    });
+    let t = Instant::now();
+    let direct = lighting::direct_light(&volume, &positions, radius, &config.lighting_calculator, seed);
+    stages.push(Stage {
+        name: "direct light",
+        seconds: t.elapsed().as_secs_f64(),
+        peak_bytes: direct.len() * positions.len() * 4,
+    });
+    let t = Instant::now();
+    let bounces = &config.lighting_calculator.bounces;
+    let per_light: Vec<Vec<transport::Transported>> = direct.iter().map(|d| transport.neumann(d, bounces)).collect();
+    stages.push(Stage {
+        name: "transport",
+        seconds: t.elapsed().as_secs_f64(),
+        peak_bytes: transport.memory_bytes() + per_light.len() * bounces.len() * positions.len() * 4,
+    });
+    let stats = GraphStats {
+        vertices: positions.len(),
+        edges: transport.edges(),
+        edges_more_than_once,
+        in_node_path_length: (runs.mean(), runs.std()),
+        render_search_range: rsr.active.then(|| mean_std(&ranges)),
+        node_radius: radius,
+        scene_radius: volume.radius,
+        paths: (report.light_paths, report.reinforcement_paths, report.reinforcement_rounds),
+        stages,
+        build_peak: report.peak,
+    };
+    let graphs = (0..bounces.len())
+        .map(|b| BuiltGraph {
+            bounces: bounces[b],
+            bounces_done: per_light.iter().map(|l| l[b].bounces_done).min().unwrap_or(bounces[b]),
+            cache: RadianceCache::new(
+                positions.clone(),
+                ranges.clone(),
+                per_light.iter().map(|l| l[b].radiance.clone()).collect(),
+            ),
+        })
+        .collect();
+    Ok((graphs, stats))
+}
+
+impl GraphStats {
+    /// Per-node bytes at the build's peak.
+    pub fn build_peak_bytes_per_node(&self) -> f64 {
+        self.build_peak.0 as f64 / self.vertices.max(1) as f64
+    }
+
+    /// Edge-list bytes (capacity included) per edge at the build's peak.
+    pub fn build_peak_bytes_per_edge(&self) -> f64 {
+        self.build_peak.1 as f64 / self.edges.max(1) as f64
+    }
+}
+
+fn mean_std(v: &[f32]) -> (f64, f64) {
+    let n = v.len().max(1) as f64;
+    let m = v.iter().map(|&x| f64::from(x)).sum::<f64>() / n;
+    let var = v.iter().map(|&x| (f64::from(x) - m).powi(2)).sum::<f64>() / n;
+    (m, var.sqrt())
+}

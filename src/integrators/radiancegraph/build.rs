@@ -1,0 +1,270 @@
+//! Building the graph (thesis Sec. 4.3): light paths traced from a grid over each light,
+//! grouped into nodes; then reinforcement from nodes with too few edges or neighbours.
+//!
+//! Paths are traced in parallel (tracing does not look at the graph) and grouped in a fixed
+//! order afterwards, each path with its own random stream: the same graph at any thread count.
+
+use glam::Vec3;
+use rayon::prelude::*;
+
+use super::config::GraphBuilder as Config;
+use super::graph::BuildGraph;
+use super::volume::{Event, GraphLight, Volume};
+use crate::geometry::Ray;
+use crate::math::Frame;
+use crate::sampling::rng::Pcg32;
+use crate::sampling::warp;
+
+/// One traced path: its scattering points and whether its last segment was sampled.
+struct Traced {
+    points: Vec<Vec3>,
+    last_sampled: bool,
+}
+
+/// Where a batch of paths starts.
+#[derive(Clone, Copy)]
+struct Start {
+    ray: Ray,
+    /// Distance to the medium's boundary along `ray` (its origin is inside).
+    t_max: f32,
+    /// The node a reinforcement path starts from.
+    node: Option<u32>,
+}
+
+/// What the build did, for the stats file.
+#[derive(Clone, Debug, Default)]
+pub struct BuildReport {
+    /// Light paths traced.
+    pub light_paths: u64,
+    /// Reinforcement rounds run.
+    pub reinforcement_rounds: u32,
+    /// Reinforcement paths traced.
+    pub reinforcement_paths: u64,
+    /// Final unsatisfied ratios (edges, neighbours), when reinforcement ran.
+    pub unsatisfied: (f32, f32),
+    /// Bytes the graph held at its largest: (per-node structures, edge lists).
+    pub peak: (usize, usize),
+}
+
+impl BuildReport {
+    fn note_memory(&mut self, graph: &BuildGraph) {
+        let m = graph.memory_bytes();
+        if m.0 + m.1 > self.peak.0 + self.peak.1 {
+            self.peak = m;
+        }
+    }
+}
+
+/// Rounds of reinforcement after which the build stops even if the ratios are not met (a
+/// node that can never be satisfied, such as one alone in a thin wisp, would otherwise
+/// keep the thesis's loop running forever).
+const MAX_ROUNDS: u32 = 64;
+
+/// Builds the graph of `volume` with node radius `radius`; `seed` picks the random streams.
+pub fn build_graph(volume: &Volume, config: &Config, radius: f32, seed: u64) -> (BuildGraph, BuildReport) {
+    let mut graph = BuildGraph::new(radius);
+    let mut report = BuildReport::default();
+    let max_depth = config.max_depth as usize;
+    let starts = light_starts(volume, config, seed);
+    let per_start = config.iterations_per_step as u64;
+    report.light_paths = starts.len() as u64 * per_start;
+    // Batches bound the memory of traced-but-ungrouped paths.
+    let batch = (1 << 16) / per_start.max(1) as usize + 1;
+    for (b, chunk) in starts.chunks(batch).enumerate() {
+        let base = (b * batch) as u64 * per_start;
+        let traced: Vec<Traced> = chunk
+            .par_iter()
+            .enumerate()
+            .flat_map_iter(|(i, s)| {
+                (0..per_start).map(move |k| {
+                    let mut rng = Pcg32::new(base + i as u64 * per_start + k, seed);
+                    trace(volume, s, max_depth, &mut rng)
+                })
+            })
+            .collect();
+        for t in &traced {
+            graph.add_path(None, &t.points, t.last_sampled);
+        }
+        report.note_memory(&graph);
+    }
+    reinforce(volume, config, &mut graph, seed, report.light_paths, &mut report);
+    report.note_memory(&graph);
+    (graph, report)
+}
+
+/// The first segments of light paths: for a distant light, `dimensionSteps`² parallel rays on
+/// a grid over the volume's bounding square, 2R before its centre (the thesis's
+/// `BuildGraph`); for a uniform infinite light as many rays with uniformly random
+/// directions through uniformly random points of the volume's bounding disk (the
+/// distribution of lines a constant radiance field sends through the volume).
+fn light_starts(volume: &Volume, config: &Config, seed: u64) -> Vec<Start> {
+    let r = volume.radius;
+    let c = volume.center();
+    let n = config.dimension_steps;
+    let step = 2.0 * r / (n + 1) as f32;
+    let mut rays = Vec::new();
+    for (li, light) in volume.lights.iter().enumerate() {
+        match light {
+            GraphLight::Distant { dir, .. } => {
+                let f = Frame::from_z(*dir);
+                let origin = c - *dir * (2.0 * r) - (f.x + f.y) * r;
+                for x in 1..=n {
+                    for y in 1..=n {
+                        rays.push(Ray::new(origin + f.x * (step * x as f32) + f.y * (step * y as f32), *dir));
+                    }
+                }
+            }
+            GraphLight::Uniform { .. } => {
+                let mut rng = Pcg32::new(u64::MAX - li as u64, seed);
+                for _ in 0..n * n {
+                    let d = warp::uniform_sphere(glam::Vec2::new(rng.uniform(), rng.uniform()));
+                    let f = Frame::from_z(d);
+                    let q = warp::concentric_disk(glam::Vec2::new(rng.uniform(), rng.uniform())) * r;
+                    rays.push(Ray::new(c - d * (2.0 * r) + f.x * q.x + f.y * q.y, d));
+                }
+            }
+        }
+    }
+    // Rays that enter the medium start at their entry point.
+    rays.par_iter()
+        .filter_map(|ray| {
+            let (t_in, t_out) = volume.span(ray)?;
+            Some(Start { ray: Ray::new(ray.at(t_in), ray.d), t_max: t_out - t_in, node: None })
+        })
+        .collect()
+}
+
+/// Traces one path from `start` (thesis `TracePath`): delta tracking to the next event,
+/// isotropic scattering, at most `max_depth` vertices counting a reinforcement path's node.
+fn trace(volume: &Volume, start: &Start, max_depth: usize, rng: &mut Pcg32) -> Traced {
+    let max_points = max_depth - usize::from(start.node.is_some());
+    let mut points = Vec::new();
+    if max_points == 0 {
+        return Traced { points, last_sampled: false };
+    }
+    let (mut ray, mut t_max) = (start.ray, start.t_max);
+    loop {
+        match volume.sample_scatter(&ray, t_max, rng) {
+            Event::Absorb | Event::Pass => return Traced { points, last_sampled: true },
+            Event::Scatter(p) => {
+                points.push(p);
+                if points.len() == max_points {
+                    return Traced { points, last_sampled: false };
+                }
+                let d = warp::uniform_sphere(glam::Vec2::new(rng.uniform(), rng.uniform()));
+                ray = Ray::new(p, d);
+                match volume.exit(&ray) {
+                    Some(t) => t_max = t,
+                    // Numerically outside already: the segment leaves at once.
+                    None => return Traced { points, last_sampled: true },
+                }
+            }
+        }
+    }
+}
+
+/// Reinforcement (thesis Sec. 4.3, App. B): while more than the allowed ratio of the nodes
+/// present before it have fewer outgoing edges or fewer nodes nearby than required, trace
+/// `reinforcementRays` paths from each such node, from uniform points in its sphere in
+/// uniform directions.
+fn reinforce(
+    volume: &Volume,
+    config: &Config,
+    graph: &mut BuildGraph,
+    seed: u64,
+    first: u64,
+    report: &mut BuildReport,
+) {
+    let (er, nr) = (&config.edge_reinforcement, &config.neighbour_reinforcement);
+    if !er.active && !nr.active {
+        return;
+    }
+    let initial = graph.len();
+    if initial == 0 {
+        return;
+    }
+    let range = graph.radius() * nr.neighbour_range_modifier;
+    let mut few_edges: Vec<u32> = if er.active { (0..initial as u32).collect() } else { Vec::new() };
+    let mut few_neighbours: Vec<u32> = if nr.active { (0..initial as u32).collect() } else { Vec::new() };
+    let check_edges = |g: &BuildGraph, list: &mut Vec<u32>| {
+        list.retain(|&a| g.out_degree(a) < er.edges_for_not_sparse as usize);
+        list.len() as f32 / initial as f32
+    };
+    let check_neighbours = |g: &BuildGraph, list: &mut Vec<u32>| {
+        let keep: Vec<bool> = list
+            .par_iter()
+            .map(|&a| g.count_within(g.positions()[a as usize], range) < nr.neighbours_for_not_sparse as usize)
+            .collect();
+        let mut k = keep.iter();
+        list.retain(|_| *k.next().unwrap());
+        list.len() as f32 / initial as f32
+    };
+    let mut edge_ratio = if er.active { check_edges(graph, &mut few_edges) } else { 0.0 };
+    let mut neighbour_ratio = if nr.active { check_neighbours(graph, &mut few_neighbours) } else { 0.0 };
+    let mut next_stream = first;
+    let max_depth = config.max_depth as usize;
+    let mut round = 0;
+    loop {
+        let edges_ok = !er.active || edge_ratio < er.unsatisfied_allowed_ratio;
+        let neighbours_ok = !nr.active || neighbour_ratio < nr.unsatisfied_allowed_ratio;
+        if (edges_ok && neighbours_ok) || round == MAX_ROUNDS {
+            break;
+        }
+        if !edges_ok {
+            report.reinforcement_paths +=
+                trace_from(volume, graph, &few_edges, er.reinforcement_rays, max_depth, seed, &mut next_stream);
+            edge_ratio = check_edges(graph, &mut few_edges);
+        }
+        if !neighbours_ok {
+            report.reinforcement_paths +=
+                trace_from(volume, graph, &few_neighbours, nr.reinforcement_rays, max_depth, seed, &mut next_stream);
+            neighbour_ratio = check_neighbours(graph, &mut few_neighbours);
+        }
+        round += 1;
+        report.note_memory(graph);
+    }
+    report.reinforcement_rounds = round;
+    report.unsatisfied = (edge_ratio, neighbour_ratio);
+}
+
+/// Traces `rays` paths from each node of `nodes` and groups them; returns how many were traced.
+fn trace_from(
+    volume: &Volume,
+    graph: &mut BuildGraph,
+    nodes: &[u32],
+    rays: u32,
+    max_depth: usize,
+    seed: u64,
+    next_stream: &mut u64,
+) -> u64 {
+    let radius = graph.radius();
+    let positions = graph.positions();
+    let base = *next_stream;
+    let traced: Vec<(u32, Traced)> = nodes
+        .par_iter()
+        .enumerate()
+        .flat_map_iter(|(i, &a)| {
+            let center = positions[a as usize];
+            (0..rays as u64).filter_map(move |k| {
+                let mut rng = Pcg32::new(base + i as u64 * rays as u64 + k, seed);
+                // A uniform point in the node's sphere (rejection, as the thesis).
+                let offset = loop {
+                    let v = Vec3::new(rng.uniform(), rng.uniform(), rng.uniform()) * 2.0 - Vec3::ONE;
+                    if v.length_squared() < 1.0 {
+                        break v * radius;
+                    }
+                };
+                let d = warp::uniform_sphere(glam::Vec2::new(rng.uniform(), rng.uniform()));
+                let ray = Ray::new(center + offset, d);
+                let (t_in, t_out) = volume.span_from(&ray)?;
+                let start = Start { ray: Ray::new(ray.at(t_in), d), t_max: t_out - t_in, node: Some(a) };
+                Some((a, trace(volume, &start, max_depth, &mut rng)))
+            })
+        })
+        .collect();
+    *next_stream += nodes.len() as u64 * rays as u64;
+    for (a, t) in &traced {
+        graph.add_path(Some(*a), &t.points, t.last_sampled);
+    }
+    traced.len() as u64
+}

@@ -1,0 +1,245 @@
+//! nimbus's graph file: the radiance cache a render needs, in a compact versioned binary.
+//!
+//! Layout (little-endian): magic `NIMBUSRG`; format version u32; scene hash u64 (the medium
+//! and the lights, see [`scene_hash`]); config hash u64; bounces asked and reached u32 ×2;
+//! node radius f32; light count u32; node count u64; then positions (3 × f32 per node),
+//! render search ranges (f32 per node) and per light the transported radiance (f32 per
+//! node). 20 bytes per node for one light; the thesis's text file holds the same in ≈ 60.
+
+use std::io::{Read, Write};
+use std::path::Path;
+
+use glam::Vec3;
+
+use super::config::GraphConfig;
+use super::volume::Volume;
+use crate::color::Rgb;
+
+const MAGIC: &[u8; 8] = b"NIMBUSRG";
+/// The format this nimbus writes and reads.
+pub const VERSION: u32 = 1;
+
+/// What a graph file holds.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GraphFile {
+    /// [`scene_hash`] of the scene it was built for.
+    pub scene_hash: u64,
+    /// [`config_hash`] of the configuration it was built with.
+    pub config_hash: u64,
+    /// Bounces asked for.
+    pub bounces: u32,
+    /// Bounces reached.
+    pub bounces_done: u32,
+    /// Node radius.
+    pub node_radius: f32,
+    /// Node positions.
+    pub positions: Vec<Vec3>,
+    /// Render search ranges.
+    pub ranges: Vec<f32>,
+    /// Per light, per node: transported radiance scalars.
+    pub radiance: Vec<Vec<f32>>,
+}
+
+/// FNV-1a, 64-bit: a stable hash (std's hashers may change between Rust versions).
+struct Fnv(u64);
+
+impl Fnv {
+    fn new() -> Fnv {
+        Fnv(0xcbf2_9ce4_8422_2325)
+    }
+    fn bytes(&mut self, b: &[u8]) {
+        for &x in b {
+            self.0 = (self.0 ^ u64::from(x)).wrapping_mul(0x100_0000_01b3);
+        }
+    }
+    fn f32(&mut self, v: f32) {
+        self.bytes(&v.to_le_bytes());
+    }
+}
+
+/// A hash of what the graph depends on in the scene: the medium, probed at 16³ points of its
+/// bounds (σa and σs, so equal media hash equally whatever file they come from), the
+/// bounds, and each light's kind, direction and radiance.
+pub fn scene_hash(volume: &Volume) -> u64 {
+    let mut h = Fnv::new();
+    let b = volume.bounds;
+    for v in [b.min, b.max] {
+        v.to_array().iter().for_each(|&x| h.f32(x));
+    }
+    let n = 16;
+    for z in 0..n {
+        for y in 0..n {
+            for x in 0..n {
+                let t = (Vec3::new(x as f32, y as f32, z as f32) + 0.5) / n as f32;
+                let p = b.min + (b.max - b.min) * t;
+                let mp = volume.medium.sample_point::<Rgb>(p, &());
+                h.f32(mp.sigma_a.x);
+                h.f32(mp.sigma_s.x);
+            }
+        }
+    }
+    for light in &volume.lights {
+        h.bytes(format!("{light:?}").as_bytes());
+    }
+    h.0
+}
+
+/// A hash of a configuration.
+pub fn config_hash(config: &GraphConfig) -> u64 {
+    let mut h = Fnv::new();
+    h.bytes(format!("{config:?}").as_bytes());
+    h.0
+}
+
+impl GraphFile {
+    /// Writes the file.
+    pub fn write(&self, path: &Path) -> Result<(), String> {
+        let n = self.positions.len();
+        let mut out = Vec::with_capacity(64 + n * (16 + 4 * self.radiance.len()));
+        out.extend_from_slice(MAGIC);
+        out.extend_from_slice(&VERSION.to_le_bytes());
+        out.extend_from_slice(&self.scene_hash.to_le_bytes());
+        out.extend_from_slice(&self.config_hash.to_le_bytes());
+        out.extend_from_slice(&self.bounces.to_le_bytes());
+        out.extend_from_slice(&self.bounces_done.to_le_bytes());
+        out.extend_from_slice(&self.node_radius.to_le_bytes());
+        out.extend_from_slice(&(self.radiance.len() as u32).to_le_bytes());
+        out.extend_from_slice(&(n as u64).to_le_bytes());
+        for p in &self.positions {
+            p.to_array().iter().for_each(|x| out.extend_from_slice(&x.to_le_bytes()));
+        }
+        self.ranges.iter().for_each(|x| out.extend_from_slice(&x.to_le_bytes()));
+        for l in &self.radiance {
+            l.iter().for_each(|x| out.extend_from_slice(&x.to_le_bytes()));
+        }
+        let mut f = std::fs::File::create(path).map_err(|e| format!("{}: cannot write: {e}", path.display()))?;
+        f.write_all(&out).map_err(|e| format!("{}: cannot write: {e}", path.display()))
+    }
+
+    /// Reads a file; `expected_scene` refuses a graph built for another scene.
+    pub fn read(path: &Path, expected_scene: Option<u64>) -> Result<GraphFile, String> {
+        let shown = path.display();
+        let mut bytes = Vec::new();
+        std::fs::File::open(path)
+            .and_then(|mut f| f.read_to_end(&mut bytes))
+            .map_err(|e| format!("{shown}: cannot read graph file: {e}"))?;
+        let mut r = Reader { b: &bytes, at: 0 };
+        let bad = |what: &str| format!("{shown}: not a nimbus graph file ({what})");
+        if r.take(8).ok_or_else(|| bad("too short"))? != MAGIC {
+            return Err(
+                if bytes.starts_with(b"free")
+                    || bytes.starts_with(b"basic")
+                    || bytes.first().is_some_and(u8::is_ascii_digit)
+                {
+                    format!(
+                        "{shown}: a text graph file (the thesis's graph_maker writes those); nimbus reads graphs built by `nimbus graph build`"
+                    )
+                } else {
+                    bad("no NIMBUSRG signature")
+                },
+            );
+        }
+        let version = r.u32().ok_or_else(|| bad("truncated header"))?;
+        if version != VERSION {
+            return Err(format!(
+                "{shown}: graph format version {version}, this nimbus reads version {VERSION}: rebuild it with `nimbus graph build`"
+            ));
+        }
+        let header = (|| Some((r.u64()?, r.u64()?, r.u32()?, r.u32()?, r.f32()?, r.u32()?, r.u64()?)))();
+        let (scene_hash, config_hash, bounces, bounces_done, node_radius, lights, n) =
+            header.ok_or_else(|| bad("truncated header"))?;
+        if let Some(expected) = expected_scene
+            && expected != scene_hash
+        {
+            return Err(format!(
+                "{shown}: this graph was built for another scene (its medium, bounds or lights differ from this scene's): rebuild it with `nimbus graph build`"
+            ));
+        }
+        let n = usize::try_from(n).map_err(|_| bad("node count"))?;
+        let need = n.checked_mul(16 + 4 * lights as usize).ok_or_else(|| bad("node count"))?;
+        if bytes.len() - r.at != need {
+            return Err(bad(&format!("{} bytes of node data, {n} nodes need {need}", bytes.len() - r.at)));
+        }
+        let mut floats = |k: usize| (0..k).map(|_| r.f32().expect("length checked")).collect::<Vec<f32>>();
+        let p = floats(3 * n);
+        let positions = p.chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect();
+        let ranges = floats(n);
+        let radiance = (0..lights).map(|_| floats(n)).collect::<Vec<_>>();
+        let all_finite = ranges.iter().chain(radiance.iter().flatten()).chain(p.iter()).all(|v| v.is_finite());
+        if !all_finite {
+            return Err(bad("NaN or infinite values"));
+        }
+        Ok(GraphFile { scene_hash, config_hash, bounces, bounces_done, node_radius, positions, ranges, radiance })
+    }
+}
+
+struct Reader<'a> {
+    b: &'a [u8],
+    at: usize,
+}
+
+impl Reader<'_> {
+    fn take(&mut self, k: usize) -> Option<&[u8]> {
+        let s = self.b.get(self.at..self.at + k)?;
+        self.at += k;
+        Some(s)
+    }
+    fn u32(&mut self) -> Option<u32> {
+        Some(u32::from_le_bytes(self.take(4)?.try_into().ok()?))
+    }
+    fn u64(&mut self) -> Option<u64> {
+        Some(u64::from_le_bytes(self.take(8)?.try_into().ok()?))
+    }
+    fn f32(&mut self) -> Option<f32> {
+        Some(f32::from_le_bytes(self.take(4)?.try_into().ok()?))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sample() -> GraphFile {
+        GraphFile {
+            scene_hash: 42,
+            config_hash: 7,
+            bounces: 9,
+            bounces_done: 9,
+            node_radius: 0.5,
+            positions: vec![Vec3::ZERO, Vec3::new(1.0, 2.0, 3.0)],
+            ranges: vec![0.6, 0.7],
+            radiance: vec![vec![0.1, 0.2]],
+        }
+    }
+
+    #[test]
+    fn round_trip_and_refusals() {
+        let dir = std::env::temp_dir().join(format!("nimbus-graphfile-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let f = dir.join("g.graph");
+        sample().write(&f).unwrap();
+        let back = GraphFile::read(&f, Some(42));
+        let other = GraphFile::read(&f, Some(43));
+        let mut bytes = std::fs::read(&f).unwrap();
+        bytes[8] = 99;
+        std::fs::write(&f, &bytes).unwrap();
+        let version = GraphFile::read(&f, None);
+        std::fs::write(&f, b"free 1.0\n").unwrap();
+        let text = GraphFile::read(&f, None);
+        let mut truncated = {
+            let mut v = Vec::new();
+            sample().write(&dir.join("t.graph")).unwrap();
+            v.extend(std::fs::read(dir.join("t.graph")).unwrap());
+            v
+        };
+        truncated.pop();
+        std::fs::write(&f, &truncated).unwrap();
+        let short = GraphFile::read(&f, None);
+        std::fs::remove_dir_all(&dir).unwrap();
+        assert_eq!(back.unwrap(), sample());
+        assert!(other.unwrap_err().contains("built for another scene"));
+        assert!(version.unwrap_err().contains("graph format version 99, this nimbus reads version 1"));
+        assert!(text.unwrap_err().contains("a text graph file"));
+        assert!(short.unwrap_err().contains("not a nimbus graph file"));
+    }
+}

@@ -1,0 +1,316 @@
+//! The graph while it is built (thesis Secs. 4.1 and 4.3): nodes with positions and counts of
+//! segments sampled from them, a hash grid over the nodes for fixed-radius queries, and each
+//! node's outgoing edges with their sample counts.
+//!
+//! Memory, per node: position 12 B, sample count 4 B, next-in-cell link 4 B, edge list
+//! header 24 B and about 20 B of hash grid; per edge: target and count, 8 B, in lists that at
+//! most double. The thesis keeps `std::map`s of nodes, edges and per-node edge maps (≈ 190 B
+//! per edge).
+
+use std::collections::HashMap;
+use std::hash::{BuildHasherDefault, Hasher};
+
+use glam::{IVec3, Vec3};
+
+use super::transport::{EdgeCount, Transport};
+
+/// A multiply-rotate hasher for grid cells (std's SipHash is several times slower here, and
+/// cell keys need no protection against adversarial input).
+#[derive(Default)]
+struct CellHasher(u64);
+
+impl Hasher for CellHasher {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.write_u64(b as u64);
+        }
+    }
+    fn write_i32(&mut self, i: i32) {
+        self.write_u64(i as u32 as u64);
+    }
+    fn write_u64(&mut self, i: u64) {
+        self.0 = (self.0.rotate_left(5) ^ i).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
+    }
+}
+
+type Cells = HashMap<IVec3, u32, BuildHasherDefault<CellHasher>>;
+
+const NONE: u32 = u32::MAX;
+
+/// Mean and spread of the lengths of runs of a path inside one node (the thesis's
+/// `in_node_path_length` statistic).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct RunStats {
+    n: u64,
+    sum: f64,
+    sum_sq: f64,
+}
+
+impl RunStats {
+    fn add(&mut self, v: f64) {
+        self.n += 1;
+        self.sum += v;
+        self.sum_sq += v * v;
+    }
+
+    /// Mean (0 without data).
+    pub fn mean(&self) -> f64 {
+        if self.n == 0 { 0.0 } else { self.sum / self.n as f64 }
+    }
+
+    /// Standard deviation (0 without data).
+    pub fn std(&self) -> f64 {
+        if self.n == 0 {
+            return 0.0;
+        }
+        let m = self.mean();
+        (self.sum_sq / self.n as f64 - m * m).max(0.0).sqrt()
+    }
+}
+
+/// The graph under construction.
+pub struct BuildGraph {
+    radius: f32,
+    cell_size: f32,
+    positions: Vec<Vec3>,
+    samples: Vec<u32>,
+    next_in_cell: Vec<u32>,
+    cells: Cells,
+    out: Vec<Vec<(u32, u32)>>,
+    /// Runs of consecutive path vertices in one node.
+    pub in_node: RunStats,
+}
+
+impl BuildGraph {
+    /// An empty graph with node radius `radius`.
+    pub fn new(radius: f32) -> BuildGraph {
+        BuildGraph {
+            radius,
+            cell_size: radius,
+            positions: Vec::new(),
+            samples: Vec::new(),
+            next_in_cell: Vec::new(),
+            cells: Cells::default(),
+            out: Vec::new(),
+            in_node: RunStats::default(),
+        }
+    }
+
+    /// The node radius.
+    pub fn radius(&self) -> f32 {
+        self.radius
+    }
+
+    /// Number of nodes.
+    pub fn len(&self) -> usize {
+        self.positions.len()
+    }
+
+    /// True without nodes.
+    pub fn is_empty(&self) -> bool {
+        self.positions.is_empty()
+    }
+
+    /// Node positions.
+    pub fn positions(&self) -> &[Vec3] {
+        &self.positions
+    }
+
+    /// Segments sampled from each node (s_n of Eq. 4.20).
+    pub fn samples(&self) -> &[u32] {
+        &self.samples
+    }
+
+    /// Outgoing edges of node `a`.
+    pub fn out_degree(&self, a: u32) -> usize {
+        self.out[a as usize].len()
+    }
+
+    fn cell(&self, p: Vec3) -> IVec3 {
+        (p / self.cell_size).floor().as_ivec3()
+    }
+
+    /// Calls `f` with every node within `reach` cells of `p`'s cell.
+    fn for_nearby(&self, p: Vec3, reach: i32, mut f: impl FnMut(u32)) {
+        let c = self.cell(p);
+        for z in -reach..=reach {
+            for y in -reach..=reach {
+                for x in -reach..=reach {
+                    let mut i = self.cells.get(&(c + IVec3::new(x, y, z))).copied().unwrap_or(NONE);
+                    while i != NONE {
+                        f(i);
+                        i = self.next_in_cell[i as usize];
+                    }
+                }
+            }
+        }
+    }
+
+    /// The node closest to `p` within the node radius (lowest index on ties).
+    pub fn closest_within_radius(&self, p: Vec3) -> Option<u32> {
+        let r2 = self.radius * self.radius;
+        let mut best: Option<(f32, u32)> = None;
+        self.for_nearby(p, 1, |i| {
+            let d2 = self.positions[i as usize].distance_squared(p);
+            if d2 <= r2 && best.is_none_or(|(bd, bi)| d2 < bd || (d2 == bd && i < bi)) {
+                best = Some((d2, i));
+            }
+        });
+        best.map(|b| b.1)
+    }
+
+    /// Nodes within `range` of `p`, `p`'s own node included (the thesis's `CountInRadius`).
+    pub fn count_within(&self, p: Vec3, range: f32) -> usize {
+        let reach = (range / self.cell_size).ceil().max(1.0) as i32;
+        let r2 = range * range;
+        let mut n = 0;
+        self.for_nearby(p, reach, |i| n += usize::from(self.positions[i as usize].distance_squared(p) <= r2));
+        n
+    }
+
+    fn add_node(&mut self, p: Vec3) -> u32 {
+        let i = self.positions.len() as u32;
+        let c = self.cell(p);
+        let head = self.cells.entry(c).or_insert(NONE);
+        self.next_in_cell.push(*head);
+        *head = i;
+        self.positions.push(p);
+        self.samples.push(0);
+        self.out.push(Vec::new());
+        i
+    }
+
+    fn add_edge(&mut self, from: u32, to: u32) {
+        let list = &mut self.out[from as usize];
+        match list.iter_mut().find(|e| e.0 == to) {
+            Some(e) => e.1 += 1,
+            None => list.push((to, 1)),
+        }
+    }
+
+    /// Groups one traced path into the graph (thesis Sec. 4.3): each scattering point joins
+    /// the closest node within the radius or becomes a new node; each segment counts as a
+    /// sample of the node it was sampled from and, if it scattered, of the edge to the node
+    /// it scattered in. `start` is the node a reinforcement path starts from; `last_sampled`
+    /// is false when the path stopped at the maximum depth (its last segment was never
+    /// sampled, so it counts for nothing).
+    pub fn add_path(&mut self, start: Option<u32>, points: &[Vec3], last_sampled: bool) {
+        let mut prev = start;
+        // In-node run lengths over the path's vertices (start included).
+        let mut run = 0u32;
+        let mut vertices = u32::from(start.is_some());
+        if start.is_some() {
+            run = 1;
+        }
+        for &p in points {
+            let node = match self.closest_within_radius(p) {
+                Some(n) => n,
+                None => self.add_node(p),
+            };
+            if let Some(v) = prev {
+                self.samples[v as usize] += 1;
+                self.add_edge(v, node);
+                if v == node {
+                    run += 1;
+                } else {
+                    self.in_node.add(run as f64);
+                    run = 1;
+                }
+            } else {
+                run = 1;
+            }
+            vertices += 1;
+            prev = Some(node);
+        }
+        if last_sampled {
+            if let Some(v) = prev {
+                self.samples[v as usize] += 1;
+            }
+            if vertices > 0 {
+                self.in_node.add(run as f64);
+            }
+        }
+    }
+
+    /// Number of edges.
+    pub fn edge_count(&self) -> usize {
+        self.out.iter().map(Vec::len).sum()
+    }
+
+    /// Edges sampled more than once.
+    pub fn edges_more_than_once(&self) -> usize {
+        self.out.iter().flatten().filter(|e| e.1 > 1).count()
+    }
+
+    /// Bytes held, as (per-node structures, edge lists), counting capacities, not lengths.
+    pub fn memory_bytes(&self) -> (usize, usize) {
+        use std::mem::size_of;
+        let nodes = self.positions.capacity() * size_of::<Vec3>()
+            + self.samples.capacity() * 4
+            + self.next_in_cell.capacity() * 4
+            + self.out.capacity() * size_of::<Vec<(u32, u32)>>()
+            // hashbrown: key, value and one control byte per bucket.
+            + self.cells.capacity() * (size_of::<IVec3>() + 4 + 1);
+        (nodes, self.out.iter().map(|l| l.capacity() * 8).sum())
+    }
+
+    /// The transport matrix (Eq. 4.8 with Eq. 4.20's weights), consuming the edge lists one
+    /// node at a time so they and the matrix are never both whole in memory.
+    pub fn into_parts(mut self) -> (Vec<Vec3>, Transport, RunStats) {
+        let mut edges: Vec<EdgeCount> = Vec::with_capacity(self.edge_count());
+        for (a, list) in self.out.iter_mut().enumerate() {
+            let mut l = std::mem::take(list);
+            l.sort_unstable_by_key(|e| e.0);
+            edges.extend(l.iter().map(|&(to, samples)| EdgeCount { from: a as u32, to, samples }));
+        }
+        let t = Transport::from_counts(&edges, &self.samples);
+        (self.positions, t, self.in_node)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn points_join_the_closest_node_within_the_radius() {
+        let mut g = BuildGraph::new(1.0);
+        g.add_path(None, &[Vec3::ZERO, Vec3::new(3.0, 0.0, 0.0), Vec3::new(0.5, 0.0, 0.0)], true);
+        // 0.5 joins node 0; the path is 0 -> 1 -> 0 with three sampled segments.
+        assert_eq!(g.len(), 2);
+        assert_eq!(g.samples(), [2, 1]);
+        g.add_path(None, &[Vec3::new(2.2, 0.0, 0.0)], false);
+        // 2.2 is within 1 of node 1 (at 3) only: no new node, no sample (forced end).
+        assert_eq!(g.len(), 2);
+        assert_eq!(g.samples(), [2, 1]);
+        // Closest, not first: 1.6 is 1.6 from node 0 (out of range) and 1.4 from node 1.
+        assert_eq!(g.closest_within_radius(Vec3::new(1.6, 0.0, 0.0)), None);
+        assert_eq!(g.closest_within_radius(Vec3::new(2.1, 0.0, 0.0)), Some(1));
+        assert_eq!(g.count_within(Vec3::ZERO, 3.0), 2);
+        assert_eq!(g.count_within(Vec3::ZERO, 2.9), 1);
+        let (pos, t, runs) = g.into_parts();
+        assert_eq!(pos.len(), 2);
+        // w(0,1) = 1/2, w(1,0) = 1/1.
+        assert_eq!(t.row(0).collect::<Vec<_>>(), [(1, 0.5)]);
+        assert_eq!(t.row(1).collect::<Vec<_>>(), [(0, 1.0)]);
+        // Runs: path 1 has three runs of 1; path 2 ended at max depth and adds none.
+        assert_eq!(runs.mean(), 1.0);
+    }
+
+    #[test]
+    fn in_node_runs_and_reinforcement_starts() {
+        let mut g = BuildGraph::new(1.0);
+        g.add_path(None, &[Vec3::ZERO, Vec3::new(0.1, 0.0, 0.0), Vec3::new(0.2, 0.0, 0.0)], true);
+        // One run of 3 in node 0, with a self-edge sampled twice and 3 samples.
+        assert_eq!(g.samples(), [3]);
+        assert_eq!(g.edges_more_than_once(), 1);
+        assert_eq!(g.in_node.mean(), 3.0);
+        g.add_path(Some(0), &[Vec3::new(5.0, 0.0, 0.0)], true);
+        assert_eq!(g.samples(), [4, 1]);
+        assert_eq!(g.edge_count(), 2);
+        assert!(g.memory_bytes().0 > 0 && g.memory_bytes().1 >= 2 * 8);
+    }
+}

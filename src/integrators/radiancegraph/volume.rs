@@ -1,0 +1,269 @@
+//! The scene as the radiance-graph method sees it (thesis Sec. 4.8): one gray, isotropic,
+//! non-emissive medium bounded by `interface` surfaces, lit by distant lights (the thesis's
+//! case) and uniform `infinite` lights (its Sec. 6.1 asks for them). Everything the method
+//! needs of the scene goes through here: where the medium ends along a ray, and the two
+//! delta-tracking walks the thesis uses (sample a scattering event; ratio-track transmittance).
+
+use glam::Vec3;
+
+use crate::accel::NONE;
+use crate::color::Rgb;
+use crate::geometry::{Bounds3, Ray};
+use crate::integrators::common::media::sample_t_maj;
+use crate::lights::LightKind;
+use crate::media::Medium;
+use crate::sampling::rng::Pcg32;
+use crate::scene::Scene;
+use crate::spectra::SpectrumValue;
+
+/// A light the graph carries one radiance scalar per node for.
+#[derive(Clone, Debug)]
+pub enum GraphLight {
+    /// Parallel light travelling along `dir`.
+    Distant {
+        /// Unit direction the light travels in (from the light into the scene).
+        dir: Vec3,
+        /// Radiance.
+        l: SpectrumValue,
+    },
+    /// Constant radiance from every direction.
+    Uniform {
+        /// Radiance.
+        l: SpectrumValue,
+    },
+}
+
+impl GraphLight {
+    /// The radiance.
+    pub fn radiance(&self) -> &SpectrumValue {
+        match self {
+            GraphLight::Distant { l, .. } | GraphLight::Uniform { l } => l,
+        }
+    }
+}
+
+/// The scene's medium and lights, once checked against the method's constraints.
+pub struct Volume<'a> {
+    /// The scene.
+    pub scene: &'a Scene,
+    /// Its one medium.
+    pub medium: &'a Medium,
+    /// The medium's index in `scene.media`.
+    pub medium_index: u32,
+    /// Bounds of the medium's boundary surfaces.
+    pub bounds: Bounds3,
+    /// Half the bounds' diagonal: the thesis's scene radius (`maxDistToCenter`).
+    pub radius: f32,
+    /// The lights, in scene order.
+    pub lights: Vec<GraphLight>,
+}
+
+/// How a sampled segment ended.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Event {
+    /// A real scattering event at this point.
+    Scatter(Vec3),
+    /// Absorbed.
+    Absorb,
+    /// Reached the end of the segment (left the medium).
+    Pass,
+}
+
+impl<'a> Volume<'a> {
+    /// Checks the method's constraints; the error lists every violated one.
+    pub fn new(scene: &'a Scene) -> Result<Volume<'a>, String> {
+        let mut violated = Vec::new();
+        let medium = match scene.media.as_slice() {
+            [m] => Some(m),
+            [] => {
+                violated.push("one medium (the scene has none)".to_string());
+                None
+            }
+            media => {
+                let names: Vec<_> = media.iter().map(|m| format!("\"{}\"", m.name)).collect();
+                violated.push(format!("one medium (the scene has {}: {})", media.len(), names.join(", ")));
+                None
+            }
+        };
+        if let Some(m) = medium {
+            if m.g != 0.0 {
+                violated.push(format!("an isotropic phase function (medium \"{}\" has g = {})", m.name, m.g));
+            }
+            if m.chromatic {
+                violated.push(format!("gray coefficients (medium \"{}\" has chromatic sigma_a or sigma_s)", m.name));
+            }
+            if m.emissive {
+                violated.push(format!("a non-emissive medium (medium \"{}\" emits)", m.name));
+            }
+        }
+        let mut lights = Vec::new();
+        for light in &scene.lights {
+            match &light.kind {
+                LightKind::Distant { w, l } => lights.push(GraphLight::Distant { dir: -*w, l: *l }),
+                LightKind::UniformInfinite { l } => lights.push(GraphLight::Uniform { l: *l }),
+                other => violated.push(format!(
+                    "distant and uniform infinite lights only (the scene has a {} light)",
+                    light_kind_name(other)
+                )),
+            }
+        }
+        if scene.lights.is_empty() {
+            violated.push("at least one light (the scene has none)".to_string());
+        }
+        if scene.camera_medium != NONE {
+            violated.push("a camera outside the medium".to_string());
+        }
+        let surfaces = &scene.surfaces;
+        if !surfaces.instances.is_empty() {
+            violated.push("no object instances".to_string());
+        }
+        let prims = surfaces.top.as_ref().map_or(&[][..], |t| t.primitives());
+        if prims.is_empty() {
+            violated.push("a medium bounded by `interface` surfaces (the scene has no surfaces)".to_string());
+        } else if prims.iter().any(|p| {
+            p.interface == NONE
+                || !surfaces.pass_through.get(p.material as usize).copied().unwrap_or(false)
+                || scene.interfaces[p.interface as usize] != [0, NONE]
+        }) {
+            violated.push(
+                "surfaces only as the medium's boundary (`interface` material, medium inside, none outside)".into(),
+            );
+        }
+        if !violated.is_empty() {
+            return Err(format!(
+                "the radiance-graph method needs {}",
+                violated.iter().map(|v| format!("\n  - {v}")).collect::<String>()
+            ));
+        }
+        let bounds = surfaces.bounds();
+        Ok(Volume {
+            scene,
+            medium: medium.expect("checked"),
+            medium_index: 0,
+            bounds,
+            radius: 0.5 * (bounds.max - bounds.min).length(),
+            lights,
+        })
+    }
+
+    /// Centre of the bounds.
+    pub fn center(&self) -> Vec3 {
+        0.5 * (self.bounds.min + self.bounds.max)
+    }
+
+    /// Where `ray` (from outside the medium) first enters it and where it next leaves:
+    /// `(t_in, t_out)`. `None` if it misses.
+    pub fn span(&self, ray: &Ray) -> Option<(f32, f32)> {
+        let hit = self.scene.surfaces.intersect(ray, f32::INFINITY)?;
+        // Entering: the direction points against the surface normal.
+        if ray.d.dot(hit.surface.n) >= 0.0 {
+            return None;
+        }
+        let t_in = hit.surface.t;
+        let inner = crate::geometry::spawn_ray(hit.surface.p, hit.surface.n, ray.d);
+        let exit = self.exit(&inner)?;
+        Some((t_in, (inner.o - ray.o).dot(ray.d) + exit))
+    }
+
+    /// The part of `ray` inside the medium from wherever its origin is: `(0, t_exit)` from
+    /// inside, `(t_in, t_out)` from outside when it enters, `None` when it misses.
+    pub fn span_from(&self, ray: &Ray) -> Option<(f32, f32)> {
+        let hit = self.scene.surfaces.intersect(ray, f32::INFINITY)?;
+        if ray.d.dot(hit.surface.n) > 0.0 { Some((0.0, hit.surface.t)) } else { self.span(ray) }
+    }
+
+    /// The medium's intervals along `ray` (whose origin is outside it) that start before
+    /// `t_end`, in order.
+    pub fn intervals(&self, ray: &Ray, t_end: f32) -> Vec<(f32, f32)> {
+        let mut v = Vec::new();
+        let mut offset = 0.0;
+        let mut r = *ray;
+        // A closed boundary is crossed an even number of times; 64 bounds a pathological mesh.
+        for _ in 0..64 {
+            let Some((t_in, t_out)) = self.span(&r) else { break };
+            if offset + t_in >= t_end {
+                break;
+            }
+            v.push((offset + t_in, offset + t_out));
+            let exit = r.at(t_out);
+            let next = crate::geometry::spawn_ray(exit, r.d, r.d);
+            offset += (next.o - r.o).dot(r.d);
+            r = next;
+        }
+        v
+    }
+
+    /// Transmittance along `ray` between distances `t0` and `t1`, given the medium's
+    /// `intervals` along it: one ratio-tracking estimate per interval piece.
+    pub fn transmittance_between(&self, ray: &Ray, intervals: &[(f32, f32)], t0: f32, t1: f32, rng: &mut Pcg32) -> f32 {
+        let mut tr = 1.0;
+        for &(a, b) in intervals {
+            let (a, b) = (a.max(t0), b.min(t1));
+            if a >= b {
+                continue;
+            }
+            tr *= self.transmittance(&Ray::new(ray.at(a), ray.d), b - a, rng);
+            if tr == 0.0 {
+                break;
+            }
+        }
+        tr
+    }
+
+    /// Distance from a point inside the medium along `ray` to the boundary.
+    pub fn exit(&self, ray: &Ray) -> Option<f32> {
+        self.scene.surfaces.intersect(ray, f32::INFINITY).map(|h| h.surface.t)
+    }
+
+    /// Samples where a segment from a point inside the medium first interacts (delta
+    /// tracking with absorption and scattering as events, as the thesis's `TracePath`):
+    /// a real scattering point, or the end of the path.
+    pub fn sample_scatter(&self, ray: &Ray, t_max: f32, rng: &mut Pcg32) -> Event {
+        sample_event(self.medium, ray, t_max, rng)
+    }
+
+    /// Transmittance along `ray` to distance `t_max` inside the medium, one ratio-tracking
+    /// estimate (thesis Eq. 4.22 averages these).
+    pub fn transmittance(&self, ray: &Ray, t_max: f32, rng: &mut Pcg32) -> f32 {
+        let mut tr = 1.0;
+        let u = rng.uniform();
+        sample_t_maj::<Rgb, _>(self.medium, ray, t_max, u, rng, 0, &(), |_, mp, sigma_maj, _, _| {
+            let sigma_n = (sigma_maj[0] - mp.sigma_a[0] - mp.sigma_s[0]).max(0.0);
+            tr *= sigma_n / sigma_maj[0];
+            tr > 0.0
+        });
+        tr
+    }
+}
+
+/// Delta tracking through a gray medium with absorption and real scattering as events (the
+/// thesis's `TracePath` and graph integrator).
+#[inline]
+pub fn sample_event(medium: &Medium, ray: &Ray, t_max: f32, rng: &mut Pcg32) -> Event {
+    let mut event = Event::Pass;
+    let u = rng.uniform();
+    sample_t_maj::<Rgb, _>(medium, ray, t_max, u, rng, 0, &(), |p, mp, sigma_maj, _, rng| {
+        let um = rng.uniform() * sigma_maj[0];
+        if um < mp.sigma_a[0] {
+            event = Event::Absorb;
+            false
+        } else if um < mp.sigma_a[0] + mp.sigma_s[0] {
+            event = Event::Scatter(p);
+            false
+        } else {
+            true
+        }
+    });
+    event
+}
+
+fn light_kind_name(k: &LightKind) -> &'static str {
+    match k {
+        LightKind::Point { .. } => "point",
+        LightKind::Spot { .. } => "spot",
+        LightKind::Distant { .. } => "distant",
+        LightKind::UniformInfinite { .. } => "uniform infinite",
+        LightKind::ImageInfinite(_) => "image infinite",
+        LightKind::Area { .. } => "area",
+    }
+}

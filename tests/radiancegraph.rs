@@ -1,0 +1,154 @@
+//! The radiance-graph method: against volpath on a scene inside its constraints, and its
+//! toolchain (`nimbus graph build`, `--graph-data`) with its refusals.
+
+use crate::common::{channel_stats, nimbus, render_scene, render_with, scratch_dir};
+use nimbus::integrators::radiancegraph::{self, config::GraphConfig, volume::Volume};
+use nimbus::scene::{BuildOptions, build_scene};
+
+/// A homogeneous cube (side 2, σs = `sigma_s`) lit from above by a distant light, seen from
+/// the side; `extra` goes into the world block.
+fn cube_text(sigma_s: f32, integrator: &str, extra: &str) -> String {
+    format!(
+        r#"LookAt 0 0.5 6  0 0 0  0 1 0
+Camera "perspective" "float fov" 35
+Film "rgb" "integer xresolution" 32 "integer yresolution" 32
+Sampler "zsobol" "integer pixelsamples" 16
+Integrator "{integrator}" "integer maxdepth" 10
+WorldBegin
+LightSource "distant" "point3 from" [0.3 1 0.2] "point3 to" [0 0 0] "rgb L" [2 2 2]
+{extra}
+MakeNamedMedium "m" "string type" "homogeneous" "rgb sigma_s" [{sigma_s} {sigma_s} {sigma_s}]
+  "rgb sigma_a" [0 0 0]
+AttributeBegin
+  MediumInterface "m" ""
+  Material "interface"
+  Shape "trianglemesh"
+    "point3 P" [-1 -1 -1  1 -1 -1  1 1 -1  -1 1 -1  -1 -1 1  1 -1 1  1 1 1  -1 1 1]
+    "integer indices" [0 2 1 0 3 2  4 5 6 4 6 7  0 1 5 0 5 4  3 7 6 3 6 2  0 4 7 0 7 3  1 2 6 1 6 5]
+AttributeEnd
+"#
+    )
+}
+
+const SMALL_CONFIG: &str = r#"{
+    "graphBuilder": {"dimensionSteps": 100, "iterationsPerStep": 20, "maxDepth": 10, "radiusModifier": 20},
+    "lightingCalculator": {"lightIterations": 4, "pointsOnRadiusLight": 1, "bounces": [9, 1]}
+}"#;
+
+/// The graph's image mean on a σs = 2 cube agrees with volpath's (maxdepth 10 on both) within
+/// four standard errors of the difference plus the method's bias. The bias measured here is
+/// +0.75 % (thesis Sec. 4.7: node averaging biases by angle between light and camera); 3 %
+/// is the issue's accuracy target.
+#[test]
+fn homogeneous_cube_matches_volpath() {
+    let desc = nimbus::parser::load_str(&cube_text(2.0, "volpath", ""), "cube.pbrt").unwrap();
+    let scene = build_scene(&desc, &BuildOptions { spp: Some(64), seed: Some(1), ..Default::default() }).unwrap();
+    let config = GraphConfig::from_json(SMALL_CONFIG).unwrap();
+    let (graphs, stats) = radiancegraph::build(&scene, &config, None, 7).unwrap();
+    assert_eq!(graphs.iter().map(|g| g.bounces).collect::<Vec<_>>(), [9, 1]);
+    assert!(stats.vertices > 1000 && stats.edges > stats.vertices, "{stats:?}");
+    let volume = Volume::new(&scene).unwrap();
+    let full = radiancegraph::render_integrator(&volume, graphs.into_iter().next().unwrap().cache);
+    let graph = channel_stats(&render_with(&scene, &full));
+    let reference = channel_stats(&render_scene(&scene));
+    let (g, r) = (graph[1], reference[1]);
+    let se = (g.1 * g.1 + r.1 * r.1).sqrt();
+    assert!((g.0 - r.0).abs() <= 4.0 * se + 0.03 * r.0, "graph {g:?} volpath {r:?}");
+}
+
+/// Fewer bounces carry less light: the 1-bounce graph is darker than the 9-bounce one, but
+/// not black (single scattering is most of this thin cube's light).
+#[test]
+fn fewer_bounces_give_less_light() {
+    let desc = nimbus::parser::load_str(&cube_text(2.0, "volpath", ""), "cube.pbrt").unwrap();
+    let scene = build_scene(&desc, &BuildOptions { spp: Some(4), seed: Some(1), ..Default::default() }).unwrap();
+    let config = GraphConfig::from_json(SMALL_CONFIG).unwrap();
+    let (graphs, _) = radiancegraph::build(&scene, &config, None, 7).unwrap();
+    let volume = Volume::new(&scene).unwrap();
+    let means: Vec<f64> = graphs
+        .into_iter()
+        .map(|g| channel_stats(&render_with(&scene, &radiancegraph::render_integrator(&volume, g.cache)))[1].0)
+        .collect();
+    assert!(means[1] < 0.9 * means[0] && means[1] > 0.0, "{means:?}");
+}
+
+/// `nimbus graph build` writes graph_maker's files; `render --graph-data` renders from them;
+/// a scene naming `Integrator "graph"` builds its graph itself from the `.json` beside it; a
+/// graph built for another scene is refused.
+#[test]
+fn graph_build_and_render_from_the_file() {
+    let dir = scratch_dir("radiancegraph-cli");
+    let scene = dir.join("cube.pbrt");
+    std::fs::write(&scene, cube_text(2.0, "graph", "")).unwrap();
+    std::fs::write(dir.join("cube.json"), SMALL_CONFIG).unwrap();
+    let out = nimbus(&["graph", "build", scene.to_str().unwrap(), "--quiet"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let stats: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("cube_stats.json")).unwrap()).unwrap();
+    for key in ["amounts", "duration", "edges", "in_node_path_length", "render_search_range", "sizes", "nimbus"] {
+        assert!(stats.get(key).is_some(), "{key} missing from {stats}");
+    }
+    assert!(stats["amounts"]["vertices"].as_u64().unwrap() > 1000);
+    assert!(dir.join("cube_d10.txt").exists() && dir.join("cube_d2.txt").exists());
+    let graph = dir.join("cube_d10.txt");
+    let img = dir.join("g.exr");
+    let render = |scene: &std::path::Path, extra: &[&str]| {
+        let mut args =
+            vec!["render", scene.to_str().unwrap(), "--quiet", "--spp", "4", "--outfile", img.to_str().unwrap()];
+        args.extend_from_slice(extra);
+        nimbus(&args)
+    };
+    let out = render(&scene, &["--graph-data", graph.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let from_file = nimbus::imageio::read_exr(&img).unwrap();
+    assert_eq!(from_file.metadata.get("nimbus:integrator").map(String::as_str), Some("radiancegraph"));
+    assert!(from_file.mean()[1] > 0.0);
+    // Without a graph file the render builds one from cube.json: the same graph, the same image.
+    let out = render(&scene, &[]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert_eq!(nimbus::imageio::read_exr(&img).unwrap().pixels, from_file.pixels);
+    // Another medium: the graph file is refused, naming the file and why.
+    let other = dir.join("other.pbrt");
+    std::fs::write(&other, cube_text(3.0, "graph", "")).unwrap();
+    let out = render(&other, &["--graph-data", graph.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(err.contains("cube_d10.txt: this graph was built for another scene"), "{err}");
+}
+
+/// Configs with an unknown key or a wrong type stop the build with the key's JSON path.
+#[test]
+fn config_errors_name_the_json_path() {
+    let dir = scratch_dir("radiancegraph-config");
+    let scene = dir.join("cube.pbrt");
+    std::fs::write(&scene, cube_text(2.0, "graph", "")).unwrap();
+    let cfg = dir.join("bad.json");
+    std::fs::write(&cfg, r#"{"graphBuilder": {"renderSearchRange": {"neighboursToUse": "five"}}}"#).unwrap();
+    let out = nimbus(&["graph", "build", scene.to_str().unwrap(), "--config", cfg.to_str().unwrap(), "--quiet"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(
+        err.contains("bad.json: graphBuilder.renderSearchRange.neighboursToUse: expected an integer, found a string"),
+        "{err}"
+    );
+}
+
+/// A scene outside the method's constraints is refused with every violated one named.
+#[test]
+fn constraints_are_checked_by_name() {
+    let dir = scratch_dir("radiancegraph-constraints");
+    let scene = dir.join("s.pbrt");
+    let text = cube_text(2.0, "graph", r#"LightSource "point" "point3 from" [0 3 0]"#)
+        .replace(r#""rgb sigma_a" [0 0 0]"#, r#""rgb sigma_a" [0 0.5 0] "float g" 0.4"#);
+    std::fs::write(&scene, text).unwrap();
+    let out = nimbus(&["graph", "build", scene.to_str().unwrap(), "--quiet"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    for needed in [
+        "an isotropic phase function (medium \"m\" has g = 0.4)",
+        "gray coefficients (medium \"m\" has chromatic sigma_a or sigma_s)",
+        "distant and uniform infinite lights only (the scene has a point light)",
+    ] {
+        assert!(err.contains(needed), "{needed} not in {err}");
+    }
+}

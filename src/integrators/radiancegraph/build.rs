@@ -193,7 +193,7 @@ fn reinforce(
     let check_neighbours = |g: &BuildGraph, list: &mut Vec<u32>| {
         let keep: Vec<bool> = list
             .par_iter()
-            .map(|&a| g.count_within(g.positions()[a as usize], range) < nr.neighbours_for_not_sparse as usize)
+            .map(|&a| g.count_within(g.position(a), range) < nr.neighbours_for_not_sparse as usize)
             .collect();
         let mut k = keep.iter();
         list.retain(|_| *k.next().unwrap());
@@ -238,13 +238,13 @@ fn trace_from(
     next_stream: &mut u64,
 ) -> u64 {
     let radius = graph.radius();
-    let positions = graph.positions();
+    let g: &BuildGraph = graph;
     let base = *next_stream;
     let traced: Vec<(u32, Traced)> = nodes
         .par_iter()
         .enumerate()
         .flat_map_iter(|(i, &a)| {
-            let center = positions[a as usize];
+            let center = g.position(a);
             (0..rays as u64).filter_map(move |k| {
                 let mut rng = Pcg32::new(base + i as u64 * rays as u64 + k, seed);
                 // A uniform point in the node's sphere (rejection, as the thesis).

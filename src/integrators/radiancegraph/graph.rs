@@ -2,17 +2,19 @@
 //! segments sampled from them, a hash grid over the nodes for fixed-radius queries, and each
 //! node's outgoing edges with their sample counts.
 //!
-//! Memory, per node: position 12 B, sample count 4 B, next-in-cell link 4 B, edge list
-//! header 24 B and about 20 B of hash grid; per edge: target and count, 8 B, in lists that at
-//! most double. The thesis keeps `std::map`s of nodes, edges and per-node edge maps (≈ 190 B
-//! per edge).
+//! Memory, per node: position 12 B, sample count 4 B, next-in-cell link 4 B, edge-list row
+//! 8 B, in arrays that grow by fixed chunks, and a hash grid with cells of twice the radius
+//! (a few nodes per cell); per edge: target and count, 8 B, in slots at most twice a list's
+//! length ([`EdgeLists`]). The thesis keeps `std::map`s of nodes, edges and per-node edge maps
+//! (≈ 190 B per edge).
 
 use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
 
 use glam::{IVec3, Vec3};
 
-use super::transport::{EdgeCount, Transport};
+use super::edges::EdgeLists;
+use super::transport::Transport;
 
 /// A multiply-rotate hasher for grid cells (std's SipHash is several times slower here, and
 /// cell keys need no protection against adversarial input).
@@ -39,6 +41,54 @@ impl Hasher for CellHasher {
 type Cells = HashMap<IVec3, u32, BuildHasherDefault<CellHasher>>;
 
 const NONE: u32 = u32::MAX;
+
+/// A growable array in fixed chunks of 2¹⁶ elements: pushing never copies or doubles.
+struct Chunked<T> {
+    chunks: Vec<Box<[T]>>,
+    len: usize,
+}
+
+const CHUNK_BITS: usize = 16;
+
+impl<T: Copy + Default> Chunked<T> {
+    fn new() -> Chunked<T> {
+        Chunked { chunks: Vec::new(), len: 0 }
+    }
+
+    fn push(&mut self, v: T) {
+        if self.len >> CHUNK_BITS == self.chunks.len() {
+            self.chunks.push(vec![T::default(); 1 << CHUNK_BITS].into_boxed_slice());
+        }
+        self.chunks[self.len >> CHUNK_BITS][self.len & ((1 << CHUNK_BITS) - 1)] = v;
+        self.len += 1;
+    }
+
+    #[inline]
+    fn get(&self, i: usize) -> T {
+        self.chunks[i >> CHUNK_BITS][i & ((1 << CHUNK_BITS) - 1)]
+    }
+
+    #[inline]
+    fn get_mut(&mut self, i: usize) -> &mut T {
+        &mut self.chunks[i >> CHUNK_BITS][i & ((1 << CHUNK_BITS) - 1)]
+    }
+
+    fn bytes(&self) -> usize {
+        self.chunks.len() * (std::mem::size_of::<T>() << CHUNK_BITS) + self.chunks.capacity() * 16
+    }
+
+    /// The elements in one contiguous vector, freeing chunks as they are copied.
+    fn into_vec(self) -> Vec<T> {
+        let mut v = Vec::with_capacity(self.len);
+        let mut left = self.len;
+        for c in self.chunks {
+            let k = left.min(c.len());
+            v.extend_from_slice(&c[..k]);
+            left -= k;
+        }
+        v
+    }
+}
 
 /// Mean and spread of the lengths of runs of a path inside one node (the thesis's
 /// `in_node_path_length` statistic).
@@ -75,11 +125,11 @@ impl RunStats {
 pub struct BuildGraph {
     radius: f32,
     cell_size: f32,
-    positions: Vec<Vec3>,
-    samples: Vec<u32>,
-    next_in_cell: Vec<u32>,
+    positions: Chunked<Vec3>,
+    samples: Chunked<u32>,
+    next_in_cell: Chunked<u32>,
     cells: Cells,
-    out: Vec<Vec<(u32, u32)>>,
+    out: EdgeLists,
     /// Runs of consecutive path vertices in one node.
     pub in_node: RunStats,
 }
@@ -89,12 +139,14 @@ impl BuildGraph {
     pub fn new(radius: f32) -> BuildGraph {
         BuildGraph {
             radius,
-            cell_size: radius,
-            positions: Vec::new(),
-            samples: Vec::new(),
-            next_in_cell: Vec::new(),
+            // Twice the radius: a radius query touches 8 cells, and a cell holds a few
+            // nodes, so the grid costs a few bytes per node.
+            cell_size: 2.0 * radius,
+            positions: Chunked::new(),
+            samples: Chunked::new(),
+            next_in_cell: Chunked::new(),
             cells: Cells::default(),
-            out: Vec::new(),
+            out: EdgeLists::default(),
             in_node: RunStats::default(),
         }
     }
@@ -106,43 +158,46 @@ impl BuildGraph {
 
     /// Number of nodes.
     pub fn len(&self) -> usize {
-        self.positions.len()
+        self.positions.len
     }
 
     /// True without nodes.
     pub fn is_empty(&self) -> bool {
-        self.positions.is_empty()
+        self.positions.len == 0
     }
 
-    /// Node positions.
-    pub fn positions(&self) -> &[Vec3] {
-        &self.positions
+    /// Position of node `a`.
+    #[inline]
+    pub fn position(&self, a: u32) -> Vec3 {
+        self.positions.get(a as usize)
     }
 
-    /// Segments sampled from each node (s_n of Eq. 4.20).
-    pub fn samples(&self) -> &[u32] {
-        &self.samples
+    /// Segments sampled from node `a` (s_n of Eq. 4.20).
+    pub fn samples(&self, a: u32) -> u32 {
+        self.samples.get(a as usize)
     }
 
     /// Outgoing edges of node `a`.
     pub fn out_degree(&self, a: u32) -> usize {
-        self.out[a as usize].len()
+        self.out.len(a)
     }
 
     fn cell(&self, p: Vec3) -> IVec3 {
         (p / self.cell_size).floor().as_ivec3()
     }
 
-    /// Calls `f` with every node within `reach` cells of `p`'s cell.
-    fn for_nearby(&self, p: Vec3, reach: i32, mut f: impl FnMut(u32)) {
-        let c = self.cell(p);
-        for z in -reach..=reach {
-            for y in -reach..=reach {
-                for x in -reach..=reach {
-                    let mut i = self.cells.get(&(c + IVec3::new(x, y, z))).copied().unwrap_or(NONE);
+    /// Calls `f` with every node in the cells the box of half-size `range` around `p`
+    /// touches: with cells of twice the radius, 8 cells for a radius query.
+    fn for_nearby(&self, p: Vec3, range: f32, mut f: impl FnMut(u32)) {
+        let lo = self.cell(p - Vec3::splat(range));
+        let hi = self.cell(p + Vec3::splat(range));
+        for z in lo.z..=hi.z {
+            for y in lo.y..=hi.y {
+                for x in lo.x..=hi.x {
+                    let mut i = self.cells.get(&IVec3::new(x, y, z)).copied().unwrap_or(NONE);
                     while i != NONE {
                         f(i);
-                        i = self.next_in_cell[i as usize];
+                        i = self.next_in_cell.get(i as usize);
                     }
                 }
             }
@@ -153,8 +208,8 @@ impl BuildGraph {
     pub fn closest_within_radius(&self, p: Vec3) -> Option<u32> {
         let r2 = self.radius * self.radius;
         let mut best: Option<(f32, u32)> = None;
-        self.for_nearby(p, 1, |i| {
-            let d2 = self.positions[i as usize].distance_squared(p);
+        self.for_nearby(p, self.radius, |i| {
+            let d2 = self.positions.get(i as usize).distance_squared(p);
             if d2 <= r2 && best.is_none_or(|(bd, bi)| d2 < bd || (d2 == bd && i < bi)) {
                 best = Some((d2, i));
             }
@@ -164,31 +219,22 @@ impl BuildGraph {
 
     /// Nodes within `range` of `p`, `p`'s own node included (the thesis's `CountInRadius`).
     pub fn count_within(&self, p: Vec3, range: f32) -> usize {
-        let reach = (range / self.cell_size).ceil().max(1.0) as i32;
         let r2 = range * range;
         let mut n = 0;
-        self.for_nearby(p, reach, |i| n += usize::from(self.positions[i as usize].distance_squared(p) <= r2));
+        self.for_nearby(p, range, |i| n += usize::from(self.positions.get(i as usize).distance_squared(p) <= r2));
         n
     }
 
     fn add_node(&mut self, p: Vec3) -> u32 {
-        let i = self.positions.len() as u32;
+        let i = self.positions.len as u32;
         let c = self.cell(p);
         let head = self.cells.entry(c).or_insert(NONE);
         self.next_in_cell.push(*head);
         *head = i;
         self.positions.push(p);
         self.samples.push(0);
-        self.out.push(Vec::new());
+        self.out.push_node();
         i
-    }
-
-    fn add_edge(&mut self, from: u32, to: u32) {
-        let list = &mut self.out[from as usize];
-        match list.iter_mut().find(|e| e.0 == to) {
-            Some(e) => e.1 += 1,
-            None => list.push((to, 1)),
-        }
     }
 
     /// Groups one traced path into the graph (thesis Sec. 4.3): each scattering point joins
@@ -211,8 +257,8 @@ impl BuildGraph {
                 None => self.add_node(p),
             };
             if let Some(v) = prev {
-                self.samples[v as usize] += 1;
-                self.add_edge(v, node);
+                *self.samples.get_mut(v as usize) += 1;
+                self.out.add(v, node);
                 if v == node {
                     run += 1;
                 } else {
@@ -227,7 +273,7 @@ impl BuildGraph {
         }
         if last_sampled {
             if let Some(v) = prev {
-                self.samples[v as usize] += 1;
+                *self.samples.get_mut(v as usize) += 1;
             }
             if vertices > 0 {
                 self.in_node.add(run as f64);
@@ -237,37 +283,33 @@ impl BuildGraph {
 
     /// Number of edges.
     pub fn edge_count(&self) -> usize {
-        self.out.iter().map(Vec::len).sum()
+        self.out.edges()
     }
 
     /// Edges sampled more than once.
     pub fn edges_more_than_once(&self) -> usize {
-        self.out.iter().flatten().filter(|e| e.1 > 1).count()
+        self.out.more_than_once()
     }
 
-    /// Bytes held, as (per-node structures, edge lists), counting capacities, not lengths.
+    /// Bytes held, as (per-node structures, edge storage).
     pub fn memory_bytes(&self) -> (usize, usize) {
-        use std::mem::size_of;
-        let nodes = self.positions.capacity() * size_of::<Vec3>()
-            + self.samples.capacity() * 4
-            + self.next_in_cell.capacity() * 4
-            + self.out.capacity() * size_of::<Vec<(u32, u32)>>()
+        let (rows, pools) = self.out.memory_bytes();
+        let nodes = self.positions.bytes()
+            + self.samples.bytes()
+            + self.next_in_cell.bytes()
+            + rows
             // hashbrown: key, value and one control byte per bucket.
-            + self.cells.capacity() * (size_of::<IVec3>() + 4 + 1);
-        (nodes, self.out.iter().map(|l| l.capacity() * 8).sum())
+            + self.cells.capacity() * (std::mem::size_of::<IVec3>() + 4 + 1);
+        (nodes, pools)
     }
 
-    /// The transport matrix (Eq. 4.8 with Eq. 4.20's weights), consuming the edge lists one
-    /// node at a time so they and the matrix are never both whole in memory.
-    pub fn into_parts(mut self) -> (Vec<Vec3>, Transport, RunStats) {
-        let mut edges: Vec<EdgeCount> = Vec::with_capacity(self.edge_count());
-        for (a, list) in self.out.iter_mut().enumerate() {
-            let mut l = std::mem::take(list);
-            l.sort_unstable_by_key(|e| e.0);
-            edges.extend(l.iter().map(|&(to, samples)| EdgeCount { from: a as u32, to, samples }));
-        }
-        let t = Transport::from_counts(&edges, &self.samples);
-        (self.positions, t, self.in_node)
+    /// The node positions, the transport matrix (Eq. 4.8 with Eq. 4.20's weights, made from
+    /// the edge lists in place) and the in-node run statistics.
+    pub fn into_parts(self) -> (Vec<Vec3>, Transport, RunStats) {
+        let BuildGraph { positions, samples, out, in_node, .. } = self;
+        let samples = samples.into_vec();
+        let t = Transport::from_lists(out, &samples);
+        (positions.into_vec(), t, in_node)
     }
 }
 
@@ -281,11 +323,11 @@ mod tests {
         g.add_path(None, &[Vec3::ZERO, Vec3::new(3.0, 0.0, 0.0), Vec3::new(0.5, 0.0, 0.0)], true);
         // 0.5 joins node 0; the path is 0 -> 1 -> 0 with three sampled segments.
         assert_eq!(g.len(), 2);
-        assert_eq!(g.samples(), [2, 1]);
+        assert_eq!([g.samples(0), g.samples(1)], [2, 1]);
         g.add_path(None, &[Vec3::new(2.2, 0.0, 0.0)], false);
         // 2.2 is within 1 of node 1 (at 3) only: no new node, no sample (forced end).
         assert_eq!(g.len(), 2);
-        assert_eq!(g.samples(), [2, 1]);
+        assert_eq!([g.samples(0), g.samples(1)], [2, 1]);
         // Closest, not first: 1.6 is 1.6 from node 0 (out of range) and 1.4 from node 1.
         assert_eq!(g.closest_within_radius(Vec3::new(1.6, 0.0, 0.0)), None);
         assert_eq!(g.closest_within_radius(Vec3::new(2.1, 0.0, 0.0)), Some(1));
@@ -305,11 +347,11 @@ mod tests {
         let mut g = BuildGraph::new(1.0);
         g.add_path(None, &[Vec3::ZERO, Vec3::new(0.1, 0.0, 0.0), Vec3::new(0.2, 0.0, 0.0)], true);
         // One run of 3 in node 0, with a self-edge sampled twice and 3 samples.
-        assert_eq!(g.samples(), [3]);
+        assert_eq!(g.samples(0), 3);
         assert_eq!(g.edges_more_than_once(), 1);
         assert_eq!(g.in_node.mean(), 3.0);
         g.add_path(Some(0), &[Vec3::new(5.0, 0.0, 0.0)], true);
-        assert_eq!(g.samples(), [4, 1]);
+        assert_eq!([g.samples(0), g.samples(1)], [4, 1]);
         assert_eq!(g.edge_count(), 2);
         assert!(g.memory_bytes().0 > 0 && g.memory_bytes().1 >= 2 * 8);
     }

@@ -6,6 +6,7 @@
 
 pub mod build;
 pub mod config;
+pub mod edges;
 pub mod file;
 pub mod graph;
 pub mod lighting;

@@ -25,26 +25,22 @@ pub fn search_ranges(points: &[Vec3], k: usize) -> Result<Vec<f32>, String> {
         return Err(format!("the graph has {} nodes, too few for {k} neighbours per node", points.len()));
     }
     let tree = node_tree(points);
-    let nearest = |a: usize| -> Vec<(u32, f32)> {
-        tree.nearest_n::<SquaredEuclidean>(&points[a].to_array(), NonZero::new(k + 1).unwrap())
-            .into_iter()
-            .filter(|n| n.item as usize != a)
-            .take(k)
-            .map(|n| (n.item, n.distance.sqrt()))
-            .collect()
-    };
-    // avgD(a) and NN(a, 1..=k), in parallel; each value is computed by one thread.
-    let per_node: Vec<(f32, Vec<u32>)> = (0..points.len())
-        .into_par_iter()
-        .map(|a| {
-            let nn = nearest(a);
-            let avg = nn.iter().map(|n| n.1).sum::<f32>() / nn.len() as f32;
-            (avg, nn.into_iter().map(|n| n.0).collect())
-        })
-        .collect();
-    Ok(per_node
-        .iter()
-        .map(|(avg, nn)| (avg + nn.iter().map(|&b| per_node[b as usize].0).sum::<f32>()) / (nn.len() + 1) as f32)
+    // avgD(a) and NN(a, 1..=k), in parallel, into flat arrays (k entries per node).
+    let mut avg = vec![0.0f32; points.len()];
+    let mut nn = vec![0u32; points.len() * k];
+    avg.par_iter_mut().zip(nn.par_chunks_mut(k)).enumerate().for_each(|(a, (avg, nn))| {
+        let found = tree.nearest_n::<SquaredEuclidean>(&points[a].to_array(), NonZero::new(k + 1).unwrap());
+        let mut sum = 0.0;
+        let mut j = 0;
+        for n in found.into_iter().filter(|n| n.item as usize != a).take(k) {
+            nn[j] = n.item;
+            sum += n.distance.sqrt();
+            j += 1;
+        }
+        *avg = sum / j as f32;
+    });
+    Ok((0..points.len())
+        .map(|a| (avg[a] + nn[a * k..(a + 1) * k].iter().map(|&b| avg[b as usize]).sum::<f32>()) / (k + 1) as f32)
         .collect())
 }
 

@@ -172,6 +172,7 @@ pub fn run(args: &CompareArgs) -> Result<ExitCode> {
             }
             let setup = run::RunSetup {
                 desc: &desc,
+                scene_file: &args.scene,
                 integrator: name,
                 seed,
                 mode,

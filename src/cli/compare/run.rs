@@ -203,6 +203,8 @@ const MAX_CHECKPOINT_SPP: u32 = 1 << 24;
 pub struct RunSetup<'a> {
     /// The parsed scene.
     pub desc: &'a SceneDescription,
+    /// Its file (methods that precompute read their config beside it).
+    pub scene_file: &'a std::path::Path,
     /// Integrator name.
     pub integrator: &'a str,
     /// Sampler seed.
@@ -231,7 +233,13 @@ pub fn run_integrator(s: &RunSetup<'_>) -> Result<Run> {
         Mode::EqualTime => None,
         Mode::EqualSpp => s.spp,
     };
-    let opts = BuildOptions { integrator: Some(s.integrator.into()), spp, seed: Some(s.seed), ..Default::default() };
+    let opts = BuildOptions {
+        integrator: Some(s.integrator.into()),
+        scene_file: Some(s.scene_file.to_path_buf()),
+        spp,
+        seed: Some(s.seed),
+        ..Default::default()
+    };
     let scene = build_scene(s.desc, &opts).map_err(scene_error)?;
     let integrator = scene.integrator.create(&scene).map_err(anyhow::Error::msg)?;
     let setup_seconds = t0.elapsed().as_secs_f64();

@@ -8,37 +8,13 @@
 //! length ([`EdgeLists`]). The thesis keeps `std::map`s of nodes, edges and per-node edge maps
 //! (≈ 190 B per edge).
 
-use std::collections::HashMap;
-use std::hash::{BuildHasherDefault, Hasher};
-
 use glam::{IVec3, Vec3};
 
+use super::cells::CellMap;
 use super::edges::EdgeLists;
 use super::transport::Transport;
 
-/// A multiply-rotate hasher for grid cells (std's SipHash is several times slower here, and
-/// cell keys need no protection against adversarial input).
-#[derive(Default)]
-struct CellHasher(u64);
-
-impl Hasher for CellHasher {
-    fn finish(&self) -> u64 {
-        self.0
-    }
-    fn write(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            self.write_u64(b as u64);
-        }
-    }
-    fn write_i32(&mut self, i: i32) {
-        self.write_u64(i as u32 as u64);
-    }
-    fn write_u64(&mut self, i: u64) {
-        self.0 = (self.0.rotate_left(5) ^ i).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
-    }
-}
-
-type Cells = HashMap<IVec3, u32, BuildHasherDefault<CellHasher>>;
+type Cells = CellMap<u32>;
 
 const NONE: u32 = u32::MAX;
 

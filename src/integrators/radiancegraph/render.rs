@@ -4,11 +4,9 @@
 //! distance-weighted mean of the transported radiance of the nodes whose render search range
 //! contains p.
 
-use std::collections::HashMap;
-use std::hash::{BuildHasherDefault, Hasher};
-
 use glam::{IVec3, Vec2, Vec3};
 
+use super::cells::CellMap;
 use super::volume::{Event, sample_event};
 use crate::color::Channels;
 use crate::geometry::{Ray, spawn_ray};
@@ -31,29 +29,8 @@ pub struct RadianceCache {
     cell: f32,
     /// Per cell, the range in `members` of the nodes whose search sphere reaches into it, so
     /// a lookup reads one cell.
-    cells: HashMap<IVec3, (u32, u32), BuildHasherDefault<CellHasher>>,
+    cells: CellMap<(u32, u32)>,
     members: Vec<u32>,
-}
-
-/// A multiply-rotate hasher for grid cells (SipHash was an eighth of a render's time).
-#[derive(Default)]
-struct CellHasher(u64);
-
-impl Hasher for CellHasher {
-    fn finish(&self) -> u64 {
-        self.0
-    }
-    fn write(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            self.write_u64(u64::from(b));
-        }
-    }
-    fn write_i32(&mut self, i: i32) {
-        self.write_u64(u64::from(i as u32));
-    }
-    fn write_u64(&mut self, i: u64) {
-        self.0 = (self.0.rotate_left(5) ^ i).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
-    }
 }
 
 impl RadianceCache {
@@ -77,7 +54,7 @@ impl RadianceCache {
             }
         }
         pairs.sort_unstable_by_key(|&(c, i)| (c.to_array(), i));
-        let mut cells = HashMap::default();
+        let mut cells = CellMap::default();
         let mut s = 0;
         while s < pairs.len() {
             let c = pairs[s].0;

@@ -46,6 +46,9 @@ struct BuildArgs {
     /// Random seed (default: the scene's sampler seed).
     #[arg(long)]
     seed: Option<i32>,
+    /// Print time and peak bytes per stage, and bytes per node and per edge at the build's peak.
+    #[arg(long)]
+    stats: bool,
 }
 
 /// Runs `nimbus graph`.
@@ -183,6 +186,19 @@ fn build(args: &BuildArgs) -> Result<ExitCode> {
             println!("wrote {}", p.display());
         }
         println!("wrote {}", stats_path.display());
+    }
+    if args.stats {
+        println!("paths       {} light, {} reinforcement ({} rounds)", stats.paths.0, stats.paths.1, stats.paths.2);
+        for s in &stats.stages {
+            println!("stage       {:<14} {:>8.3} s  peak {:>8.1} MB", s.name, s.seconds, s.peak_bytes as f64 / 1e6);
+        }
+        println!(
+            "memory      {:.1} B/node, {:.1} B/edge at the build's peak ({} nodes, {} edges)",
+            stats.build_peak_bytes_per_node(),
+            stats.build_peak_bytes_per_edge(),
+            stats.vertices,
+            stats.edges
+        );
     }
     Ok(ExitCode::SUCCESS)
 }

@@ -119,7 +119,7 @@ fn build(args: &BuildArgs) -> Result<ExitCode> {
     std::fs::create_dir_all(&dir).map_err(|e| anyhow::anyhow!("{}: cannot create: {e}", dir.display()))?;
     let (scene_hash, config_hash) = (file::scene_hash(&volume), file::config_hash(&config));
     let mut written = Vec::new();
-    for g in &graphs {
+    for g in &graphs.graphs {
         let path = dir.join(format!("{stem}_d{}.txt", g.bounces_done + 1));
         let f = file::GraphFile {
             scene_hash,
@@ -127,9 +127,9 @@ fn build(args: &BuildArgs) -> Result<ExitCode> {
             bounces: g.bounces,
             bounces_done: g.bounces_done,
             node_radius: stats.node_radius,
-            positions: g.cache.positions().to_vec(),
-            ranges: g.cache.ranges(),
-            radiance: g.cache.radiance(),
+            positions: graphs.positions.clone(),
+            ranges: graphs.ranges.clone(),
+            radiance: g.radiance.clone(),
         };
         if let Err(e) = f.write(&path) {
             eprintln!("error: {e}");

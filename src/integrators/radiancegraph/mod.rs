@@ -19,6 +19,7 @@ pub mod volume;
 use std::time::Instant;
 
 use config::GraphConfig;
+use glam::Vec3;
 use render::RadianceCache;
 use volume::Volume;
 
@@ -56,7 +57,7 @@ pub fn create(settings: &RadianceGraphSettings, scene: &Scene) -> Result<render:
                 None => GraphConfig::default(),
             };
             let (graphs, _) = build(scene, &config, None, scene.sampler.seed as u64)?;
-            graphs.into_iter().max_by_key(|g| g.bounces).expect("bounces has an entry").cache
+            graphs.into_largest()
         }
     };
     Ok(render_integrator(&volume, cache))
@@ -110,14 +111,37 @@ pub struct GraphStats {
     pub build_peak: (usize, usize),
 }
 
-/// One graph per requested bounce count.
+/// The transported radiance for one requested bounce count.
 pub struct BuiltGraph {
     /// Bounces asked for.
     pub bounces: u32,
     /// Bounces reached (fewer at the numerical limit).
     pub bounces_done: u32,
-    /// The radiance cache to render from.
-    pub cache: RadianceCache,
+    /// Per light, per node: transported radiance scalars (L'_n of Eq. 4.23).
+    pub radiance: Vec<Vec<f32>>,
+}
+
+/// What a build produces: the nodes, and their radiance for each requested bounce count.
+pub struct Graphs {
+    /// Node positions.
+    pub positions: Vec<Vec3>,
+    /// Render search ranges (the node radius when they are off).
+    pub ranges: Vec<f32>,
+    /// One per entry of `lightingCalculator.bounces`, in its order.
+    pub graphs: Vec<BuiltGraph>,
+}
+
+impl Graphs {
+    /// The radiance cache of graph `i`, to render from.
+    pub fn cache(&self, i: usize) -> RadianceCache {
+        RadianceCache::new(self.positions.clone(), self.ranges.clone(), self.graphs[i].radiance.clone())
+    }
+
+    /// The radiance cache of the graph with the most bounces, consuming the build.
+    pub fn into_largest(mut self) -> RadianceCache {
+        let i = (0..self.graphs.len()).max_by_key(|&i| self.graphs[i].bounces).expect("bounces has an entry");
+        RadianceCache::new(self.positions, self.ranges, self.graphs.swap_remove(i).radiance)
+    }
 }
 
 /// Builds the graphs of `scene` (thesis Ch. 4: build, direct light, transport) for every
@@ -127,7 +151,7 @@ pub fn build(
     config: &GraphConfig,
     node_radius: Option<f32>,
     seed: u64,
-) -> Result<(Vec<BuiltGraph>, GraphStats), String> {
+) -> Result<(Graphs, GraphStats), String> {
     let volume = Volume::new(scene)?;
     // Sec. 4.3.1: the default radius is the scene's diameter / 1000 (the thesis's code).
     let radius = node_radius.unwrap_or(volume.radius * 2.0 / 1000.0 * config.graph_builder.radius_modifier);
@@ -182,18 +206,15 @@ pub fn build(
         stages,
         build_peak: report.peak,
     };
+    let mut per_light = per_light;
     let graphs = (0..bounces.len())
         .map(|b| BuiltGraph {
             bounces: bounces[b],
             bounces_done: per_light.iter().map(|l| l[b].bounces_done).min().unwrap_or(bounces[b]),
-            cache: RadianceCache::new(
-                positions.clone(),
-                ranges.clone(),
-                per_light.iter().map(|l| l[b].radiance.clone()).collect(),
-            ),
+            radiance: per_light.iter_mut().map(|l| std::mem::take(&mut l[b].radiance)).collect(),
         })
         .collect();
-    Ok((graphs, stats))
+    Ok((Graphs { positions, ranges, graphs }, stats))
 }
 
 impl GraphStats {

@@ -25,7 +25,7 @@ pub struct RadianceCache {
     /// Transported radiance scalars, light-major: `radiance[light * n + node]`.
     radiance: Vec<f32>,
     lights: usize,
-    /// Cell size: the mean search range.
+    /// Cell size: twice the mean search range.
     cell: f32,
     /// Per cell, the range in `members` of the nodes whose search sphere reaches into it, so
     /// a lookup reads one cell.
@@ -39,31 +39,46 @@ impl RadianceCache {
     pub fn new(positions: Vec<Vec3>, ranges: Vec<f32>, radiance: Vec<Vec<f32>>) -> RadianceCache {
         let n = positions.len();
         let mean = ranges.iter().map(|&r| f64::from(r)).sum::<f64>() / n.max(1) as f64;
-        let cell = (mean as f32).max(f32::MIN_POSITIVE);
+        // Cells of twice the mean range: a node's search sphere reaches into about 8 of them
+        // (4 bytes each), a lookup checks the nodes of one.
+        let cell = (2.0 * mean as f32).max(f32::MIN_POSITIVE);
         let key = |p: Vec3| (p / cell).floor().as_ivec3();
-        // (cell, node) for every cell a node's search sphere's box overlaps.
-        let mut pairs: Vec<(IVec3, u32)> = Vec::new();
-        for (i, (&p, &r)) in positions.iter().zip(&ranges).enumerate() {
+        let for_cells = |i: usize, f: &mut dyn FnMut(IVec3)| {
+            let (p, r) = (positions[i], ranges[i]);
             let (lo, hi) = (key(p - Vec3::splat(r)), key(p + Vec3::splat(r)));
             for z in lo.z..=hi.z {
                 for y in lo.y..=hi.y {
                     for x in lo.x..=hi.x {
-                        pairs.push((IVec3::new(x, y, z), i as u32));
+                        f(IVec3::new(x, y, z));
                     }
                 }
             }
+        };
+        // Two passes (count, then fill) instead of sorting (cell, node) pairs: no array of
+        // pairs, which was 16 bytes for each of them.
+        let mut cells: CellMap<(u32, u32)> = CellMap::default();
+        for i in 0..n {
+            for_cells(i, &mut |c| cells.entry(c).or_insert((0, 0)).1 += 1);
         }
-        pairs.sort_unstable_by_key(|&(c, i)| (c.to_array(), i));
-        let mut cells = CellMap::default();
-        let mut s = 0;
-        while s < pairs.len() {
-            let c = pairs[s].0;
-            let mut e = s;
-            while e < pairs.len() && pairs[e].0 == c {
-                e += 1;
-            }
-            cells.insert(c, (s as u32, e as u32));
-            s = e;
+        // Cell ranges in `members`, in cell order so the layout does not depend on hashing.
+        let mut keys: Vec<IVec3> = cells.keys().copied().collect();
+        keys.sort_unstable_by_key(|c| c.to_array());
+        let mut start = 0u32;
+        for k in &keys {
+            let e = cells.get_mut(k).expect("counted");
+            let count = e.1;
+            *e = (start, start);
+            start += count;
+        }
+        drop(keys);
+        // Fill: the second field counts up to the cell's end; nodes in index order.
+        let mut members = vec![0u32; start as usize];
+        for i in 0..n {
+            for_cells(i, &mut |c| {
+                let e = cells.get_mut(&c).expect("counted");
+                members[e.1 as usize] = i as u32;
+                e.1 += 1;
+            });
         }
         let lights = radiance.len();
         RadianceCache {
@@ -73,7 +88,7 @@ impl RadianceCache {
             lights,
             cell,
             cells,
-            members: pairs.into_iter().map(|p| p.1).collect(),
+            members,
         }
     }
 
@@ -104,22 +119,6 @@ impl RadianceCache {
             }
         }
         if weight > 0.0 { (sum / weight) as f32 } else { 0.0 }
-    }
-
-    /// Node positions.
-    pub fn positions(&self) -> &[Vec3] {
-        &self.positions
-    }
-
-    /// Render search ranges.
-    pub fn ranges(&self) -> Vec<f32> {
-        self.ranges_sq.iter().map(|r| r.sqrt()).collect()
-    }
-
-    /// Per light, the nodes' transported radiance.
-    pub fn radiance(&self) -> Vec<Vec<f32>> {
-        let n = self.positions.len().max(1);
-        self.radiance.chunks(n).map(<[f32]>::to_vec).collect()
     }
 
     /// Number of lights.

@@ -227,9 +227,19 @@ impl<'a> Volume<'a> {
     pub fn transmittance(&self, ray: &Ray, t_max: f32, rng: &mut Pcg32) -> f32 {
         let mut tr = 1.0;
         let u = rng.uniform();
-        sample_t_maj::<Rgb, _>(self.medium, ray, t_max, u, rng, 0, &(), |_, mp, sigma_maj, _, _| {
+        sample_t_maj::<Rgb, _>(self.medium, ray, t_max, u, rng, 0, &(), |_, mp, sigma_maj, _, rng| {
             let sigma_n = (sigma_maj[0] - mp.sigma_a[0] - mp.sigma_s[0]).max(0.0);
             tr *= sigma_n / sigma_maj[0];
+            // Russian roulette once the estimate is small (as nimbus's shadow rays, and pbrt-v4's):
+            // unbiased, and walks deep into a dense cloud stop early instead of multiplying
+            // ever smaller ratios to the far side. The thesis tracks to the end.
+            if tr < 0.05 {
+                if rng.uniform() < 0.75 {
+                    tr = 0.0;
+                } else {
+                    tr /= 0.25;
+                }
+            }
             tr > 0.0
         });
         tr

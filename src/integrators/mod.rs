@@ -49,7 +49,9 @@ impl IntegratorSettings {
             "simplevolpath" => {
                 Ok(IntegratorSettings::SimpleVolPath(simplevolpath::SimpleVolPathSettings::from_entity(e)?))
             }
-            "radiancegraph" => Ok(IntegratorSettings::RadianceGraph(radiancegraph::RadianceGraphSettings::default())),
+            "radiancegraph" => {
+                Ok(IntegratorSettings::RadianceGraph(radiancegraph::RadianceGraphSettings::from_entity(e)?))
+            }
             other => Err(Error::new(
                 &e.loc,
                 format!("integrator \"{other}\" is not available in nimbus (it has: {})", INTEGRATOR_NAMES.join(", ")),

@@ -103,6 +103,11 @@ def main():
             t_graph = render(scene, g_img, SPP, ["--integrator", "graph", "--graph-data", graph])
             t_vp = render(scene, v_img, SPP)
             eg, ev = diff(g_img, ref, os.path.join(HERE, f"{name}-graph-error.png")), diff(v_img, ref, os.path.join(HERE, f"{name}-volpath-error.png"))
+            # nimbus's collision estimator along camera rays (same graph, same integral).
+            col_scene = scene_variant(scene, os.path.join(work, f"{name}-collision.pbrt"), [(r'Integrator [^\n]*', 'Integrator "radiancegraph" "string estimator" "collision"')])
+            c_img = os.path.join(work, f"{name}-collision.exr")
+            t_col = render(col_scene, c_img, SPP, ["--graph-data", graph])
+            ec = diff(c_img, ref, os.path.join(HERE, f"{name}-collision-error.png"))
             run(["convert", g_img, os.path.join(HERE, f"{name}-graph.png")])
             run(["convert", ref, os.path.join(HERE, f"{name}-reference.png")])
             row = {
@@ -113,9 +118,11 @@ def main():
                 "bytes_per_node": stats["nimbus"]["build_peak_bytes_per_node"],
                 "bytes_per_edge": stats["nimbus"]["build_peak_bytes_per_edge"],
                 "graph_s": t_graph,
+                "collision_s": t_col,
                 "volpath_s": t_vp,
                 "reference_s": t_ref,
                 "graph": eg,
+                "collision": ec,
                 "volpath": ev,
             }
             main_rows.append(row)
@@ -242,6 +249,11 @@ def main():
                 f"| {r['scene']} | {r['nodes']} | {r['edges']} | {r['build_s']:.2f} | {r['bytes_per_node']:.1f} | {r['bytes_per_edge']:.1f} | "
                 f"{r['graph_s']:.2f} | {r['volpath_s']:.2f} | {r['volpath_s'] / r['graph_s']:.1f}× | {g['mae'] / g['ref_mean']:.2%} | "
                 f"{g['mpe']:.2e} | {g['mne']:.2e} | {g['mean'] / g['ref_mean'] - 1:+.2%} | {v['mae'] / v['ref_mean']:.2%} |")
+        lines += ["", "With the collision estimator along camera rays (`\"string estimator\" \"collision\"`, same graphs):", "",
+                  "| scene | render s | speed-up | MAE/mean | MPE | MNE | mean vs ref |", "|---|--:|--:|--:|--:|--:|--:|"]
+        for r in main_rows:
+            c = r["collision"]
+            lines.append(f"| {r['scene']} | {r['collision_s']:.2f} | {r['volpath_s'] / r['collision_s']:.1f}× | {c['mae'] / c['ref_mean']:.2%} | {c['mpe']:.2e} | {c['mne']:.2e} | {c['mean'] / c['ref_mean'] - 1:+.2%} |")
         lines += ["", "Node radius (cloud):", "", "| radius | nodes | edges | MAE/mean | MPE | MNE |", "|--:|--:|--:|--:|--:|--:|"]
         for s in sweep:
             lines.append(f"| {s['radius']:.4f} | {s['nodes']} | {s['edges']} | {s['mae'] / s['ref_mean']:.2%} | {s['mpe']:.2e} | {s['mne']:.2e} |")

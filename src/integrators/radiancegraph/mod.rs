@@ -32,6 +32,27 @@ pub struct RadianceGraphSettings {
     pub graph_data: Option<std::path::PathBuf>,
     /// The config to build with when there is no graph file (the scene's `.json`).
     pub config: Option<std::path::PathBuf>,
+    /// How camera rays integrate through the medium (`"string estimator"`).
+    pub estimator: render::Estimator,
+}
+
+impl RadianceGraphSettings {
+    /// Reads the integrator's parameters: `"string estimator"`, `"deltatracking"` (the
+    /// thesis's, default) or `"collision"`.
+    pub fn from_entity(e: &nimbus_parser::Entity) -> Result<RadianceGraphSettings, nimbus_parser::Error> {
+        let p = &e.params;
+        let estimator = match p.get_one_string("estimator", "deltatracking")? {
+            "deltatracking" => render::Estimator::DeltaTracking,
+            "collision" => render::Estimator::Collision,
+            other => {
+                return Err(nimbus_parser::Error::new(
+                    p.loc("estimator").unwrap_or(&e.loc),
+                    format!("unknown estimator \"{other}\" (deltatracking or collision)"),
+                ));
+            }
+        };
+        Ok(RadianceGraphSettings { estimator, ..Default::default() })
+    }
 }
 
 /// The integrator for `scene`: from the graph file, or from a graph built now with the
@@ -60,7 +81,7 @@ pub fn create(settings: &RadianceGraphSettings, scene: &Scene) -> Result<render:
             graphs.into_largest()
         }
     };
-    Ok(render_integrator(&volume, cache))
+    Ok(render_integrator(&volume, cache).with_estimator(settings.estimator))
 }
 
 /// The integrator over `cache` for `volume`'s lights.

@@ -7,11 +7,13 @@
 use glam::{IVec3, Vec2, Vec3};
 
 use super::cells::CellMap;
-use super::volume::{Event, sample_event};
+use super::volume::{Event, MAX_LIGHTS, sample_event};
 use crate::color::Channels;
+use crate::color::Rgb;
 use crate::geometry::{Ray, spawn_ray};
 use crate::integrators::RayIntegrator;
 use crate::integrators::common::RayStats;
+use crate::integrators::common::media::sample_t_maj;
 use crate::samplers::Sampler;
 use crate::sampling::rng::{Pcg32, hash_sample};
 use crate::scene::Scene;
@@ -127,9 +129,23 @@ impl RadianceCache {
     }
 }
 
+/// How a camera ray integrates Eq. 4.24, ∫ T_r σs L' dt, through the medium.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Estimator {
+    /// The thesis's: delta tracking to the first real event; a scattering event reads the
+    /// cache there, absorption and leaving read nothing.
+    #[default]
+    DeltaTracking,
+    /// Every tentative collision reads the cache, weighted by the ratio-tracked transmittance
+    /// to it and σs/σmaj (the collision estimator of the same integral): more lookups per
+    /// sample, no zero-or-one outcome.
+    Collision,
+}
+
 /// The `radiancegraph` integrator: a cache and the lights its scalars belong to.
 pub struct RadianceGraphIntegrator {
     cache: RadianceCache,
+    estimator: Estimator,
     /// Each cached light's radiance, in cache order.
     lights: Vec<SpectrumValue>,
     /// Uniform infinite lights, seen directly by rays that leave the medium.
@@ -141,7 +157,26 @@ impl RadianceGraphIntegrator {
     /// uniform lights a camera ray sees when it leaves the scene.
     pub fn new(cache: RadianceCache, lights: Vec<SpectrumValue>, sky: Vec<SpectrumValue>) -> RadianceGraphIntegrator {
         assert_eq!(cache.lights(), lights.len());
-        RadianceGraphIntegrator { cache, lights, sky }
+        RadianceGraphIntegrator { cache, estimator: Estimator::default(), lights, sky }
+    }
+
+    /// The same with another estimator along camera rays.
+    pub fn with_estimator(mut self, estimator: Estimator) -> RadianceGraphIntegrator {
+        self.estimator = estimator;
+        self
+    }
+
+    /// Σ_lights L_e · L'_search(p), weighted by `w`.
+    #[inline]
+    fn radiance_at<C: Channels>(&self, p: Vec3, w: f32, le: &[C]) -> C {
+        let mut l = C::ZERO;
+        for (i, le) in le.iter().enumerate() {
+            let v = self.cache.lookup(p, i);
+            if v > 0.0 {
+                l += *le * (w * v);
+            }
+        }
+        l
     }
 }
 
@@ -160,31 +195,56 @@ impl RayIntegrator for RadianceGraphIntegrator {
     ) -> C {
         let medium = &scene.media[0];
         let mut rng = Pcg32::new(hash_sample(sampler.get_1d(), Vec2::ZERO), hash_sample(sampler.get_1d(), Vec2::ONE));
+        // The lights' radiance in the path's channels, once per sample (at most a few lights).
+        let mut le = [C::ZERO; MAX_LIGHTS];
+        let n_lights = self.lights.len();
+        for (slot, l) in le.iter_mut().zip(&self.lights) {
+            *slot = C::eval(l, lambda);
+        }
+        let le = &le[..n_lights];
         let mut ray = ray;
         let mut inside = false;
+        // What reaches the camera from beyond the current point (the collision estimator's
+        // transmittance so far; 1 for delta tracking, whose outcomes are all or nothing).
+        let mut beta = 1.0f32;
+        let mut l = C::ZERO;
         // A closed boundary is crossed an even number of times; 64 bounds a pathological mesh.
         for _ in 0..64 {
             let hit = scene.surfaces.intersect(&ray, f32::INFINITY);
             stats.bounce += 1;
             if inside {
                 let t_max = hit.as_ref().map_or(f32::INFINITY, |h| h.surface.t);
-                match sample_event(medium, &ray, t_max, &mut rng) {
-                    Event::Scatter(p) => {
-                        let mut l = C::ZERO;
-                        for (i, le) in self.lights.iter().enumerate() {
-                            l += C::eval(le, lambda) * self.cache.lookup(p, i);
+                match self.estimator {
+                    Estimator::DeltaTracking => match sample_event(medium, &ray, t_max, &mut rng) {
+                        Event::Scatter(p) => return self.radiance_at(p, 1.0, le),
+                        Event::Absorb => return C::ZERO,
+                        Event::Pass => {}
+                    },
+                    Estimator::Collision => {
+                        let u = rng.uniform();
+                        sample_t_maj::<Rgb, _>(medium, &ray, t_max, u, &mut rng, 0, &(), |p, mp, sigma_maj, _, rng| {
+                            let s = sigma_maj[0];
+                            l += self.radiance_at(p, beta * mp.sigma_s[0] / s, le);
+                            beta *= ((s - mp.sigma_a[0] - mp.sigma_s[0]) / s).max(0.0);
+                            if beta < 0.05 {
+                                if rng.uniform() < 0.75 {
+                                    beta = 0.0;
+                                } else {
+                                    beta /= 0.25;
+                                }
+                            }
+                            beta > 0.0
+                        });
+                        if beta == 0.0 {
+                            return l;
                         }
-                        return l;
                     }
-                    Event::Absorb => return C::ZERO,
-                    Event::Pass => {}
                 }
             }
             match hit {
                 None => {
-                    let mut l = C::ZERO;
-                    for le in &self.sky {
-                        l += C::eval(le, lambda);
+                    for s in &self.sky {
+                        l += C::eval(s, lambda) * beta;
                     }
                     return l;
                 }
@@ -194,7 +254,7 @@ impl RayIntegrator for RadianceGraphIntegrator {
                 }
             }
         }
-        C::ZERO
+        l
     }
 }
 

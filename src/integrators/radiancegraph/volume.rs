@@ -16,6 +16,9 @@ use crate::sampling::rng::Pcg32;
 use crate::scene::Scene;
 use crate::spectra::SpectrumValue;
 
+/// The most lights a graph carries scalars for (camera rays keep their radiance on the stack).
+pub const MAX_LIGHTS: usize = 8;
+
 /// A light the graph carries one radiance scalar per node for.
 #[derive(Clone, Debug)]
 pub enum GraphLight {
@@ -109,6 +112,9 @@ impl<'a> Volume<'a> {
         }
         if scene.lights.is_empty() {
             violated.push("at least one light (the scene has none)".to_string());
+        }
+        if scene.lights.len() > MAX_LIGHTS {
+            violated.push(format!("at most {MAX_LIGHTS} lights (the scene has {})", scene.lights.len()));
         }
         if scene.camera_medium != NONE {
             violated.push("a camera outside the medium".to_string());

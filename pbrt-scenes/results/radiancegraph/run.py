@@ -185,15 +185,18 @@ def main():
             json.dump(results, f, indent=2)
 
         # Charts.
+        def error_panel(ax, xs, rows, xlabel, title):
+            for k, c in [("mae", "black"), ("mpe", "green"), ("mne", "red")]:
+                ax.plot(xs, [r[k] / r["ref_mean"] for r in rows], "o-", color=c, label=k.upper())
+            ax.set_xscale("log")
+            ax.set_xlabel(xlabel)
+            ax.set_ylabel("error / reference mean")
+            ax.set_title(title)
+            ax.legend()
+
         fig, ax = plt.subplots(1, 2, figsize=(10, 4))
         rs = [s["radius"] for s in sweep]
-        for k, c in [("mae", "black"), ("mpe", "green"), ("mne", "red")]:
-            ax[0].plot(rs, [s[k] / s["ref_mean"] for s in sweep], "o-", color=c, label=k.upper())
-        ax[0].set_xscale("log")
-        ax[0].set_xlabel("node radius")
-        ax[0].set_ylabel("error / reference mean")
-        ax[0].set_title("cloud: error against node radius")
-        ax[0].legend()
+        error_panel(ax[0], rs, sweep, "node radius", "cloud: error against node radius")
         ax[1].plot(rs, [s["nodes"] for s in sweep], "o-", label="nodes")
         ax[1].plot(rs, [s["edges"] for s in sweep], "s-", label="edges")
         ax[1].set_xscale("log")
@@ -206,13 +209,7 @@ def main():
 
         fig, ax = plt.subplots(1, 2, figsize=(10, 4))
         vr = [s["volume_radius"] for s in vsweep]
-        for k, c in [("mae", "black"), ("mpe", "green"), ("mne", "red")]:
-            ax[0].plot(vr, [s[k] / s["ref_mean"] for s in vsweep], "o-", color=c, label=k.upper())
-        ax[0].set_xscale("log")
-        ax[0].set_xlabel("volume radius (node radius fixed)")
-        ax[0].set_ylabel("error / reference mean")
-        ax[0].set_title("cube: error against volume size")
-        ax[0].legend()
+        error_panel(ax[0], vr, vsweep, "volume radius (node radius fixed)", "cube: error against volume size")
         ax[1].plot(vr, [s["build_s"] for s in vsweep], "o-", label="graph build")
         ax[1].plot(vr, [s["render_s"] for s in vsweep], "s-", label=f"graph render ({SPP} spp)")
         ax[1].plot(vr, [s["volpath_s"] for s in vsweep], "^-", label=f"volpath render ({SPP} spp)")

@@ -15,11 +15,28 @@ use crate::math::Frame;
 use crate::sampling::rng::Pcg32;
 use crate::sampling::warp;
 
-/// One traced path: its scattering points and whether its last segment was sampled.
+/// Traced paths, flat: all scattering points in order, and per path its start node, its
+/// number of points and whether its last segment was sampled. One per parallel chunk, so
+/// tracing allocates per chunk, not per path.
+#[derive(Default)]
 struct Traced {
     points: Vec<Vec3>,
-    last_sampled: bool,
+    paths: Vec<(Option<u32>, u32, bool)>,
 }
+
+impl Traced {
+    /// Groups the paths into the graph, in order.
+    fn add_to(&self, graph: &mut BuildGraph) {
+        let mut at = 0;
+        for &(start, n, last_sampled) in &self.paths {
+            graph.add_path(start, &self.points[at..at + n as usize], last_sampled);
+            at += n as usize;
+        }
+    }
+}
+
+/// Paths per parallel chunk.
+const CHUNK: usize = 256;
 
 /// Where a batch of paths starts.
 #[derive(Clone, Copy)]
@@ -72,19 +89,23 @@ pub fn build_graph(volume: &Volume, config: &Config, radius: f32, seed: u64) -> 
     let batch = (1 << 16) / per_start.max(1) as usize + 1;
     for (b, chunk) in starts.chunks(batch).enumerate() {
         let base = (b * batch) as u64 * per_start;
+        let per_chunk = CHUNK.div_ceil(per_start as usize).max(1);
         let traced: Vec<Traced> = chunk
-            .par_iter()
+            .par_chunks(per_chunk)
             .enumerate()
-            .flat_map_iter(|(i, s)| {
-                (0..per_start).map(move |k| {
-                    let mut rng = Pcg32::new(base + i as u64 * per_start + k, seed);
-                    trace(volume, s, max_depth, &mut rng)
-                })
+            .map(|(c, starts)| {
+                let mut t = Traced::default();
+                for (j, s) in starts.iter().enumerate() {
+                    let i = (c * per_chunk + j) as u64;
+                    for k in 0..per_start {
+                        let mut rng = Pcg32::new(base + i * per_start + k, seed);
+                        trace(volume, s, max_depth, &mut rng, &mut t);
+                    }
+                }
+                t
             })
             .collect();
-        for t in &traced {
-            graph.add_path(None, &t.points, t.last_sampled);
-        }
+        traced.iter().for_each(|t| t.add_to(&mut graph));
         report.note_memory(&graph);
     }
     reinforce(volume, config, &mut graph, seed, report.light_paths, &mut report);
@@ -136,27 +157,32 @@ fn light_starts(volume: &Volume, config: &Config, seed: u64) -> Vec<Start> {
 
 /// Traces one path from `start` (thesis `TracePath`): delta tracking to the next event,
 /// isotropic scattering, at most `max_depth` vertices counting a reinforcement path's node.
-fn trace(volume: &Volume, start: &Start, max_depth: usize, rng: &mut Pcg32) -> Traced {
+/// Appends it to `out`.
+fn trace(volume: &Volume, start: &Start, max_depth: usize, rng: &mut Pcg32, out: &mut Traced) {
     let max_points = max_depth - usize::from(start.node.is_some());
-    let mut points = Vec::new();
+    let first = out.points.len();
+    let done = |out: &mut Traced, last_sampled: bool| {
+        let n = (out.points.len() - first) as u32;
+        out.paths.push((start.node, n, last_sampled));
+    };
     if max_points == 0 {
-        return Traced { points, last_sampled: false };
+        return done(out, false);
     }
     let (mut ray, mut t_max) = (start.ray, start.t_max);
     loop {
         match volume.sample_scatter(&ray, t_max, rng) {
-            Event::Absorb | Event::Pass => return Traced { points, last_sampled: true },
+            Event::Absorb | Event::Pass => return done(out, true),
             Event::Scatter(p) => {
-                points.push(p);
-                if points.len() == max_points {
-                    return Traced { points, last_sampled: false };
+                out.points.push(p);
+                if out.points.len() - first == max_points {
+                    return done(out, false);
                 }
                 let d = warp::uniform_sphere(glam::Vec2::new(rng.uniform(), rng.uniform()));
                 ray = Ray::new(p, d);
                 match volume.exit(&ray) {
                     Some(t) => t_max = t,
                     // Numerically outside already: the segment leaves at once.
-                    None => return Traced { points, last_sampled: true },
+                    None => return done(out, true),
                 }
             }
         }
@@ -240,31 +266,37 @@ fn trace_from(
     let radius = graph.radius();
     let g: &BuildGraph = graph;
     let base = *next_stream;
-    let traced: Vec<(u32, Traced)> = nodes
-        .par_iter()
+    let per_chunk = CHUNK.div_ceil(rays as usize).max(1);
+    let traced: Vec<Traced> = nodes
+        .par_chunks(per_chunk)
         .enumerate()
-        .flat_map_iter(|(i, &a)| {
-            let center = g.position(a);
-            (0..rays as u64).filter_map(move |k| {
-                let mut rng = Pcg32::new(base + i as u64 * rays as u64 + k, seed);
-                // A uniform point in the node's sphere (rejection, as the thesis).
-                let offset = loop {
-                    let v = Vec3::new(rng.uniform(), rng.uniform(), rng.uniform()) * 2.0 - Vec3::ONE;
-                    if v.length_squared() < 1.0 {
-                        break v * radius;
+        .map(|(c, chunk)| {
+            let mut t = Traced::default();
+            for (j, &a) in chunk.iter().enumerate() {
+                let i = (c * per_chunk + j) as u64;
+                let center = g.position(a);
+                for k in 0..rays as u64 {
+                    let mut rng = Pcg32::new(base + i * rays as u64 + k, seed);
+                    // A uniform point in the node's sphere (rejection, as the thesis).
+                    let offset = loop {
+                        let v = Vec3::new(rng.uniform(), rng.uniform(), rng.uniform()) * 2.0 - Vec3::ONE;
+                        if v.length_squared() < 1.0 {
+                            break v * radius;
+                        }
+                    };
+                    let d = warp::uniform_sphere(glam::Vec2::new(rng.uniform(), rng.uniform()));
+                    let ray = Ray::new(center + offset, d);
+                    // Rays that miss the medium sample nothing (the thesis skips them too).
+                    if let Some((t_in, t_out)) = volume.span_from(&ray) {
+                        let start = Start { ray: Ray::new(ray.at(t_in), d), t_max: t_out - t_in, node: Some(a) };
+                        trace(volume, &start, max_depth, &mut rng, &mut t);
                     }
-                };
-                let d = warp::uniform_sphere(glam::Vec2::new(rng.uniform(), rng.uniform()));
-                let ray = Ray::new(center + offset, d);
-                let (t_in, t_out) = volume.span_from(&ray)?;
-                let start = Start { ray: Ray::new(ray.at(t_in), d), t_max: t_out - t_in, node: Some(a) };
-                Some((a, trace(volume, &start, max_depth, &mut rng)))
-            })
+                }
+            }
+            t
         })
         .collect();
     *next_stream += nodes.len() as u64 * rays as u64;
-    for (a, t) in &traced {
-        graph.add_path(Some(*a), &t.points, t.last_sampled);
-    }
-    traced.len() as u64
+    traced.iter().for_each(|t| t.add_to(graph));
+    traced.iter().map(|t| t.paths.len() as u64).sum()
 }

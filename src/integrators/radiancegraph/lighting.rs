@@ -51,26 +51,45 @@ pub fn direct_light(
         .iter()
         .enumerate()
         .map(|(li, light)| {
-            let per_node = |a: usize| {
+            let per_node = |scratch: &mut Scratch, a: usize| {
                 let mut rng = Pcg32::new(li as u64 * n + a as u64, seed ^ 0x006c_6967_6874);
                 match light {
                     GraphLight::Distant { dir, .. } => {
-                        distant(volume, positions[a], radius, *dir, &disk, config.light_iterations, &mut rng) * INV_4PI
+                        let iterations = config.light_iterations;
+                        distant(volume, positions[a], radius, *dir, &disk, iterations, &mut rng, scratch) * INV_4PI
                     }
-                    GraphLight::Uniform { .. } => uniform(volume, positions[a], radius, estimates, &mut rng),
+                    GraphLight::Uniform { .. } => uniform(volume, positions[a], radius, estimates, &mut rng, scratch),
                 }
             };
             if config.run_in_parallel {
-                (0..positions.len()).into_par_iter().map(per_node).collect()
+                (0..positions.len()).into_par_iter().map_init(Scratch::default, per_node).collect()
             } else {
-                (0..positions.len()).map(per_node).collect()
+                let mut scratch = Scratch::default();
+                (0..positions.len()).map(|a| per_node(&mut scratch, a)).collect()
             }
         })
         .collect()
 }
 
+/// Per-thread buffers of the direct-light walks.
+#[derive(Default)]
+struct Scratch {
+    intervals: Vec<(f32, f32)>,
+    overlaps: Vec<(f32, f32)>,
+}
+
 /// Mean transmittance from a distant light travelling along `dir` into the node at `c`.
-fn distant(volume: &Volume, c: Vec3, radius: f32, dir: Vec3, disk: &[Vec2], iterations: u32, rng: &mut Pcg32) -> f32 {
+#[allow(clippy::too_many_arguments)] // the node, the light, the disk and the scratch buffers
+fn distant(
+    volume: &Volume,
+    c: Vec3,
+    radius: f32,
+    dir: Vec3,
+    disk: &[Vec2],
+    iterations: u32,
+    rng: &mut Pcg32,
+    scratch: &mut Scratch,
+) -> f32 {
     let f = Frame::from_z(dir);
     let back = 2.0 * volume.radius + radius;
     let (mut sum, mut count) = (0.0f64, 0u32);
@@ -81,10 +100,11 @@ fn distant(volume: &Volume, c: Vec3, radius: f32, dir: Vec3, disk: &[Vec2], iter
         let t_mid = (c - o).dot(dir);
         let half = (radius * radius - q.length_squared()).max(0.0).sqrt();
         let (s0, s1) = (t_mid - half, t_mid + half);
-        let intervals = volume.intervals(&ray, s1);
+        let Scratch { intervals, overlaps } = scratch;
+        volume.intervals(&ray, s1, intervals);
         // The part of the chord inside the medium, where the node's points are.
-        let overlaps: Vec<(f32, f32)> =
-            intervals.iter().map(|&(a, b)| (a.max(s0), b.min(s1))).filter(|&(a, b)| a < b).collect();
+        overlaps.clear();
+        overlaps.extend(intervals.iter().map(|&(a, b)| (a.max(s0), b.min(s1))).filter(|&(a, b)| a < b));
         let length: f32 = overlaps.iter().map(|(a, b)| b - a).sum();
         if length <= 0.0 {
             continue;
@@ -93,14 +113,14 @@ fn distant(volume: &Volume, c: Vec3, radius: f32, dir: Vec3, disk: &[Vec2], iter
             // A uniform depth in the chord's medium part.
             let mut u = rng.uniform() * length;
             let mut depth = overlaps[overlaps.len() - 1].1;
-            for &(a, b) in &overlaps {
+            for &(a, b) in overlaps.iter() {
                 if u < b - a {
                     depth = a + u;
                     break;
                 }
                 u -= b - a;
             }
-            sum += f64::from(volume.transmittance_between(&ray, &intervals, 0.0, depth, rng));
+            sum += f64::from(volume.transmittance_between(&ray, intervals, 0.0, depth, rng));
             count += 1;
         }
     }
@@ -109,13 +129,14 @@ fn distant(volume: &Volume, c: Vec3, radius: f32, dir: Vec3, disk: &[Vec2], iter
 
 /// ∫ p T_r dω for a uniform light: the mean over uniform directions of the transmittance from
 /// uniform points of the node's medium part to the boundary.
-fn uniform(volume: &Volume, c: Vec3, radius: f32, estimates: usize, rng: &mut Pcg32) -> f32 {
+fn uniform(volume: &Volume, c: Vec3, radius: f32, estimates: usize, rng: &mut Pcg32, scratch: &mut Scratch) -> f32 {
     let back = 2.0 * volume.radius + radius;
     let mut sum = 0.0f64;
     for _ in 0..estimates {
         let d = warp::uniform_sphere(Vec2::new(rng.uniform(), rng.uniform()));
         // A uniform point of the sphere inside the medium (rejection; the centre, always
         // inside for a node, after 16 misses).
+        let intervals = &mut scratch.intervals;
         let mut found = None;
         for _ in 0..16 {
             let v = Vec3::new(rng.uniform(), rng.uniform(), rng.uniform()) * 2.0 - Vec3::ONE;
@@ -124,18 +145,18 @@ fn uniform(volume: &Volume, c: Vec3, radius: f32, estimates: usize, rng: &mut Pc
             }
             // From outside, back through the point, so the walk sees every boundary crossing.
             let ray = Ray::new(c + v * radius - d * back, d);
-            let intervals = volume.intervals(&ray, f32::INFINITY);
+            volume.intervals(&ray, f32::INFINITY, intervals);
             if intervals.iter().any(|&(a, b)| a <= back && back <= b) {
-                found = Some((ray, intervals));
+                found = Some(ray);
                 break;
             }
         }
-        let (ray, intervals) = found.unwrap_or_else(|| {
+        let ray = found.unwrap_or_else(|| {
             let ray = Ray::new(c - d * back, d);
-            let intervals = volume.intervals(&ray, f32::INFINITY);
-            (ray, intervals)
+            volume.intervals(&ray, f32::INFINITY, intervals);
+            ray
         });
-        sum += f64::from(volume.transmittance_between(&ray, &intervals, back, f32::INFINITY, rng));
+        sum += f64::from(volume.transmittance_between(&ray, intervals, back, f32::INFINITY, rng));
     }
     (sum / estimates.max(1) as f64) as f32
 }

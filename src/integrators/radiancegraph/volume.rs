@@ -179,9 +179,9 @@ impl<'a> Volume<'a> {
     }
 
     /// The medium's intervals along `ray` (whose origin is outside it) that start before
-    /// `t_end`, in order.
-    pub fn intervals(&self, ray: &Ray, t_end: f32) -> Vec<(f32, f32)> {
-        let mut v = Vec::new();
+    /// `t_end`, in order, into `v` (cleared first; callers reuse it).
+    pub fn intervals(&self, ray: &Ray, t_end: f32, v: &mut Vec<(f32, f32)>) {
+        v.clear();
         let mut offset = 0.0;
         let mut r = *ray;
         // A closed boundary is crossed an even number of times; 64 bounds a pathological mesh.
@@ -196,7 +196,6 @@ impl<'a> Volume<'a> {
             offset += (next.o - r.o).dot(r.d);
             r = next;
         }
-        v
     }
 
     /// Transmittance along `ray` between distances `t0` and `t1`, given the medium's

@@ -64,3 +64,35 @@ fn bench_reports_equal_spp_and_equal_error_ratios() {
     assert!(stderr.contains("speed.json") && stderr.contains("scenes.tiny.seconds"), "{stderr}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// A scene that fails makes the bench fail (after the others ran) and is listed in the JSON;
+/// a scene without a reference image says why it has no MSE.
+#[test]
+fn bench_failures_and_missing_references_are_reported() {
+    let dir = scratch_dir("bench-failures");
+    std::fs::create_dir_all(dir.join("scenes")).unwrap();
+    let good = dir.join("scenes/noref.pbrt");
+    std::fs::write(
+        &good,
+        "Film \"rgb\" \"integer xresolution\" 4 \"integer yresolution\" 4\nWorldBegin\nLightSource \"infinite\"\nShape \"sphere\"\n",
+    )
+    .unwrap();
+    let bad = dir.join("scenes/bad.pbrt");
+    std::fs::write(&bad, "WorldBegin\nShape \"plymesh\" \"string filename\" \"missing.ply\"\n").unwrap();
+    std::fs::write(dir.join("speed.json"), r#"{"spp": 1, "threads": 1, "scenes": {}}"#).unwrap();
+    let json = dir.join("out.json");
+    let args = ["bench", "--references", dir.to_str().unwrap(), "--spp", "1", "--nthreads", "1", "--spectral", "off"];
+    let mut args: Vec<&str> = args.to_vec();
+    args.extend(["--json", json.to_str().unwrap(), good.to_str().unwrap(), bad.to_str().unwrap()]);
+    let out = nimbus(&args);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("noref: no MSE") && stderr.contains("noref.exr"), "{stderr}");
+    assert!(stderr.contains("1 scene/transport run(s) failed"), "{stderr}");
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(v["rows"].as_array().unwrap().len(), 1);
+    let failures = v["failures"].as_array().unwrap();
+    assert_eq!(failures.len(), 1);
+    assert_eq!(failures[0]["scene"], "bad");
+    assert!(failures[0]["error"].as_str().unwrap().contains("missing.ply"), "{failures:?}");
+}

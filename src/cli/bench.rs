@@ -27,7 +27,8 @@ pub struct BenchArgs {
     /// Worker threads (pbrt-v4's figures use 2).
     #[arg(long, default_value_t = 2)]
     nthreads: usize,
-    /// Runs per scene and transport; the median time is reported.
+    /// Runs per scene and transport (at least 2: seeds 1 and 2 give the MSE); the median time
+    /// is reported.
     #[arg(long, default_value_t = 2)]
     repeat: usize,
     /// The pbrt-v4 references folder (scenes/, images/, speed.json).
@@ -48,13 +49,20 @@ struct PbrtFigures {
     mse: f64,
 }
 
-/// Reads speed.json: `{"spp": .., "scenes": {"name": {"seconds": .., "mse": ..}}}`.
-fn read_speed(path: &Path) -> Result<(u32, Vec<(String, PbrtFigures)>)> {
+/// What speed.json says: pbrt-v4's spp, its thread count if given, and per-scene figures.
+type Speed = (u32, Option<u64>, Vec<(String, PbrtFigures)>);
+
+/// Reads speed.json: `{"spp": .., "threads": .., "scenes": {"name": {"seconds": .., "mse": ..}}}`.
+fn read_speed(path: &Path) -> Result<Speed> {
     let text = std::fs::read_to_string(path).with_context(|| format!("{}: cannot read", path.display()))?;
     let v: serde_json::Value =
         serde_json::from_str(&text).with_context(|| format!("{}: not valid JSON", path.display()))?;
     let spp =
         v.get("spp").and_then(|s| s.as_u64()).with_context(|| format!("{}: no integer \"spp\"", path.display()))?;
+    let threads = match v.get("threads") {
+        None => None,
+        Some(t) => Some(t.as_u64().with_context(|| format!("{}: \"threads\" must be an integer", path.display()))?),
+    };
     let scenes = v
         .get("scenes")
         .and_then(|s| s.as_object())
@@ -69,7 +77,22 @@ fn read_speed(path: &Path) -> Result<(u32, Vec<(String, PbrtFigures)>)> {
         };
         out.push((name.clone(), PbrtFigures { seconds: num("seconds")?, mse: num("mse")? }));
     }
-    Ok((spp as u32, out))
+    Ok((spp as u32, threads, out))
+}
+
+/// A scene's name as speed.json and the reference images name it: the file name without
+/// `.pbrt` or `.pbrt.gz`.
+fn scene_name(path: &Path) -> String {
+    let file = path.file_name().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    let file = file.strip_suffix(".gz").unwrap_or(&file);
+    file.strip_suffix(".pbrt").unwrap_or(file).to_string()
+}
+
+/// The median of `times` (the mean of the middle two for an even count).
+fn median(times: &mut [f64]) -> f64 {
+    times.sort_by(f64::total_cmp);
+    let n = times.len();
+    if n % 2 == 1 { times[n / 2] } else { 0.5 * (times[n / 2 - 1] + times[n / 2]) }
 }
 
 /// A fixed scalar workload (a tiny ray-sphere loop) to calibrate machine speed.
@@ -137,11 +160,19 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode> {
         .references
         .clone()
         .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/pbrt-v4-references"));
-    let (pbrt_spp, pbrt) = read_speed(&refs.join("speed.json"))?;
+    let (pbrt_spp, pbrt_threads, pbrt) = read_speed(&refs.join("speed.json"))?;
     if args.spp != pbrt_spp {
         eprintln!(
             "note: speed.json holds pbrt-v4's figures at {pbrt_spp} spp; ratios at {} spp are not comparable",
             args.spp
+        );
+    }
+    if let Some(t) = pbrt_threads
+        && t != args.nthreads as u64
+    {
+        eprintln!(
+            "note: speed.json holds pbrt-v4's figures on {t} threads; ratios on {} are not comparable",
+            args.nthreads
         );
     }
     let scenes = if args.scenes.is_empty() {
@@ -163,10 +194,19 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode> {
     );
     println!("|---|---|--:|--:|--:|--:|--:|--:|");
     let mut rows = Vec::new();
+    let mut failures = Vec::new();
     for path in &scenes {
-        let name = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+        let name = scene_name(path);
         let figures = pbrt.iter().find(|(n, _)| *n == name).map(|(_, f)| *f);
-        let reference = nimbus::imageio::read_exr(&refs.join(format!("images/{name}.exr"))).ok();
+        let ref_path = refs.join(format!("images/{name}.exr"));
+        // No reference means no MSE: say why instead of leaving a silent "-".
+        let reference = match nimbus::imageio::read_exr(&ref_path) {
+            Ok(r) => Some(r),
+            Err(e) => {
+                eprintln!("note: {name}: no MSE ({}: {e})", ref_path.display());
+                None
+            }
+        };
         for &mode in &args.spectral {
             // Seeds 1 and 2 as pbrt-v4's MSE figure; the timed runs alternate them.
             let mut times = Vec::new();
@@ -190,15 +230,24 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode> {
             }
             if let Some(e) = failed {
                 println!("| {name} | {mode} | failed: {e} | | | | | |");
+                failures.push(serde_json::json!({ "scene": name, "mode": mode.to_string(), "error": e }));
                 continue;
             }
-            times.sort_by(f64::total_cmp);
-            let seconds = times[times.len() / 2];
-            let mse = reference.as_ref().and_then(|r| {
-                let m: Option<Vec<f64>> =
-                    images.iter().map(|i| nimbus::metrics::error_metrics(i, r).ok().map(|e| e.mse)).collect();
-                m.map(|m| m.iter().sum::<f64>() / m.len() as f64)
-            });
+            let seconds = median(&mut times);
+            let mse = match &reference {
+                None => None,
+                Some(r) => {
+                    let m: Result<Vec<f64>, String> =
+                        images.iter().map(|i| nimbus::metrics::error_metrics(i, r).map(|e| e.mse)).collect();
+                    match m {
+                        Ok(m) => Some(m.iter().sum::<f64>() / m.len() as f64),
+                        Err(e) => {
+                            eprintln!("note: {name}: no MSE against {}: {e}", ref_path.display());
+                            None
+                        }
+                    }
+                }
+            };
             let equal_spp = figures.map(|f| f.seconds / seconds);
             let equal_error = figures.zip(mse).map(|(f, m)| (f.seconds * f.mse) / (seconds * m));
             let fmt = |v: Option<f64>, p: usize| v.map_or("-".to_string(), |v| format!("{v:.p$}"));
@@ -226,10 +275,28 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode> {
     }
     if let Some(path) = &args.json {
         let rows: Vec<serde_json::Value> = rows.iter().map(Row::to_json).collect();
-        let doc =
-            serde_json::json!({ "baseline_seconds": base, "spp": args.spp, "threads": args.nthreads, "rows": rows });
+        let doc = serde_json::json!({
+            "baseline_seconds": base, "spp": args.spp, "threads": args.nthreads, "rows": rows, "failures": failures,
+        });
         std::fs::write(path, serde_json::to_string_pretty(&doc)?)
             .with_context(|| format!("{}: cannot write", path.display()))?;
     }
+    if !failures.is_empty() {
+        eprintln!("error: {} scene/transport run(s) failed (see the table)", failures.len());
+        return Ok(ExitCode::FAILURE);
+    }
     Ok(ExitCode::SUCCESS)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_and_medians() {
+        assert_eq!(scene_name(Path::new("a/b/cloud.pbrt")), "cloud");
+        assert_eq!(scene_name(Path::new("cloud.pbrt.gz")), "cloud");
+        assert_eq!(median(&mut [3.0, 1.0]), 2.0);
+        assert_eq!(median(&mut [3.0, 1.0, 2.0]), 2.0);
+    }
 }

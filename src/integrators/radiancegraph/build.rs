@@ -87,10 +87,10 @@ pub fn build_graph(volume: &Volume, config: &Config, radius: f32, seed: u64) -> 
     report.light_paths = starts.len() as u64 * per_start;
     // Batches bound the memory of traced-but-ungrouped paths.
     let batch = (1 << 16) / per_start.max(1) as usize + 1;
-    for (b, chunk) in starts.chunks(batch).enumerate() {
+    let per_chunk = CHUNK.div_ceil(per_start as usize).max(1);
+    let trace_batch = |b: usize, chunk: &[Start]| -> Vec<Traced> {
         let base = (b * batch) as u64 * per_start;
-        let per_chunk = CHUNK.div_ceil(per_start as usize).max(1);
-        let traced: Vec<Traced> = chunk
+        chunk
             .par_chunks(per_chunk)
             .enumerate()
             .map(|(c, starts)| {
@@ -104,8 +104,25 @@ pub fn build_graph(volume: &Volume, config: &Config, radius: f32, seed: u64) -> 
                 }
                 t
             })
-            .collect();
-        traced.iter().for_each(|t| t.add_to(&mut graph));
+            .collect()
+    };
+    // Grouping is sequential (each path sees the nodes of the paths before it); it runs on one
+    // thread while the others trace the next batch.
+    let mut pending: Option<Vec<Traced>> = None;
+    for (b, chunk) in starts.chunks(batch).enumerate() {
+        let (traced, ()) = rayon::join(
+            || trace_batch(b, chunk),
+            || {
+                if let Some(p) = pending.take() {
+                    p.iter().for_each(|t| t.add_to(&mut graph));
+                    report.note_memory(&graph);
+                }
+            },
+        );
+        pending = Some(traced);
+    }
+    if let Some(p) = pending.take() {
+        p.iter().for_each(|t| t.add_to(&mut graph));
         report.note_memory(&graph);
     }
     reinforce(volume, config, &mut graph, seed, report.light_paths, &mut report);
@@ -264,39 +281,62 @@ fn trace_from(
     next_stream: &mut u64,
 ) -> u64 {
     let radius = graph.radius();
-    let g: &BuildGraph = graph;
     let base = *next_stream;
+    *next_stream += nodes.len() as u64 * rays as u64;
+    // The nodes' centres, copied so tracing needs no access to the graph being grouped into.
+    let centers: Vec<Vec3> = nodes.iter().map(|&a| graph.position(a)).collect();
     let per_chunk = CHUNK.div_ceil(rays as usize).max(1);
-    let traced: Vec<Traced> = nodes
-        .par_chunks(per_chunk)
-        .enumerate()
-        .map(|(c, chunk)| {
-            let mut t = Traced::default();
-            for (j, &a) in chunk.iter().enumerate() {
-                let i = (c * per_chunk + j) as u64;
-                let center = g.position(a);
-                for k in 0..rays as u64 {
-                    let mut rng = Pcg32::new(base + i * rays as u64 + k, seed);
-                    // A uniform point in the node's sphere (rejection, as the thesis).
-                    let offset = loop {
-                        let v = Vec3::new(rng.uniform(), rng.uniform(), rng.uniform()) * 2.0 - Vec3::ONE;
-                        if v.length_squared() < 1.0 {
-                            break v * radius;
+    let trace_batch = |first: usize, nodes: &[u32]| -> Vec<Traced> {
+        nodes
+            .par_chunks(per_chunk)
+            .enumerate()
+            .map(|(c, chunk)| {
+                let mut t = Traced::default();
+                for (j, &a) in chunk.iter().enumerate() {
+                    let i = first + c * per_chunk + j;
+                    for k in 0..rays as u64 {
+                        let mut rng = Pcg32::new(base + i as u64 * rays as u64 + k, seed);
+                        // A uniform point in the node's sphere (rejection, as the thesis).
+                        let offset = loop {
+                            let v = Vec3::new(rng.uniform(), rng.uniform(), rng.uniform()) * 2.0 - Vec3::ONE;
+                            if v.length_squared() < 1.0 {
+                                break v * radius;
+                            }
+                        };
+                        let d = warp::uniform_sphere(glam::Vec2::new(rng.uniform(), rng.uniform()));
+                        let ray = Ray::new(centers[i] + offset, d);
+                        // Rays that miss the medium sample nothing (the thesis skips them too).
+                        if let Some((t_in, t_out)) = volume.span_from(&ray) {
+                            let start = Start { ray: Ray::new(ray.at(t_in), d), t_max: t_out - t_in, node: Some(a) };
+                            trace(volume, &start, max_depth, &mut rng, &mut t);
                         }
-                    };
-                    let d = warp::uniform_sphere(glam::Vec2::new(rng.uniform(), rng.uniform()));
-                    let ray = Ray::new(center + offset, d);
-                    // Rays that miss the medium sample nothing (the thesis skips them too).
-                    if let Some((t_in, t_out)) = volume.span_from(&ray) {
-                        let start = Start { ray: Ray::new(ray.at(t_in), d), t_max: t_out - t_in, node: Some(a) };
-                        trace(volume, &start, max_depth, &mut rng, &mut t);
                     }
                 }
-            }
-            t
-        })
-        .collect();
-    *next_stream += nodes.len() as u64 * rays as u64;
-    traced.iter().for_each(|t| t.add_to(graph));
-    traced.iter().map(|t| t.paths.len() as u64).sum()
+                t
+            })
+            .collect()
+    };
+    // As for light paths: group one batch while the next is traced.
+    let batch = (1 << 16) / (rays as usize).max(1) + 1;
+    let mut traced_paths = 0u64;
+    let mut pending: Option<Vec<Traced>> = None;
+    let mut group = |p: Vec<Traced>, graph: &mut BuildGraph| {
+        p.iter().for_each(|t| t.add_to(graph));
+        traced_paths += p.iter().map(|t| t.paths.len() as u64).sum::<u64>();
+    };
+    for (b, chunk) in nodes.chunks(batch).enumerate() {
+        let (traced, ()) = rayon::join(
+            || trace_batch(b * batch, chunk),
+            || {
+                if let Some(p) = pending.take() {
+                    group(p, graph);
+                }
+            },
+        );
+        pending = Some(traced);
+    }
+    if let Some(p) = pending.take() {
+        group(p, graph);
+    }
+    traced_paths
 }

@@ -105,9 +105,9 @@ Shape "trianglemesh" "integer indices" [0 1 2 0 2 3  4 5 6 4 6 7  8 9 10 8 10 11
 Material "conductor" "float roughness" 0.3
 Shape "sphere" "float radius" 0.4"#;
     let s = scene(text, &BuildOptions::default());
-    let mis = render_with(&s, &VolPath::with_config(PathConfig { max_depth: 5, regularize: false, next_event: true }));
+    let mis = render_with(&s, &VolPath::with_config(PathConfig::volpath(5, false)));
     let bsdf =
-        render_with(&s, &VolPath::with_config(PathConfig { max_depth: 5, regularize: false, next_event: false }));
+        render_with(&s, &VolPath::with_config(PathConfig { next_event: false, ..PathConfig::volpath(5, false) }));
     let (m1, e1) = mean_and_stderr(&mis);
     let (m2, e2) = mean_and_stderr(&bsdf);
     // Pixels differ in expectation here, so the per-pixel spread overstates the noise of the

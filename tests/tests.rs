@@ -5,6 +5,7 @@ mod check;
 mod common;
 mod compare;
 mod media;
+mod pathgraph;
 mod radiancegraph;
 mod render;
 mod render_cli;

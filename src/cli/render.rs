@@ -192,6 +192,9 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
             scene.sensor.name(),
             scene.sensor.imaging_ratio()
         );
+        for line in integrator.report() {
+            println!("{line}");
+        }
         println!("lights      {}", scene.lights.len());
         for m in &scene.media {
             println!(

@@ -2,6 +2,7 @@
 //! scenes and `--integrator` use to settings readers and implementations.
 
 pub mod common;
+pub mod pathgraph;
 pub mod radiancegraph;
 pub mod simplevolpath;
 pub mod volpath;
@@ -24,6 +25,8 @@ pub enum IntegratorSettings {
     SimpleVolPath(simplevolpath::SimpleVolPathSettings),
     /// `radiancegraph` (`graph` in the thesis's scenes)
     RadianceGraph(radiancegraph::RadianceGraphSettings),
+    /// `pathgraph`
+    PathGraph(pathgraph::PathGraphSettings),
 }
 
 /// The integrator a scene's name stands for: the radiance-graph thesis's scenes name their
@@ -38,7 +41,7 @@ pub fn canonical_name(name: &str) -> &str {
 }
 
 /// Names of the integrators nimbus has.
-pub const INTEGRATOR_NAMES: &[&str] = &["volpath", "simplevolpath", "radiancegraph"];
+pub const INTEGRATOR_NAMES: &[&str] = &["volpath", "simplevolpath", "radiancegraph", "pathgraph"];
 
 impl IntegratorSettings {
     /// Reads the integrator entity; `name_override` replaces the scene's choice (the
@@ -52,6 +55,7 @@ impl IntegratorSettings {
             "radiancegraph" => {
                 Ok(IntegratorSettings::RadianceGraph(radiancegraph::RadianceGraphSettings::from_entity(e)?))
             }
+            "pathgraph" => Ok(IntegratorSettings::PathGraph(pathgraph::PathGraphSettings::from_entity(e)?)),
             other => Err(Error::new(
                 &e.loc,
                 format!("integrator \"{other}\" is not available in nimbus (it has: {})", INTEGRATOR_NAMES.join(", ")),
@@ -65,6 +69,7 @@ impl IntegratorSettings {
             IntegratorSettings::VolPath(_) => "volpath",
             IntegratorSettings::SimpleVolPath(_) => "simplevolpath",
             IntegratorSettings::RadianceGraph(_) => "radiancegraph",
+            IntegratorSettings::PathGraph(_) => "pathgraph",
         }
     }
 
@@ -77,6 +82,7 @@ impl IntegratorSettings {
             IntegratorSettings::VolPath(s) => Box::new(volpath::VolPath::new(s)),
             IntegratorSettings::SimpleVolPath(s) => Box::new(simplevolpath::SimpleVolPath::new(s, scene)),
             IntegratorSettings::RadianceGraph(s) => Box::new(radiancegraph::create(s, scene)?),
+            IntegratorSettings::PathGraph(s) => Box::new(pathgraph::create(s, scene)?),
         })
     }
 }
@@ -100,6 +106,37 @@ pub trait Integrator: Sync {
         sampler: &mut Sampler,
         stats: &mut RayStats,
     ) -> SampledSpectrum;
+
+    /// Methods that work on the whole image (record every pixel's path → solve → write)
+    /// return themselves here; the renderer then asks them for whole-image samples instead
+    /// of calling `li` per camera ray. Per-ray methods keep the default and pay nothing.
+    fn whole_image(&self) -> Option<&dyn ImageIntegrator> {
+        None
+    }
+
+    /// Lines for `--stats` about the method's own work (memory, stage times), after a render.
+    fn report(&self) -> Vec<String> {
+        Vec::new()
+    }
+}
+
+/// A method that estimates every pixel at once: one sample of the image from one pass of
+/// camera rays (see [`crate::render::ImagePass`]).
+pub trait ImageIntegrator: Sync {
+    /// One sample of every pixel: (accumulator index, filter weight, RGB radiance) for each
+    /// camera ray of `pass`, and the rays traced.
+    fn sample_image(&self, scene: &Scene, pass: &crate::render::ImagePass<'_>) -> (Vec<PixelValue>, RayStats);
+}
+
+/// One camera sample's value for the film, from an [`ImageIntegrator`].
+#[derive(Clone, Copy, Debug)]
+pub struct PixelValue {
+    /// The pixel's index in the film (row-major within the pixel bounds).
+    pub index: u32,
+    /// The filter weight of the camera sample.
+    pub weight: f32,
+    /// RGB radiance.
+    pub l: Rgb,
 }
 
 /// A method that estimates radiance one camera ray at a time, written once for every

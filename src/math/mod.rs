@@ -1,5 +1,6 @@
 //! Small geometric helpers on top of glam.
 
+pub mod cell_map;
 mod frame;
 
 pub use frame::Frame;

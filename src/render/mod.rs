@@ -11,8 +11,8 @@ use rayon::prelude::*;
 use crate::color::{Channels, Rgb};
 use crate::geometry::Ray;
 use crate::imageio::Image;
-use crate::integrators::Integrator;
 use crate::integrators::common::RayStats;
+use crate::integrators::{ImageIntegrator, Integrator, PixelValue};
 use crate::samplers::{Sampler, get_camera_sample};
 use crate::scene::Scene;
 use crate::scene::sampler::SamplerSettings;
@@ -53,6 +53,130 @@ struct PixelSum {
     weight: f64,
 }
 
+impl PixelSum {
+    /// Adds one sample with filter weight `w`, clamped to the film's `max` component value.
+    #[inline]
+    fn add(&mut self, mut l: Rgb, w: f32, max: f32) {
+        if !l.is_finite() {
+            // A NaN or infinite sample would poison the pixel; pbrt-v4 logs and zeroes it.
+            l = Rgb::ZERO;
+        }
+        let m = l.max_element();
+        if m > max {
+            l *= max / m;
+        }
+        let w = w as f64;
+        self.rgb[0] += w * l.x as f64;
+        self.rgb[1] += w * l.y as f64;
+        self.rgb[2] += w * l.z as f64;
+        self.weight += w;
+    }
+}
+
+/// The camera ray of sample `s` of `pixel`, its wavelengths and its filter weight, drawn in
+/// pbrt-v4's order.
+#[inline]
+fn camera_ray<C: Channels>(scene: &Scene, sampler: &mut Sampler, pixel: UVec2, s: u32) -> (Ray, C::Lambda, f32) {
+    sampler.start_pixel_sample(pixel, s, 0);
+    // pbrt-v4 draws the wavelengths first; RGB draws the same dimension so the two
+    // representations see the same samples afterwards.
+    let u = sampler.get_1d();
+    let lambda = C::sample_lambda(if scene.disable_wavelength_jitter { 0.5 } else { u });
+    let cs = get_camera_sample(sampler, pixel, &scene.filter);
+    (scene.camera.generate_ray(cs.p_film, cs.p_lens), lambda, cs.filter_weight)
+}
+
+/// One whole-image sample: every pixel's camera ray for one sample index, handed to an
+/// [`ImageIntegrator`], in the representation the method asks for.
+pub struct ImagePass<'a> {
+    scene: &'a Scene,
+    sampler: &'a Sampler,
+    tiles: &'a [[u32; 4]],
+    origin: UVec2,
+    width: u32,
+    sample: u32,
+}
+
+/// A camera ray of an [`ImagePass`].
+#[derive(Clone, Copy, Debug)]
+pub struct PixelRay {
+    /// The pixel's index in the film (row-major within the pixel bounds).
+    pub index: u32,
+    /// The filter weight of the camera sample.
+    pub weight: f32,
+    /// The ray.
+    pub ray: Ray,
+}
+
+impl ImagePass<'_> {
+    /// The sample index (0 for the first sample of every pixel).
+    pub fn sample_index(&self) -> u32 {
+        self.sample
+    }
+
+    /// Traces every pixel's camera ray with `f`, in parallel over tiles. Each tile starts a
+    /// `T` with `init` and the results come in tile order, pixels in scanline order within a
+    /// tile, whatever the thread count. `f` gets the pixel's sampler positioned after the
+    /// camera sample's dimensions, as a per-ray integrator's `li` does.
+    pub fn trace_pixels<C: FilmChannels, T: Send>(
+        &self,
+        init: impl Fn() -> T + Sync,
+        f: impl Fn(&mut T, PixelRay, &mut C::Lambda, &mut Sampler, &mut RayStats) + Sync,
+    ) -> (Vec<T>, RayStats) {
+        let results: Vec<(T, RayStats)> = self
+            .tiles
+            .par_iter()
+            .map(|tile| {
+                let mut sampler = self.sampler.clone();
+                let mut stats = RayStats::default();
+                let mut t = init();
+                for y in tile[1]..tile[3] {
+                    for x in tile[0]..tile[2] {
+                        let pixel = UVec2::new(x, y);
+                        let (ray, mut lambda, weight) = camera_ray::<C>(self.scene, &mut sampler, pixel, self.sample);
+                        stats.camera += 1;
+                        let index = (y - self.origin.y) * self.width + (x - self.origin.x);
+                        f(&mut t, PixelRay { index, weight, ray }, &mut lambda, &mut sampler, &mut stats);
+                    }
+                }
+                (t, stats)
+            })
+            .collect();
+        let mut stats = RayStats::default();
+        let out = results
+            .into_iter()
+            .map(|(t, s)| {
+                stats.add(&s);
+                t
+            })
+            .collect();
+        (out, stats)
+    }
+}
+
+/// One whole-image sample from `method`, as per-pixel sums.
+fn image_sample(
+    scene: &Scene,
+    method: &dyn ImageIntegrator,
+    sampler: &Sampler,
+    tiles: &[[u32; 4]],
+    acc: &Accumulator,
+    sample: u32,
+) -> (Vec<(u32, PixelSum)>, RayStats) {
+    let pass = ImagePass { scene, sampler, tiles, origin: acc.origin, width: acc.width, sample };
+    let (values, stats) = method.sample_image(scene, &pass);
+    let max = scene.film.max_component_value;
+    let sums = values
+        .into_iter()
+        .map(|PixelValue { index, weight, l }| {
+            let mut sum = PixelSum::default();
+            sum.add(l, weight, max);
+            (index, sum)
+        })
+        .collect();
+    (sums, stats)
+}
+
 /// The film being accumulated.
 pub struct Accumulator {
     width: u32,
@@ -88,7 +212,7 @@ impl Accumulator {
 
 /// The channels a render can carry: how to ask an integrator for them and how a sample
 /// reaches the film.
-trait FilmChannels: Channels {
+pub trait FilmChannels: Channels {
     /// The integrator's estimate along `ray` in these channels.
     fn li(
         integrator: &dyn Integrator,
@@ -162,29 +286,10 @@ fn render_tile<C: FilmChannels>(
             let pixel = UVec2::new(x, y);
             let mut sum = PixelSum::default();
             for s in first..first + count {
-                sampler.start_pixel_sample(pixel, s, 0);
-                // pbrt-v4 draws the wavelengths first; RGB draws the same dimension so the
-                // two representations see the same samples afterwards.
-                let u = sampler.get_1d();
-                let mut lambda = C::sample_lambda(if scene.disable_wavelength_jitter { 0.5 } else { u });
-                let cs = get_camera_sample(sampler, pixel, &scene.filter);
-                let ray = scene.camera.generate_ray(cs.p_film, cs.p_lens);
+                let (ray, mut lambda, weight) = camera_ray::<C>(scene, sampler, pixel, s);
                 stats.camera += 1;
                 let l = C::li(integrator, scene, ray, &mut lambda, sampler, stats);
-                let mut l = l.to_film(&lambda, scene);
-                if !l.is_finite() {
-                    // A NaN or infinite sample would poison the pixel; pbrt-v4 logs and zeroes it.
-                    l = Rgb::ZERO;
-                }
-                let m = l.max_element();
-                if m > max {
-                    l *= max / m;
-                }
-                let w = cs.filter_weight as f64;
-                sum.rgb[0] += w * l.x as f64;
-                sum.rgb[1] += w * l.y as f64;
-                sum.rgb[2] += w * l.z as f64;
-                sum.weight += w;
+                sum.add(l.to_film(&lambda, scene), weight, max);
             }
             let index = (y - acc_origin.y) * acc_width + (x - acc_origin.x);
             out.push((index, sum));
@@ -304,35 +409,49 @@ pub fn render_with_passes(
         if count == 0 {
             break;
         }
-        let results: Vec<(Vec<(u32, PixelSum)>, RayStats)> = tiles
-            .par_iter()
-            .map(|tile| {
-                let mut sampler = base_sampler.clone();
-                let mut out = Vec::with_capacity(((tile[2] - tile[0]) * (tile[3] - tile[1])) as usize);
-                let mut stats = RayStats::default();
-                let tile_fn = match scene.transport.transport {
-                    Transport::Rgb => render_tile::<Rgb>,
-                    Transport::Spectral => render_tile::<SampledSpectrum>,
-                };
-                tile_fn(
-                    scene,
-                    integrator,
-                    &mut sampler,
-                    acc.origin,
-                    acc.width,
-                    *tile,
-                    spp_done,
-                    count,
-                    &mut out,
-                    &mut stats,
-                );
-                if let Some(pb) = &progress {
-                    pb.inc(count as u64);
-                }
-                rays.fetch_add(stats.total(), Ordering::Relaxed);
-                (out, stats)
-            })
-            .collect();
+        let results: Vec<(Vec<(u32, PixelSum)>, RayStats)> = if let Some(method) = integrator.whole_image() {
+            // A whole-image method: `count` samples of the whole image, one after another.
+            (spp_done..spp_done + count)
+                .map(|s| {
+                    let r = image_sample(scene, method, &base_sampler, &tiles, &acc, s);
+                    if let Some(pb) = &progress {
+                        pb.inc(tiles.len() as u64);
+                    }
+                    rays.fetch_add(r.1.total(), Ordering::Relaxed);
+                    r
+                })
+                .collect()
+        } else {
+            tiles
+                .par_iter()
+                .map(|tile| {
+                    let mut sampler = base_sampler.clone();
+                    let mut out = Vec::with_capacity(((tile[2] - tile[0]) * (tile[3] - tile[1])) as usize);
+                    let mut stats = RayStats::default();
+                    let tile_fn = match scene.transport.transport {
+                        Transport::Rgb => render_tile::<Rgb>,
+                        Transport::Spectral => render_tile::<SampledSpectrum>,
+                    };
+                    tile_fn(
+                        scene,
+                        integrator,
+                        &mut sampler,
+                        acc.origin,
+                        acc.width,
+                        *tile,
+                        spp_done,
+                        count,
+                        &mut out,
+                        &mut stats,
+                    );
+                    if let Some(pb) = &progress {
+                        pb.inc(count as u64);
+                    }
+                    rays.fetch_add(stats.total(), Ordering::Relaxed);
+                    (out, stats)
+                })
+                .collect()
+        };
         for (out, stats) in &results {
             total_stats.add(stats);
             for (i, s) in out {

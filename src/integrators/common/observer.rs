@@ -30,6 +30,9 @@ pub struct VertexEvent<C = Rgb> {
     pub specular: bool,
     /// True for a vertex inside a medium.
     pub in_medium: bool,
+    /// The medium's Henyey-Greenstein asymmetry at a medium vertex (0 on surfaces): with `wo`
+    /// it is all a path graph needs to evaluate the phase function for other directions.
+    pub g: f32,
 }
 
 /// A next-event estimate at a vertex.
@@ -57,6 +60,11 @@ pub struct EmissionEvent<C = Rgb> {
     pub depth: u32,
     /// Contribution added to the pixel (MIS-weighted).
     pub contribution: C,
+    /// Density with which light sampling at the previous vertex would have chosen this
+    /// emission's direction (light choice × direction, solid angle): the MIS partner. 0 when
+    /// the emission had none (seen from the camera, after a specular bounce, medium emission,
+    /// or next-event estimation off).
+    pub pdf_light: f32,
 }
 
 /// Receives the path loop's events, in the channels the path carries (RGB or the path's
@@ -71,6 +79,10 @@ pub trait PathObserver<C: Channels> {
     /// Emission was added.
     #[inline]
     fn on_emission(&mut self, _e: &EmissionEvent<C>) {}
+    /// The mean of [`super::PathConfig::extra_direct`] light samples at the vertex `depth`
+    /// (not added to the path's estimate).
+    #[inline]
+    fn on_extra_direct(&mut self, _depth: u32, _contribution: C) {}
 }
 
 /// The observer that records nothing.

@@ -10,7 +10,7 @@ use glam::{Vec2, Vec3};
 
 use super::RayStats;
 use super::media::{ShadowEstimate, ratio_tracking, sample_t_maj};
-use super::observer::{EmissionEvent, NeeEvent, PathObserver, VertexEvent};
+use super::observer::{EmissionEvent, NeeEvent, NoObserver, PathObserver, VertexEvent};
 use crate::accel::{Hit, NONE};
 use crate::color::Channels;
 use crate::geometry::{Ray, offset_origin, spawn_ray};
@@ -33,6 +33,18 @@ pub struct PathConfig {
     /// Sample lights at vertices (next-event estimation with MIS). Without it, emission is
     /// only found by scattering: a simpler unbiased estimator that tests use to check MIS.
     pub next_event: bool,
+    /// Extra light samples (light sampling alone, no MIS) at the first vertex that samples
+    /// lights, reported to the observer and not added to the path's estimate: path graphs
+    /// use them for the pixel's direct light (Hu et al. 2024, Sec. 4). 0 for every per-ray
+    /// method.
+    pub extra_direct: u32,
+}
+
+impl PathConfig {
+    /// pbrt-v4's volpath loop: next-event estimation, no extra samples.
+    pub fn volpath(max_depth: u32, regularize: bool) -> PathConfig {
+        PathConfig { max_depth, regularize, next_event: true, extra_direct: 0 }
+    }
 }
 
 /// Local shading frame at a surface hit.
@@ -110,6 +122,7 @@ pub fn trace_path<C: Channels, O: PathObserver<C>>(
     let mut eta_scale = 1.0f32;
     let mut depth = 0u32;
     let mut prev_p = ray.o;
+    let mut extra_done = false;
 
     loop {
         stats.bounce += 1;
@@ -138,7 +151,7 @@ pub fn trace_path<C: Channels, O: PathObserver<C>>(
                         if !r_e.is_zero() {
                             let c = betap * mp.sigma_a * mp.le / r_e.average();
                             l += c;
-                            observer.on_emission(&EmissionEvent { depth, contribution: c });
+                            observer.on_emission(&EmissionEvent { depth, contribution: c, pdf_light: 0.0 });
                         }
                     }
                     // Choose absorption, real scattering or null scattering with the hero
@@ -197,15 +210,20 @@ pub fn trace_path<C: Channels, O: PathObserver<C>>(
                         None,
                         medium,
                         &sc,
-                        u_pick,
-                        u_light,
+                        (u_pick, u_light),
                         &st,
                         lambda,
                         depth - 1,
                         observer,
                         stats,
+                        true,
                     ) {
                         l += c;
+                    }
+                    if config.extra_direct > 0 && !extra_done {
+                        extra_done = true;
+                        let c = extra_direct(scene, scatter_p, None, medium, &sc, &st, lambda, config, sampler, stats);
+                        observer.on_extra_direct(depth - 1, c);
                     }
                 }
                 let u = sampler.get_2d();
@@ -226,6 +244,7 @@ pub fn trace_path<C: Channels, O: PathObserver<C>>(
                     beta: st.beta,
                     specular: false,
                     in_medium: true,
+                    g: m.g,
                 });
                 st.beta *= ps.p / ps.pdf;
                 st.r_l = st.r_u / ps.pdf;
@@ -254,15 +273,15 @@ pub fn trace_path<C: Channels, O: PathObserver<C>>(
                 if le.is_zero() {
                     continue;
                 }
-                let c = if depth == 0 || specular_bounce || !config.next_event {
-                    st.beta * le / st.r_u.average()
+                let (c, pdf_light) = if depth == 0 || specular_bounce || !config.next_event {
+                    (st.beta * le / st.r_u.average(), 0.0)
                 } else {
                     let pdf = scene.light_sampler.pmf(i as usize)
                         * light.pdf_li(&LightContext { p: prev_p }, ray.d, None, &scene.surfaces.shapes);
-                    st.beta * le / (st.r_u + st.r_l * pdf).average()
+                    (st.beta * le / (st.r_u + st.r_l * pdf).average(), pdf)
                 };
                 l += c;
-                observer.on_emission(&EmissionEvent { depth, contribution: c });
+                observer.on_emission(&EmissionEvent { depth, contribution: c, pdf_light });
             }
             break;
         };
@@ -274,15 +293,15 @@ pub fn trace_path<C: Channels, O: PathObserver<C>>(
             let light = &scene.lights[hit.prim.area_light as usize];
             let le = light.emitted::<C>(s, wo, lambda);
             if !le.is_zero() {
-                let c = if depth == 0 || specular_bounce || !config.next_event {
-                    st.beta * le / st.r_u.average()
+                let (c, pdf_light) = if depth == 0 || specular_bounce || !config.next_event {
+                    (st.beta * le / st.r_u.average(), 0.0)
                 } else {
                     let pdf = scene.light_sampler.pmf(hit.prim.area_light as usize)
                         * light.pdf_li(&LightContext { p: prev_p }, ray.d, Some(s), &scene.surfaces.shapes);
-                    st.beta * le / (st.r_u + st.r_l * pdf).average()
+                    (st.beta * le / (st.r_u + st.r_l * pdf).average(), pdf)
                 };
                 l += c;
-                observer.on_emission(&EmissionEvent { depth, contribution: c });
+                observer.on_emission(&EmissionEvent { depth, contribution: c, pdf_light });
             }
         }
 
@@ -315,15 +334,20 @@ pub fn trace_path<C: Channels, O: PathObserver<C>>(
                 Some(&hit),
                 medium,
                 &sc,
-                u_pick,
-                u_light,
+                (u_pick, u_light),
                 &st,
                 lambda,
                 depth - 1,
                 observer,
                 stats,
+                true,
             ) {
                 l += c;
+            }
+            if config.extra_direct > 0 && !extra_done {
+                extra_done = true;
+                let c = extra_direct(scene, s.p, Some(&hit), medium, &sc, &st, lambda, config, sampler, stats);
+                observer.on_extra_direct(depth - 1, c);
             }
         }
 
@@ -346,6 +370,7 @@ pub fn trace_path<C: Channels, O: PathObserver<C>>(
             beta: st.beta,
             specular: bs.is_specular(),
             in_medium: false,
+            g: 0.0,
         });
         st.beta *= f_cos / bs.pdf;
         st.r_l = if bs.pdf_is_proportional {
@@ -388,9 +413,40 @@ fn rr<C: Channels>(st: &mut PathState<C>, eta_scale: f32, depth: u32, sampler: &
     false
 }
 
+/// The mean of `config.extra_direct` light samples at a vertex, by light sampling alone (so
+/// each is unbiased without the BSDF/phase technique). Their random numbers come from a
+/// generator seeded by one sampler dimension, so the count does not shift the sampler's
+/// dimensions for the rest of the path.
+#[allow(clippy::too_many_arguments)]
+fn extra_direct<C: Channels>(
+    scene: &Scene,
+    p: Vec3,
+    hit: Option<&Hit>,
+    medium: u32,
+    scatterer: &Scatterer<'_, C>,
+    st: &PathState<C>,
+    lambda: &C::Lambda,
+    config: &PathConfig,
+    sampler: &mut Sampler,
+    stats: &mut RayStats,
+) -> C {
+    let mut rng = Pcg32::new(hash_sample(sampler.get_1d(), Vec2::new(0.25, 0.75)), 0x9e37_79b9);
+    let mut sum = C::ZERO;
+    for _ in 0..config.extra_direct {
+        let u = (rng.uniform(), Vec2::new(rng.uniform(), rng.uniform()));
+        if let Some(c) =
+            sample_direct(scene, p, hit, medium, scatterer, u, st, lambda, 0, &mut NoObserver, stats, false)
+        {
+            sum += c;
+        }
+    }
+    sum / config.extra_direct as f32
+}
+
 /// One light sample at a vertex at `p` (on the surface `hit`, or inside `medium` when there
-/// is none), MIS-weighted against BSDF/phase sampling (pbrt-v4's SampleLd). The shadow ray
-/// crosses `interface` surfaces and accumulates ratio-tracking transmittance through media.
+/// is none), MIS-weighted against BSDF/phase sampling when `mis` (pbrt-v4's SampleLd), by
+/// light sampling alone otherwise. The shadow ray crosses `interface` surfaces and
+/// accumulates ratio-tracking transmittance through media.
 #[allow(clippy::too_many_arguments)]
 fn sample_direct<C: Channels, O: PathObserver<C>>(
     scene: &Scene,
@@ -398,13 +454,13 @@ fn sample_direct<C: Channels, O: PathObserver<C>>(
     hit: Option<&Hit>,
     medium: u32,
     scatterer: &Scatterer<'_, C>,
-    u_pick: f32,
-    u_light: Vec2,
+    (u_pick, u_light): (f32, Vec2),
     st: &PathState<C>,
     lambda: &C::Lambda,
     depth: u32,
     observer: &mut O,
     stats: &mut RayStats,
+    mis: bool,
 ) -> Option<C> {
     let (index, pmf) = scene.light_sampler.sample(u_pick)?;
     let light = &scene.lights[index];
@@ -425,7 +481,7 @@ fn sample_direct<C: Channels, O: PathObserver<C>>(
     let pdf_light = pmf * ls.pdf;
     let r_l = r_l * st.r_u * pdf_light;
     let r_u = r_u * st.r_u * pdf_scatter;
-    let contribution = if ls.delta {
+    let contribution = if ls.delta || !mis {
         st.beta * f * t_ray * ls.l / r_l.average()
     } else {
         st.beta * f * t_ray * ls.l / (r_l + r_u).average()

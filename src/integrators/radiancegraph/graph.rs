@@ -10,9 +10,9 @@
 
 use glam::{IVec3, Vec3};
 
-use super::cells::CellMap;
 use super::edges::EdgeLists;
 use super::transport::Transport;
+use crate::math::cell_map::CellMap;
 
 type Cells = CellMap<u32>;
 

@@ -5,7 +5,7 @@
 //!
 
 pub mod build;
-mod cells;
+
 pub mod config;
 pub mod edges;
 pub mod file;

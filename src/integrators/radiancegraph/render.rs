@@ -6,7 +6,6 @@
 
 use glam::{IVec3, Vec2, Vec3};
 
-use super::cells::CellMap;
 use super::volume::{Event, MAX_LIGHTS, sample_event};
 use crate::color::Channels;
 use crate::color::Rgb;
@@ -14,6 +13,7 @@ use crate::geometry::{Ray, spawn_ray};
 use crate::integrators::RayIntegrator;
 use crate::integrators::common::RayStats;
 use crate::integrators::common::media::sample_t_maj;
+use crate::math::cell_map::CellMap;
 use crate::samplers::Sampler;
 use crate::sampling::rng::{Pcg32, hash_sample};
 use crate::scene::Scene;

@@ -20,7 +20,7 @@ pub struct VolPath {
 impl VolPath {
     /// A tracer with the given settings.
     pub fn new(s: &VolPathSettings) -> VolPath {
-        VolPath { config: PathConfig { max_depth: s.max_depth, regularize: s.regularize, next_event: true } }
+        VolPath { config: PathConfig::volpath(s.max_depth, s.regularize) }
     }
 
     /// A tracer with an explicit loop configuration (tests switch next-event estimation off).

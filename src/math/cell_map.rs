@@ -1,4 +1,4 @@
-//! Hashing of integer grid cells for the graph's spatial lookups.
+//! Hashing of integer grid cells for spatial lookups (radiance and path graphs).
 
 use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};

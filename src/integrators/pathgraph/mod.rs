@@ -1,0 +1,244 @@
+//! `pathgraph`: volume path graphs (Hu, Deng, Luan, Hašan and Marschner 2024), solved on the
+//! CPU. One sample of the image = one 1-spp pass of the shared path loop with a recording
+//! observer ([`record`]) + clustering ([`cluster`]) + aggregation and propagation iterated as
+//! Eq. 28 ([`solve`]); each pixel takes the refined indirect radiance of its path's first
+//! vertex plus the path's own (non-aggregated) direct light there (Sec. 4). More spp average
+//! independent graph samples.
+
+mod cluster;
+mod record;
+mod settings;
+mod solve;
+
+pub use settings::PathGraphSettings;
+
+use std::sync::Mutex;
+use std::time::Instant;
+
+use rayon::prelude::*;
+
+use super::common::{NoObserver, PathConfig, RayStats, trace_path};
+use super::{ImageIntegrator, Integrator, PixelValue};
+use crate::accel::NONE;
+use crate::color::Rgb;
+use crate::geometry::Ray;
+use crate::render::{FilmChannels, ImagePass};
+use crate::samplers::Sampler;
+use crate::scene::Scene;
+use crate::scene::transport::Transport;
+use crate::spectra::{SampledSpectrum, SampledWavelengths};
+use record::{Paths, Recorder, Vertices};
+
+/// The path-graph integrator.
+pub struct PathGraph {
+    settings: PathGraphSettings,
+    config: PathConfig,
+    report: Mutex<Report>,
+}
+
+/// What the graph samples cost, for `--stats`.
+#[derive(Clone, Copy, Debug, Default)]
+struct Report {
+    samples: u32,
+    vertices: u64,
+    clusters: u64,
+    paths: u64,
+    record_seconds: f64,
+    solve_seconds: f64,
+    peak_bytes: usize,
+}
+
+/// Creates the integrator.
+pub fn create(settings: &PathGraphSettings, _scene: &Scene) -> Result<PathGraph, String> {
+    Ok(PathGraph {
+        settings: settings.clone(),
+        config: PathConfig {
+            extra_direct: settings.extra_direct,
+            ..PathConfig::volpath(settings.max_depth, settings.regularize)
+        },
+        report: Mutex::new(Report::default()),
+    })
+}
+
+impl PathGraph {
+    /// Records one 1-spp pass in the channels `C`: graph vertices (in film RGB) and one path
+    /// per pixel.
+    fn record<C: FilmChannels>(&self, scene: &Scene, pass: &ImagePass<'_>) -> (Vertices, Paths, RayStats) {
+        let (parts, stats) = pass.trace_pixels::<C, _>(
+            || (Recorder::<C>::default(), Vertices::default(), Paths::default()),
+            |(rec, v, p), px, lambda, sampler, stats| {
+                trace_path::<C, Recorder<C>>(
+                    scene,
+                    px.ray,
+                    scene.camera_medium,
+                    lambda,
+                    sampler,
+                    &self.config,
+                    rec,
+                    stats,
+                );
+                let lambda = *lambda;
+                rec.finish(px.index, px.weight, |x: C| x.to_film(&lambda, scene), v, p);
+            },
+        );
+        let (mut vertices, mut paths) = (Vertices::default(), Paths::default());
+        for (_, mut v, mut p) in parts {
+            paths.append(&mut p, vertices.len() as u32);
+            vertices.append(&mut v);
+        }
+        (vertices, paths, stats)
+    }
+}
+
+/// The path-traced L⁺ of every vertex (the iteration's start, Sec. 4): a backward sweep, as
+/// each path's vertices are recorded in order.
+fn path_traced(v: &Vertices) -> Vec<Rgb> {
+    let n = v.len();
+    let mut l_plus = vec![Rgb::ZERO; n];
+    let mut scattered = vec![Rgb::ZERO; n];
+    for i in (0..n).rev() {
+        let next = v.next[i];
+        let lp = if next == NONE { v.edge_const[i] } else { v.edge_const[i] + v.edge[i] * scattered[next as usize] };
+        l_plus[i] = lp;
+        scattered[i] = v.direct_light[i] + v.direct_scatter[i] + v.w[i] * lp;
+    }
+    l_plus
+}
+
+impl ImageIntegrator for PathGraph {
+    fn sample_image(&self, scene: &Scene, pass: &ImagePass<'_>) -> (Vec<PixelValue>, RayStats) {
+        let start = Instant::now();
+        let (vertices, mut paths, stats) = match scene.transport.transport {
+            Transport::Rgb => self.record::<Rgb>(scene, pass),
+            Transport::Spectral => self.record::<SampledSpectrum>(scene, pass),
+        };
+        let recorded = Instant::now();
+
+        let seed = (scene.sampler.seed as u32 as u64) << 32 | pass.sample_index() as u64;
+        let clusters = cluster::cluster(&vertices.p, |i| !vertices.g[i].is_nan(), self.settings.cluster_size, seed);
+        let mut rank = vec![0u32; clusters.order.len()];
+        for (new, &old) in clusters.order.iter().enumerate() {
+            rank[old as usize] = new as u32;
+        }
+        let l_plus_recorded = path_traced(&vertices);
+        let v = vertices.permuted(&clusters.order, &rank);
+        let peak = (Vertices::BYTES_PER_VERTEX + 4 * 12 + 3 * 4) * v.len() + Paths::BYTES_PER_PATH * paths.len();
+        drop(vertices);
+        let mut l_plus: Vec<Rgb> = clusters.order.iter().map(|&i| l_plus_recorded[i as usize]).collect();
+        drop(l_plus_recorded);
+        for f in paths.first.iter_mut() {
+            if *f != NONE {
+                *f = rank[*f as usize];
+            }
+        }
+        drop(rank);
+        let mut cluster_of = vec![0u32; v.len()];
+        for c in 0..clusters.len() {
+            cluster_of[clusters.range(c)].fill(c as u32);
+        }
+
+        let solver = solve::Solver::new(&v, &clusters.offsets);
+        let mut scattered = vec![Rgb::ZERO; v.len()];
+        for _ in 0..self.settings.iterations {
+            solver.aggregate(&l_plus, &mut scattered);
+            solver.propagate(&scattered, &mut l_plus);
+        }
+        let values: Vec<PixelValue> = (0..paths.len())
+            .into_par_iter()
+            .with_min_len(1024)
+            .map(|k| {
+                let f = paths.first[k];
+                let l = if f == NONE {
+                    paths.before[k]
+                } else {
+                    let f = f as usize;
+                    let extra = paths.extra[k];
+                    let direct = if extra.is_nan() { v.direct_light[f] + v.direct_scatter[f] } else { extra };
+                    let indirect = solver.indirect_at(cluster_of[f] as usize, f, &l_plus);
+                    paths.before[k] + paths.beta[k] * (direct + indirect)
+                };
+                PixelValue { index: paths.pixel[k], weight: paths.weight[k], l }
+            })
+            .collect();
+        let solved = Instant::now();
+        if let Ok(mut r) = self.report.lock() {
+            r.samples += 1;
+            r.vertices += v.len() as u64;
+            r.clusters += clusters.len() as u64;
+            r.paths += paths.len() as u64;
+            r.record_seconds += (recorded - start).as_secs_f64();
+            r.solve_seconds += (solved - recorded).as_secs_f64();
+            r.peak_bytes = r.peak_bytes.max(peak);
+        }
+        // Keep `paths` alive until here: `values` borrows nothing from it, but the memory
+        // figure counts it.
+        paths.pixel.clear();
+        (values, stats)
+    }
+}
+
+impl Integrator for PathGraph {
+    fn name(&self) -> &'static str {
+        "pathgraph"
+    }
+
+    /// Per-ray callers get the path-traced estimate the graph starts from.
+    fn li_rgb(&self, scene: &Scene, ray: Ray, lambda: &mut (), sampler: &mut Sampler, stats: &mut RayStats) -> Rgb {
+        let config = PathConfig { extra_direct: 0, ..self.config };
+        trace_path(scene, ray, scene.camera_medium, lambda, sampler, &config, &mut NoObserver, stats)
+    }
+
+    fn li_spectral(
+        &self,
+        scene: &Scene,
+        ray: Ray,
+        lambda: &mut SampledWavelengths,
+        sampler: &mut Sampler,
+        stats: &mut RayStats,
+    ) -> SampledSpectrum {
+        let config = PathConfig { extra_direct: 0, ..self.config };
+        trace_path::<SampledSpectrum, _>(
+            scene,
+            ray,
+            scene.camera_medium,
+            lambda,
+            sampler,
+            &config,
+            &mut NoObserver,
+            stats,
+        )
+    }
+
+    fn whole_image(&self) -> Option<&dyn ImageIntegrator> {
+        Some(self)
+    }
+
+    fn report(&self) -> Vec<String> {
+        let Ok(r) = self.report.lock() else { return Vec::new() };
+        if r.samples == 0 {
+            return Vec::new();
+        }
+        let n = r.samples as f64;
+        let verts = r.vertices as f64 / n;
+        vec![
+            format!(
+                "pathgraph   {} graph samples (K {}, {} iterations, extradirect {}): {:.0} vertices and {:.0} clusters \
+                 per sample ({:.2} vertices per path)",
+                r.samples,
+                self.settings.cluster_size,
+                self.settings.iterations,
+                self.settings.extra_direct,
+                verts,
+                r.clusters as f64 / n,
+                r.vertices as f64 / r.paths.max(1) as f64
+            ),
+            format!(
+                "pathgraph   record {:.3} s, solve {:.3} s per sample; peak {:.1} MiB ({:.0} bytes per vertex incl. paths)",
+                r.record_seconds / n,
+                r.solve_seconds / n,
+                r.peak_bytes as f64 / (1 << 20) as f64,
+                r.peak_bytes as f64 / verts.max(1.0)
+            ),
+        ]
+    }
+}

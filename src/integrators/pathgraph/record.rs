@@ -1,0 +1,383 @@
+//! Recording a path graph through the shared path loop's observer (Sec. 3.4, Fig. 3).
+//!
+//! The loop reports each scattering vertex (throughput β before it, f and the sampling
+//! density of the continuation), each next-event estimate and each emission it adds. At the
+//! end of a path these become graph vertices whose quantities are per unit of β, so that a
+//! vertex's scattered radiance is
+//!
+//! L̄ᵢ = Eᵢ + Rᵢ + wᵢ ∘ L⁺ᵢ,    L⁺ᵢ = cᵢ + Pᵢ ∘ L̄ₙₑₓₜ₍ᵢ₎
+//!
+//! with E the light-sampled direct light (the NEE contribution / β), R the emission the
+//! continuation direction found with an MIS partner (its contribution / β), w = f/p the
+//! continuation weight, P = β_next/(β ∘ w) the continuation edge's factor per RGB channel
+//! (transmittance over the distance pdf, Eq. 27, chromatic extinction and Russian roulette
+//! included) and c the radiance found along the edge that no other technique could find
+//! (medium emission, lights behind specular bounces, next-event estimates at specular
+//! vertices). Medium vertices and diffuse/glossy surface vertices are graph vertices;
+//! vertices that continued by a specular sample fold into the continuation edge. Without
+//! any aggregation these quantities give back the path-traced pixel exactly.
+
+use glam::Vec3;
+
+use crate::accel::NONE;
+use crate::color::{Channels, Rgb};
+use crate::integrators::common::{EmissionEvent, NeeEvent, PathObserver, VertexEvent};
+
+/// Graph vertices, struct of arrays.
+#[derive(Debug, Default)]
+pub struct Vertices {
+    /// Position.
+    pub p: Vec<Vec3>,
+    /// Direction back along the incoming ray.
+    pub wo: Vec<Vec3>,
+    /// Continuation direction (the phase- or BSDF-sampled direction).
+    pub wi: Vec<Vec3>,
+    /// Henyey-Greenstein asymmetry of a medium vertex; NaN marks a surface vertex, which is
+    /// not clustered (its BSDF is not stored).
+    pub g: Vec<f32>,
+    /// f/p of the continuation direction.
+    pub w: Vec<Rgb>,
+    /// Light-sampled direct light, MIS-weighted, per unit of β.
+    pub direct_light: Vec<Rgb>,
+    /// Direction of the light sample.
+    pub light_wi: Vec<Vec3>,
+    /// Light-sampling density of the light sample (light choice × solid angle).
+    pub light_pdf: Vec<f32>,
+    /// Phase density of the light sample's direction (0 for a delta light).
+    pub light_pdf_scatter: Vec<f32>,
+    /// Emission found along the continuation direction with an MIS partner, per unit of β.
+    pub direct_scatter: Vec<Rgb>,
+    /// Light-sampling density of that emission's direction.
+    pub scatter_pdf_light: Vec<f32>,
+    /// Radiance along the continuation edge found by no other technique (L⁺ units).
+    pub edge_const: Vec<Rgb>,
+    /// Continuation edge factor P (Eq. 27), per channel.
+    pub edge: Vec<Rgb>,
+    /// The next graph vertex on the path, or NONE.
+    pub next: Vec<u32>,
+}
+
+impl Vertices {
+    /// Number of vertices.
+    pub fn len(&self) -> usize {
+        self.p.len()
+    }
+
+    /// Bytes per vertex of these arrays.
+    pub const BYTES_PER_VERTEX: usize = 3 * 12 + 4 + 12 + 12 + 12 + 4 + 4 + 12 + 4 + 12 + 12 + 4;
+
+    /// Appends `o`, whose `next` indices are relative to its own start.
+    pub fn append(&mut self, o: &mut Vertices) {
+        let base = self.len() as u32;
+        self.p.append(&mut o.p);
+        self.wo.append(&mut o.wo);
+        self.wi.append(&mut o.wi);
+        self.g.append(&mut o.g);
+        self.w.append(&mut o.w);
+        self.direct_light.append(&mut o.direct_light);
+        self.light_wi.append(&mut o.light_wi);
+        self.light_pdf.append(&mut o.light_pdf);
+        self.light_pdf_scatter.append(&mut o.light_pdf_scatter);
+        self.direct_scatter.append(&mut o.direct_scatter);
+        self.scatter_pdf_light.append(&mut o.scatter_pdf_light);
+        self.edge_const.append(&mut o.edge_const);
+        self.edge.append(&mut o.edge);
+        self.next.extend(o.next.drain(..).map(|n| if n == NONE { NONE } else { n + base }));
+    }
+
+    /// The vertices in the order `order` (a permutation; `rank` its inverse), `next`
+    /// renumbered.
+    pub fn permuted(&self, order: &[u32], rank: &[u32]) -> Vertices {
+        fn gather<T: Copy>(v: &[T], order: &[u32]) -> Vec<T> {
+            order.iter().map(|&i| v[i as usize]).collect()
+        }
+        Vertices {
+            p: gather(&self.p, order),
+            wo: gather(&self.wo, order),
+            wi: gather(&self.wi, order),
+            g: gather(&self.g, order),
+            w: gather(&self.w, order),
+            direct_light: gather(&self.direct_light, order),
+            light_wi: gather(&self.light_wi, order),
+            light_pdf: gather(&self.light_pdf, order),
+            light_pdf_scatter: gather(&self.light_pdf_scatter, order),
+            direct_scatter: gather(&self.direct_scatter, order),
+            scatter_pdf_light: gather(&self.scatter_pdf_light, order),
+            edge_const: gather(&self.edge_const, order),
+            edge: gather(&self.edge, order),
+            next: order
+                .iter()
+                .map(|&i| {
+                    let n = self.next[i as usize];
+                    if n == NONE { NONE } else { rank[n as usize] }
+                })
+                .collect(),
+        }
+    }
+}
+
+/// Recorded paths, one per camera ray, struct of arrays.
+#[derive(Debug, Default)]
+pub struct Paths {
+    /// The pixel's film index.
+    pub pixel: Vec<u32>,
+    /// The camera sample's filter weight.
+    pub weight: Vec<f32>,
+    /// Radiance found before the first graph vertex (seen emitters, and everything when the
+    /// path has no graph vertex).
+    pub before: Vec<Rgb>,
+    /// The first graph vertex, or NONE.
+    pub first: Vec<u32>,
+    /// Throughput arriving at the first graph vertex.
+    pub beta: Vec<Rgb>,
+    /// The extra light samples' direct light at the first graph vertex, per unit of β, when
+    /// `extradirect` asked for them (NaN when the path has none: its first light-sampling
+    /// vertex was not its first graph vertex, or no extra samples were taken).
+    pub extra: Vec<Rgb>,
+}
+
+impl Paths {
+    /// Bytes per path of these arrays.
+    pub const BYTES_PER_PATH: usize = 4 + 4 + 12 + 4 + 12 + 12;
+
+    /// Appends `o`, whose vertex indices start at `vertex_base` in the combined vertices.
+    pub fn append(&mut self, o: &mut Paths, vertex_base: u32) {
+        self.pixel.append(&mut o.pixel);
+        self.weight.append(&mut o.weight);
+        self.before.append(&mut o.before);
+        self.first.extend(o.first.drain(..).map(|f| if f == NONE { NONE } else { f + vertex_base }));
+        self.beta.append(&mut o.beta);
+        self.extra.append(&mut o.extra);
+    }
+
+    /// Number of paths.
+    pub fn len(&self) -> usize {
+        self.pixel.len()
+    }
+}
+
+/// The path loop's observer: collects one path's events (per-thread scratch, reused), in the
+/// channels the path carries.
+pub struct Recorder<C: Channels> {
+    vertices: Vec<VertexEvent<C>>,
+    nee: Vec<NeeEvent<C>>,
+    emission: Vec<EmissionEvent<C>>,
+    extra: Option<(u32, C)>,
+    /// Graph vertex (index into the per-path arrays below) of each scattering vertex, by
+    /// depth; NONE for folded ones.
+    graph: Vec<u32>,
+    /// Per graph vertex of the path: depth, E, R, c, w, P, L⁺ and L̄ in the path's channels.
+    depth: Vec<usize>,
+    e: Vec<C>,
+    r: Vec<C>,
+    c: Vec<C>,
+    w: Vec<C>,
+    edge: Vec<C>,
+    l_plus: Vec<C>,
+    scattered: Vec<C>,
+    /// Σ weight and Σ weight × light pdf of each vertex's MIS-partnered emission.
+    scatter_weights: Vec<(f32, f32)>,
+    /// Each vertex's light sample: direction, light density, phase density.
+    light: Vec<(Vec3, f32, f32)>,
+}
+
+impl<C: Channels> Default for Recorder<C> {
+    fn default() -> Self {
+        Recorder {
+            vertices: Vec::new(),
+            nee: Vec::new(),
+            emission: Vec::new(),
+            extra: None,
+            graph: Vec::new(),
+            depth: Vec::new(),
+            e: Vec::new(),
+            r: Vec::new(),
+            c: Vec::new(),
+            w: Vec::new(),
+            edge: Vec::new(),
+            l_plus: Vec::new(),
+            scattered: Vec::new(),
+            scatter_weights: Vec::new(),
+            light: Vec::new(),
+        }
+    }
+}
+
+impl<C: Channels> PathObserver<C> for Recorder<C> {
+    #[inline]
+    fn on_vertex(&mut self, v: &VertexEvent<C>) {
+        self.vertices.push(*v);
+    }
+    #[inline]
+    fn on_nee(&mut self, e: &NeeEvent<C>) {
+        self.nee.push(*e);
+    }
+    #[inline]
+    fn on_emission(&mut self, e: &EmissionEvent<C>) {
+        self.emission.push(*e);
+    }
+    #[inline]
+    fn on_extra_direct(&mut self, depth: u32, contribution: C) {
+        self.extra = Some((depth, contribution));
+    }
+}
+
+/// Component-wise a/b with 0 where b is 0.
+#[inline]
+fn div<C: Channels>(a: C, b: C) -> C {
+    a.zip_map(b, |a, b| if b != 0.0 { a / b } else { 0.0 })
+}
+
+/// The RGB factor that maps `to_rgb(x)` to `to_rgb(f ∘ x)`, channel by channel: exact for the
+/// path's own values (so a cluster of one reproduces the path-traced pixel in any
+/// representation), and f's own RGB where x has no signal in a channel. In RGB it is f.
+#[inline]
+fn rgb_factor<C: Channels>(f: C, x: C, to_rgb: &impl Fn(C) -> Rgb) -> Rgb {
+    let (num, den) = (to_rgb(f * x), to_rgb(x));
+    let (fr, one) = (to_rgb(f), to_rgb(C::ONE));
+    let fallback = |k: usize| if one[k].abs() > 1e-12 { fr[k] / one[k] } else { f.average() };
+    Rgb::from_array(std::array::from_fn(|k| {
+        if den[k].abs() > 1e-12 * (den.abs().max_element() + 1e-30) && den[k] != 0.0 {
+            num[k] / den[k]
+        } else {
+            fallback(k)
+        }
+    }))
+}
+
+impl<C: Channels> Recorder<C> {
+    /// Turns the recorded path of the camera ray for film pixel `pixel` into graph vertices
+    /// and a path entry, and clears the scratch for the next path. `to_rgb` is the film's
+    /// linear map from the path's channels to RGB (the sensor at the path's wavelengths):
+    /// the graph aggregates across paths, so it stores what the film would see.
+    pub fn finish(
+        &mut self,
+        pixel: u32,
+        weight: f32,
+        to_rgb: impl Fn(C) -> Rgb,
+        vertices: &mut Vertices,
+        paths: &mut Paths,
+    ) {
+        self.graph.clear();
+        self.depth.clear();
+        for (d, v) in self.vertices.iter().enumerate() {
+            debug_assert_eq!(v.depth as usize, d);
+            if v.specular || v.pdf == 0.0 {
+                self.graph.push(NONE);
+                continue;
+            }
+            self.graph.push(self.depth.len() as u32);
+            self.depth.push(d);
+        }
+        let n = self.depth.len();
+        for a in [&mut self.e, &mut self.r, &mut self.c, &mut self.edge, &mut self.l_plus, &mut self.scattered] {
+            a.clear();
+            a.resize(n, C::ZERO);
+        }
+        self.w.clear();
+        self.w.extend(self.depth.iter().map(|&d| div(self.vertices[d].f, C::splat(self.vertices[d].pdf))));
+        self.scatter_weights.clear();
+        self.scatter_weights.resize(n, (0.0, 0.0));
+        self.light.clear();
+        self.light.resize(n, (Vec3::Z, 0.0, 0.0));
+        // Eq. 27 per channel: what the path multiplied β by between consecutive graph vertices,
+        // after the continuation weight at the first.
+        for k in 1..n {
+            let (a, b) = (&self.vertices[self.depth[k - 1]], &self.vertices[self.depth[k]]);
+            self.edge[k - 1] = div(b.beta, a.beta * self.w[k - 1]);
+        }
+        // The latest graph vertex at a depth below `depth`.
+        let graph = &self.graph;
+        let before_depth =
+            |depth: usize| -> Option<usize> { (0..depth.min(graph.len())).rev().find(|&d| graph[d] != NONE) };
+        let mut before = C::ZERO;
+        let vs = &self.vertices;
+        // Radiance found after graph vertex at depth `d` by no technique the graph aggregates.
+        let mut fold = |d: Option<usize>, x: C, c: &mut [C], w: &[C]| match d {
+            Some(d) => {
+                let k = graph[d] as usize;
+                c[k] += div(x, vs[d].beta * w[k]);
+            }
+            None => before += x,
+        };
+        for e in &self.nee {
+            let d = e.depth as usize;
+            match graph.get(d) {
+                Some(&k) if k != NONE => {
+                    let k = k as usize;
+                    self.e[k] += div(e.contribution, vs[d].beta);
+                    self.light[k] = (e.wi, e.pdf_light, e.pdf_scatter);
+                }
+                _ => fold(before_depth(d), e.contribution, &mut self.c, &self.w),
+            }
+        }
+        for e in &self.emission {
+            let d = e.depth as usize;
+            let owner = d.checked_sub(1).and_then(|j| graph.get(j).map(|&k| (j, k)));
+            match owner {
+                Some((j, k)) if k != NONE && e.pdf_light > 0.0 => {
+                    let k = k as usize;
+                    self.r[k] += div(e.contribution, vs[j].beta);
+                    // Several lights can be found along one direction (infinite lights): their
+                    // densities are averaged by weight, which keeps the path-traced sum.
+                    let y = e.contribution.average().abs().max(1e-30);
+                    let sw = &mut self.scatter_weights[k];
+                    sw.0 += y;
+                    sw.1 += y * e.pdf_light;
+                }
+                _ => fold(before_depth(d), e.contribution, &mut self.c, &self.w),
+            }
+        }
+        // The path-traced L⁺ and L̄ of each graph vertex, backwards along the path.
+        for k in (0..n).rev() {
+            let next = if k + 1 < n { self.edge[k] * self.scattered[k + 1] } else { C::ZERO };
+            self.l_plus[k] = self.c[k] + next;
+            self.scattered[k] = self.e[k] + self.r[k] + self.w[k] * self.l_plus[k];
+        }
+        let base = vertices.len() as u32;
+        for k in 0..n {
+            let v = &vs[self.depth[k]];
+            vertices.p.push(v.p);
+            vertices.wo.push(v.wo);
+            vertices.wi.push(v.wi);
+            vertices.g.push(if v.in_medium { v.g } else { f32::NAN });
+            vertices.w.push(rgb_factor(self.w[k], self.l_plus[k], &to_rgb));
+            vertices.direct_light.push(to_rgb(self.e[k]));
+            let (light_wi, light_pdf, light_pdf_scatter) = self.light[k];
+            vertices.light_wi.push(light_wi);
+            vertices.light_pdf.push(light_pdf);
+            vertices.light_pdf_scatter.push(light_pdf_scatter);
+            vertices.direct_scatter.push(to_rgb(self.r[k]));
+            let (sw, swp) = self.scatter_weights[k];
+            vertices.scatter_pdf_light.push(if sw > 0.0 { swp / sw } else { 0.0 });
+            vertices.edge_const.push(to_rgb(self.c[k]));
+            if k + 1 < n {
+                vertices.edge.push(rgb_factor(self.edge[k], self.scattered[k + 1], &to_rgb));
+                vertices.next.push(base + k as u32 + 1);
+            } else {
+                vertices.edge.push(Rgb::ZERO);
+                vertices.next.push(NONE);
+            }
+        }
+        paths.pixel.push(pixel);
+        paths.weight.push(weight);
+        paths.before.push(to_rgb(before));
+        if n == 0 {
+            paths.first.push(NONE);
+            paths.beta.push(Rgb::ZERO);
+            paths.extra.push(Rgb::NAN);
+        } else {
+            let beta = vs[self.depth[0]].beta;
+            paths.first.push(base);
+            paths.beta.push(rgb_factor(beta, self.scattered[0], &to_rgb));
+            paths.extra.push(match self.extra {
+                Some((depth, c)) if depth as usize == self.depth[0] => to_rgb(div(c, beta)),
+                _ => Rgb::NAN,
+            });
+        }
+        self.extra = None;
+        self.vertices.clear();
+        self.nee.clear();
+        self.emission.clear();
+    }
+}

@@ -1,0 +1,80 @@
+//! `pathgraph` parameters: the path loop's `maxdepth` and `regularize` (shared with
+//! `volpath`, so switching a volpath scene to pathgraph keeps its paths) and the graph's
+//! cluster size, iteration count and extra first-vertex light samples.
+
+use nimbus_parser::{Entity, Error};
+
+/// `pathgraph` parameters.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PathGraphSettings {
+    /// Maximum number of scattering events (`integer maxdepth`, default 5 as pbrt-v4's volpath).
+    pub max_depth: u32,
+    /// Roughen near-specular BSDFs after the first non-specular bounce (`bool regularize`).
+    pub regularize: bool,
+    /// Expected shading points per cluster, K (`integer clustersize`). 1 makes every point its
+    /// own cluster: the image is then volpath's.
+    pub cluster_size: u32,
+    /// Aggregation + propagation rounds of Eq. 28 (`integer iterations`).
+    pub iterations: u32,
+    /// Extra light samples at each path's first vertex, used for the pixel's direct light
+    /// instead of the path's own (`integer extradirect`, Sec. 4; 0 = the path's own).
+    pub extra_direct: u32,
+}
+
+impl Default for PathGraphSettings {
+    fn default() -> Self {
+        PathGraphSettings { max_depth: 5, regularize: false, cluster_size: 32, iterations: 8, extra_direct: 0 }
+    }
+}
+
+impl PathGraphSettings {
+    /// Reads the parameters.
+    pub fn from_entity(e: &Entity) -> Result<PathGraphSettings, Error> {
+        let p = &e.params;
+        let d = PathGraphSettings::default();
+        let count = |name: &str, default: u32, min: i32, max: i32| -> Result<u32, Error> {
+            let v = p.get_one_int(name, default as i32)?;
+            if v < min || v > max {
+                return Err(Error::new(
+                    p.loc(name).unwrap_or(&e.loc),
+                    format!("\"{name}\" must be between {min} and {max} (it is {v})"),
+                ));
+            }
+            Ok(v as u32)
+        };
+        Ok(PathGraphSettings {
+            max_depth: count("maxdepth", d.max_depth, 0, 100_000)?,
+            regularize: p.get_one_bool("regularize", d.regularize)?,
+            cluster_size: count("clustersize", d.cluster_size, 1, 4096)?,
+            iterations: count("iterations", d.iterations, 0, 1000)?,
+            extra_direct: count("extradirect", d.extra_direct, 0, 4096)?,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn read(params: &str) -> Result<PathGraphSettings, Error> {
+        let text = format!("Integrator \"pathgraph\" {params}\nWorldBegin\n");
+        let desc = nimbus_parser::load_str(&text, "test.pbrt").unwrap();
+        PathGraphSettings::from_entity(&desc.integrator)
+    }
+
+    #[test]
+    fn defaults_and_overrides() {
+        assert_eq!(read("").unwrap(), PathGraphSettings::default());
+        let s = read(r#""integer maxdepth" 12 "integer clustersize" 1 "integer iterations" 0 "integer extradirect" 4"#)
+            .unwrap();
+        assert_eq!((s.max_depth, s.cluster_size, s.iterations, s.extra_direct), (12, 1, 0, 4));
+    }
+
+    #[test]
+    fn out_of_range_and_wrong_types_name_the_parameter() {
+        let e = read(r#""integer clustersize" 0"#).unwrap_err().to_string();
+        assert!(e.contains("clustersize") && e.contains("test.pbrt:1"), "{e}");
+        let e = read(r#""float iterations" 2"#).unwrap_err().to_string();
+        assert!(e.contains("iterations"), "{e}");
+    }
+}

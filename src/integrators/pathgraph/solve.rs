@@ -1,0 +1,317 @@
+//! Aggregation (Eqs. 17 and 22) and propagation (Eqs. 12 and 27), iterated as Eq. 28.
+//!
+//! The vertices arrive sorted by cluster, so each cluster is a contiguous range and the
+//! clusters are solved in parallel without sharing anything. Marginal densities depend only
+//! on directions, so they and the aggregated direct light A⁰L⁰ are computed once (first
+//! pass); every iteration then aggregates L⁺ (A⁺L⁺, second pass) and propagates along the
+//! continuation edges. Surface vertices are clusters of one (nimbus stores no BSDF per
+//! vertex, README: deviations): their aggregate is their own path-traced estimate.
+
+use glam::Vec3;
+use rayon::prelude::*;
+
+use super::record::Vertices;
+use crate::accel::NONE;
+use crate::color::Rgb;
+
+/// The Henyey-Greenstein phase function of one vertex as a / (b + c·(ωo·ω))^{3/2}, the same
+/// expression as [`crate::media::phase::henyey_greenstein`] with ωo folded in.
+#[derive(Clone, Copy, Debug)]
+struct Hg {
+    wo: Vec3,
+    a: f32,
+    b: f32,
+    c: f32,
+}
+
+impl Hg {
+    #[inline]
+    fn new(g: f32, wo: Vec3) -> Hg {
+        let g = g.clamp(-0.99, 0.99);
+        Hg { wo, a: (1.0 - g * g) / (4.0 * std::f32::consts::PI), b: 1.0 + g * g, c: 2.0 * g }
+    }
+
+    #[inline]
+    fn eval(&self, w: Vec3) -> f32 {
+        let d = (self.b + self.c * self.wo.dot(w)).max(0.0);
+        self.a / (d * d.sqrt())
+    }
+}
+
+/// Clusters per parallel work item.
+const BATCH: usize = 256;
+
+/// A path graph ready to iterate: vertices in cluster order with their clusters.
+pub struct Solver<'a> {
+    v: &'a Vertices,
+    /// Cluster start offsets (plus the end).
+    offsets: &'a [u32],
+    /// Σ over the cluster of phase densities of each vertex's continuation direction (the
+    /// marginal p_m of Eq. 17); NaN for surface vertices.
+    marginal: Vec<f32>,
+    /// Aggregated scattered direct light A⁰L⁰ (Eq. 22), constant over iterations.
+    direct: Vec<Rgb>,
+    /// Batches of clusters, as ranges of cluster indices.
+    batches: Vec<(usize, usize)>,
+}
+
+impl<'a> Solver<'a> {
+    /// The first aggregation pass: marginal densities and the aggregated direct light.
+    pub fn new(v: &'a Vertices, offsets: &'a [u32]) -> Solver<'a> {
+        let n = v.len();
+        let clusters = offsets.len() - 1;
+        let batches: Vec<(usize, usize)> =
+            (0..clusters).step_by(BATCH).map(|c| (c, (c + BATCH).min(clusters))).collect();
+        let mut marginal = vec![0.0f32; n];
+        let mut direct = vec![Rgb::ZERO; n];
+        {
+            let parts = split_by_batches(&batches, offsets, &mut marginal, &mut direct);
+            parts.into_par_iter().for_each(|(range, marginal, direct)| {
+                let mut scratch = Scratch::default();
+                let base = offsets[range.0] as usize;
+                for c in range.0..range.1 {
+                    let r = offsets[c] as usize..offsets[c + 1] as usize;
+                    let local = r.start - base..r.end - base;
+                    first_pass(v, r, &mut marginal[local.clone()], &mut direct[local], &mut scratch);
+                }
+            });
+        }
+        Solver { v, offsets, marginal, direct, batches }
+    }
+
+    /// Aggregated scattered radiance L̄ = A⁰L⁰ + A⁺L⁺ (Eq. 25) of every vertex, into `out`.
+    pub fn aggregate(&self, l_plus: &[Rgb], out: &mut [Rgb]) {
+        let parts = split_one(&self.batches, self.offsets, out);
+        parts.into_par_iter().for_each(|(range, out)| {
+            let mut q = Vec::new();
+            let base = self.offsets[range.0] as usize;
+            for c in range.0..range.1 {
+                let r = self.offsets[c] as usize..self.offsets[c + 1] as usize;
+                let local = r.start - base..r.end - base;
+                self.aggregate_cluster(r, l_plus, &mut out[local], &mut q);
+            }
+        });
+    }
+
+    /// A⁺L⁺ + A⁰L⁰ for the cluster `r`.
+    fn aggregate_cluster(&self, r: std::ops::Range<usize>, l_plus: &[Rgb], out: &mut [Rgb], q: &mut Vec<Rgb>) {
+        let v = self.v;
+        if v.g[r.start].is_nan() {
+            // A surface vertex: its own estimate.
+            for (o, i) in out.iter_mut().zip(r) {
+                *o = self.direct[i] + v.w[i] * l_plus[i];
+            }
+            return;
+        }
+        // Eq. 17: L̄⁺(xᵢ) = Σⱼ fᵢ(ωⱼ)/p_m(ωⱼ) L⁺ⱼ; the sample values over their marginal first.
+        q.clear();
+        q.extend(r.clone().map(|j| l_plus[j] / self.marginal[j]));
+        for (o, i) in out.iter_mut().zip(r.clone()) {
+            let hg = Hg::new(v.g[i], v.wo[i]);
+            let mut sum = Rgb::ZERO;
+            for (qj, j) in q.iter().zip(r.clone()) {
+                if *qj != Rgb::ZERO {
+                    sum += hg.eval(v.wi[j]) * *qj;
+                }
+            }
+            *o = self.direct[i] + sum;
+        }
+    }
+
+    /// The aggregated scattered indirect light A⁺L⁺ at vertex `i` alone.
+    pub fn indirect_at(&self, cluster: usize, i: usize, l_plus: &[Rgb]) -> Rgb {
+        let v = self.v;
+        if v.g[i].is_nan() {
+            return v.w[i] * l_plus[i];
+        }
+        let hg = Hg::new(v.g[i], v.wo[i]);
+        let r = self.offsets[cluster] as usize..self.offsets[cluster + 1] as usize;
+        r.map(|j| if l_plus[j] == Rgb::ZERO { Rgb::ZERO } else { hg.eval(v.wi[j]) * l_plus[j] / self.marginal[j] })
+            .sum()
+    }
+
+    /// Propagation (Eq. 26): L⁺ᵢ = cᵢ + Pᵢ ∘ L̄ₙₑₓₜ₍ᵢ₎ for every vertex.
+    pub fn propagate(&self, scattered: &[Rgb], l_plus: &mut [Rgb]) {
+        let v = self.v;
+        l_plus.par_iter_mut().enumerate().with_min_len(4096).for_each(|(i, l)| {
+            let next = v.next[i];
+            *l = if next == NONE { v.edge_const[i] } else { v.edge_const[i] + v.edge[i] * scattered[next as usize] };
+        });
+    }
+}
+
+/// Per-batch scratch of the first pass.
+#[derive(Default)]
+struct Scratch {
+    hg: Vec<Hg>,
+    light: Vec<Rgb>,
+    scatter: Vec<Rgb>,
+}
+
+/// Marginals and Eq. 22 for the cluster `r` (outputs indexed from the cluster's start).
+fn first_pass(v: &Vertices, r: std::ops::Range<usize>, marginal: &mut [f32], direct: &mut [Rgb], s: &mut Scratch) {
+    let i0 = r.start;
+    if v.g[i0].is_nan() {
+        for (k, i) in r.enumerate() {
+            marginal[k] = f32::NAN;
+            direct[k] = v.direct_light[i] + v.direct_scatter[i];
+        }
+        return;
+    }
+    let n = r.len() as f32;
+    s.hg.clear();
+    s.hg.extend(r.clone().map(|i| Hg::new(v.g[i], v.wo[i])));
+    let sum_pdf = |w: Vec3, hg: &[Hg]| -> f32 { hg.iter().map(|h| h.eval(w)).sum() };
+    s.light.clear();
+    s.scatter.clear();
+    for (k, j) in r.clone().enumerate() {
+        let own = &s.hg[k];
+        // Phase-sampled directions: the marginal of Eq. 17, and with K light densities that of
+        // Eq. 22's second sum.
+        let p_phase = sum_pdf(v.wi[j], &s.hg);
+        marginal[k] = p_phase;
+        // Incoming direct radiance L⁰ recovered from the path's MIS-weighted value (so that a
+        // cluster of one gives the path-traced value back exactly), over its marginal.
+        let scatter = if v.direct_scatter[j] == Rgb::ZERO {
+            Rgb::ZERO
+        } else {
+            let f = own.eval(v.wi[j]);
+            let l0 = v.direct_scatter[j] * ((f + v.scatter_pdf_light[j]) / f);
+            l0 / (p_phase + n * v.scatter_pdf_light[j])
+        };
+        s.scatter.push(scatter);
+        // Light-sampled directions (Eq. 22's first sum); a delta light (phase density 0) can
+        // only be found by light sampling.
+        let light = if v.direct_light[j] == Rgb::ZERO {
+            Rgb::ZERO
+        } else {
+            let w = v.light_wi[j];
+            let f = own.eval(w);
+            let (pl, ps) = (v.light_pdf[j], v.light_pdf_scatter[j]);
+            let l0 = v.direct_light[j] * ((ps + pl) / f);
+            let p_m = if ps == 0.0 { n * pl } else { sum_pdf(w, &s.hg) + n * pl };
+            l0 / p_m
+        };
+        s.light.push(light);
+    }
+    for (k, _) in r.clone().enumerate() {
+        let own = &s.hg[k];
+        let mut sum = Rgb::ZERO;
+        for (m, j) in r.clone().enumerate() {
+            if s.light[m] != Rgb::ZERO {
+                sum += own.eval(v.light_wi[j]) * s.light[m];
+            }
+            if s.scatter[m] != Rgb::ZERO {
+                sum += own.eval(v.wi[j]) * s.scatter[m];
+            }
+        }
+        direct[k] = sum;
+    }
+}
+
+type Batch<'s, T> = ((usize, usize), &'s mut [T]);
+
+/// `out` cut into the vertex ranges of `batches`.
+fn split_one<'s, T>(batches: &[(usize, usize)], offsets: &[u32], mut out: &'s mut [T]) -> Vec<Batch<'s, T>> {
+    let mut parts = Vec::with_capacity(batches.len());
+    for &(c0, c1) in batches {
+        let len = (offsets[c1] - offsets[c0]) as usize;
+        let (head, tail) = std::mem::take(&mut out).split_at_mut(len);
+        parts.push(((c0, c1), head));
+        out = tail;
+    }
+    parts
+}
+
+/// Two arrays cut into the vertex ranges of `batches`.
+#[allow(clippy::type_complexity)]
+fn split_by_batches<'s>(
+    batches: &[(usize, usize)],
+    offsets: &[u32],
+    a: &'s mut [f32],
+    b: &'s mut [Rgb],
+) -> Vec<((usize, usize), &'s mut [f32], &'s mut [Rgb])> {
+    split_one(batches, offsets, a)
+        .into_iter()
+        .zip(split_one(batches, offsets, b))
+        .map(|((r, a), (_, b))| (r, a, b))
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::media::phase::henyey_greenstein;
+
+    #[test]
+    fn folded_hg_is_the_phase_function() {
+        for g in [-0.7, 0.0, 0.3, 0.95] {
+            let wo = Vec3::new(0.3, -0.4, 0.866).normalize();
+            let w = Vec3::new(-0.2, 0.9, 0.1).normalize();
+            let a = Hg::new(g, wo).eval(w);
+            let b = henyey_greenstein(wo.dot(w), g);
+            assert!((a - b).abs() <= 1e-6 * b, "g={g}: {a} vs {b}");
+        }
+    }
+
+    /// Two isotropic medium vertices in one cluster, no lights: Eq. 17 by hand. With p = 1/4π
+    /// for both, p_m = 2/4π and L̄⁺ᵢ = Σⱼ (1/4π)/(2/4π) L⁺ⱼ = the mean of the two L⁺.
+    #[test]
+    fn two_point_cluster_averages_indirect_light() {
+        let mut v = Vertices::default();
+        for k in 0..2 {
+            v.p.push(Vec3::ZERO);
+            v.wo.push(Vec3::Z);
+            v.wi.push(if k == 0 { Vec3::X } else { -Vec3::Y });
+            v.g.push(0.0);
+            v.w.push(Rgb::ONE);
+            v.direct_light.push(Rgb::ZERO);
+            v.light_wi.push(Vec3::Z);
+            v.light_pdf.push(0.0);
+            v.light_pdf_scatter.push(0.0);
+            v.direct_scatter.push(Rgb::ZERO);
+            v.scatter_pdf_light.push(0.0);
+            v.edge_const.push(Rgb::ZERO);
+            v.edge.push(Rgb::ZERO);
+            v.next.push(NONE);
+        }
+        let offsets = [0u32, 2];
+        let s = Solver::new(&v, &offsets);
+        let l_plus = [Rgb::new(1.0, 2.0, 3.0), Rgb::new(3.0, 0.0, 1.0)];
+        let mut out = [Rgb::ZERO; 2];
+        s.aggregate(&l_plus, &mut out);
+        for o in out {
+            assert!((o - Rgb::new(2.0, 1.0, 2.0)).abs().max_element() < 1e-5, "{o}");
+        }
+    }
+
+    /// Light-sampled direct light from a point light (delta: only light sampling finds it)
+    /// in a cluster of two isotropic vertices: each vertex gets the mean of the two samples.
+    #[test]
+    fn delta_light_samples_are_averaged() {
+        let mut v = Vertices::default();
+        for k in 0..2 {
+            v.p.push(Vec3::ZERO);
+            v.wo.push(Vec3::Z);
+            v.wi.push(Vec3::X);
+            v.g.push(0.0);
+            v.w.push(Rgb::ONE);
+            v.direct_light.push(Rgb::splat(if k == 0 { 4.0 } else { 2.0 }));
+            v.light_wi.push(Vec3::Y);
+            v.light_pdf.push(1.0);
+            v.light_pdf_scatter.push(0.0);
+            v.direct_scatter.push(Rgb::ZERO);
+            v.scatter_pdf_light.push(0.0);
+            v.edge_const.push(Rgb::ZERO);
+            v.edge.push(Rgb::ZERO);
+            v.next.push(NONE);
+        }
+        let offsets = [0u32, 2];
+        let s = Solver::new(&v, &offsets);
+        let mut out = [Rgb::ZERO; 2];
+        s.aggregate(&[Rgb::ZERO; 2], &mut out);
+        for o in out {
+            assert!((o - Rgb::splat(3.0)).abs().max_element() < 1e-5, "{o}");
+        }
+    }
+}

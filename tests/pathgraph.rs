@@ -1,0 +1,102 @@
+//! Volume path graphs: a cluster of one is volpath, in either representation; the image does
+//! not depend on the thread count; the method's energy against volpath, with its bias measured.
+
+use crate::common::{channel_stats, load_scene, render_scene, render_with, transport};
+use nimbus::imageio::Image;
+use nimbus::scene::BuildOptions;
+
+/// A cube (side 2) of a forward-scattering medium with a `sigma_s` spectrum, over a diffuse
+/// floor, lit by a distant light and a sky, rendered by `integrator` with `params`.
+fn scene_text(integrator: &str, params: &str, sigma_s: &str) -> String {
+    format!(
+        r#"LookAt 0 1 6  0 0 0  0 1 0
+Camera "perspective" "float fov" 40
+Film "rgb" "integer xresolution" 32 "integer yresolution" 32
+Sampler "zsobol" "integer pixelsamples" 4
+Integrator "{integrator}" "integer maxdepth" 20 {params}
+WorldBegin
+LightSource "distant" "point3 from" [0.3 1 0.2] "point3 to" [0 0 0] "rgb L" [2 2 2]
+LightSource "infinite" "rgb L" [0.2 0.25 0.4]
+MakeNamedMedium "m" "string type" "homogeneous" "rgb sigma_s" [{sigma_s}] "rgb sigma_a" [0.05 0.05 0.05]
+  "float g" 0.5
+AttributeBegin
+  Material "diffuse" "rgb reflectance" [0.5 0.5 0.5]
+  Shape "trianglemesh" "point3 P" [-4 -1 -4  4 -1 -4  4 -1 4  -4 -1 4] "integer indices" [0 2 1 0 3 2]
+AttributeEnd
+AttributeBegin
+  MediumInterface "m" ""
+  Material "interface"
+  Shape "trianglemesh"
+    "point3 P" [-1 -1 -1  1 -1 -1  1 1 -1  -1 1 -1  -1 -1 1  1 -1 1  1 1 1  -1 1 1]
+    "integer indices" [0 2 1 0 3 2  4 5 6 4 6 7  0 1 5 0 5 4  3 7 6 3 6 2  0 4 7 0 7 3  1 2 6 1 6 5]
+AttributeEnd
+"#
+    )
+}
+
+fn max_abs_diff(a: &Image, b: &Image) -> f32 {
+    a.pixels.iter().zip(&b.pixels).map(|(p, q)| (*p - *q).abs().max_element()).fold(0.0, f32::max)
+}
+
+/// K = 1 makes every shading point its own cluster: aggregation then gives back each path's
+/// own estimates, so the image is volpath's at the same seed (to float rounding), in RGB and
+/// in spectral transport, with surfaces (diffuse floor) and media vertices.
+#[test]
+fn cluster_size_one_is_volpath() {
+    for (sigma_s, spectral) in [("2 2 2", false), ("1 2 4", true)] {
+        let opts = BuildOptions { seed: Some(3), ..transport(spectral) };
+        let graph =
+            load_scene(&scene_text("pathgraph", r#""integer clustersize" 1 "integer iterations" 4"#, sigma_s), &opts);
+        let volpath = load_scene(&scene_text("volpath", "", sigma_s), &opts);
+        let (g, v) = (render_scene(&graph), render_scene(&volpath));
+        let peak = v.pixels.iter().map(|p| p.max_element()).fold(0.0, f32::max);
+        let d = max_abs_diff(&g, &v);
+        assert!(peak > 0.05 && d <= 1e-4 * peak, "spectral {spectral}: max difference {d} (peak {peak})");
+    }
+}
+
+/// Centres, clusters and the solve are fixed by the seed: one thread and two give the same
+/// image, bit for bit.
+#[test]
+fn same_image_at_any_thread_count() {
+    let scene =
+        load_scene(&scene_text("pathgraph", "", "2 2 2"), &BuildOptions { seed: Some(5), ..Default::default() });
+    let render = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        pool.install(|| render_scene(&scene))
+    };
+    let (one, two) = (render(1), render(2));
+    assert_eq!(one.pixels, two.pixels);
+}
+
+/// Against volpath at 64 spp: the image means agree within four standard errors of the
+/// difference plus the method's bias allowance (the issue's 1 %), and the graph's per-pixel
+/// noise is lower. Returns the relative mean difference (the bias measured).
+#[test]
+fn energy_and_noise_against_volpath() {
+    let opts = BuildOptions { spp: Some(64), seed: Some(1), ..Default::default() };
+    let graph = load_scene(&scene_text("pathgraph", "", "2 2 2"), &opts);
+    let volpath = load_scene(&scene_text("volpath", "", "2 2 2"), &opts);
+    let reference = load_scene(
+        &scene_text("volpath", "", "2 2 2"),
+        &BuildOptions { spp: Some(1024), seed: Some(9), ..Default::default() },
+    );
+    let r = render_scene(&reference);
+    let g = render_with(&graph, graph.integrator.create(&graph).unwrap().as_ref());
+    let v = render_scene(&volpath);
+    let (gs, rs) = (channel_stats(&g), channel_stats(&r));
+    for c in 0..3 {
+        let se = (gs[c].1 * gs[c].1 + rs[c].1 * rs[c].1).sqrt();
+        assert!(
+            (gs[c].0 - rs[c].0).abs() <= 4.0 * se + 0.01 * rs[c].0,
+            "channel {c}: graph {:?} reference {:?}",
+            gs[c],
+            rs[c]
+        );
+    }
+    let mse = |a: &Image| {
+        a.pixels.iter().zip(&r.pixels).map(|(p, q)| f64::from((*p - *q).length_squared())).sum::<f64>()
+            / a.pixels.len() as f64
+    };
+    assert!(mse(&g) < mse(&v), "graph MSE {} volpath MSE {}", mse(&g), mse(&v));
+}

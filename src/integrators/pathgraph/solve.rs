@@ -315,3 +315,60 @@ mod tests {
         }
     }
 }
+
+#[cfg(test)]
+mod estimator_tests {
+    use super::*;
+    use crate::media::phase::HenyeyGreenstein;
+    use glam::Vec2;
+
+    /// Eq. 17 is unbiased when every member sees the same radiance function L(ω): over many
+    /// clusters of 4 points with different ωo (g = 0.7; the first always the same) and ω sampled from each point's phase
+    /// function, the aggregate at the first point averages to ∫ p(ωo, ω) L(ω) dω, which for
+    /// L(ω) = 1 + ω_z is 1 − g ωo_z (the HG lobe's mean direction is −g ωo).
+    #[test]
+    fn aggregation_is_unbiased_for_a_shared_radiance_function() {
+        let g = 0.7;
+        let mut state = 12345u64;
+        let mut u = || {
+            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            ((state >> 40) as f32 + 0.5) / (1u64 << 24) as f32
+        };
+        let (mut sum, mut expected, mut n) = (0.0f64, 0.0f64, 0usize);
+        for _ in 0..40_000 {
+            let mut v = Vertices::default();
+            for k in 0..4 {
+                let z = 1.0 - 2.0 * u();
+                let phi = 2.0 * std::f32::consts::PI * u();
+                let r = (1.0 - z * z).max(0.0).sqrt();
+                // The first point looks along +z (its lobe points to −z); the others anywhere.
+                let wo = if k == 0 { Vec3::Z } else { Vec3::new(r * phi.cos(), r * phi.sin(), z) };
+                let wi = HenyeyGreenstein::new(g).sample_p(wo, Vec2::new(u(), u())).unwrap().wi;
+                v.p.push(Vec3::ZERO);
+                v.wo.push(wo);
+                v.wi.push(wi);
+                v.g.push(g);
+                v.w.push(Rgb::ONE);
+                v.direct_light.push(Rgb::ZERO);
+                v.light_wi.push(Vec3::Z);
+                v.light_pdf.push(0.0);
+                v.light_pdf_scatter.push(0.0);
+                v.direct_scatter.push(Rgb::ZERO);
+                v.scatter_pdf_light.push(0.0);
+                v.edge_const.push(Rgb::ZERO);
+                v.edge.push(Rgb::ZERO);
+                v.next.push(NONE);
+            }
+            let offsets = [0u32, 4];
+            let s = Solver::new(&v, &offsets);
+            let l: Vec<Rgb> = v.wi.iter().map(|w| Rgb::splat(1.0 + w.z)).collect();
+            let mut out = vec![Rgb::ZERO; 4];
+            s.aggregate(&l, &mut out);
+            sum += f64::from(out[0].x);
+            expected += f64::from(1.0 - g * v.wo[0].z);
+            n += 1;
+        }
+        let (mean, exp) = (sum / n as f64, expected / n as f64);
+        assert!((mean - exp).abs() < 0.01, "aggregate mean {mean}, expected {exp}");
+    }
+}

@@ -104,13 +104,13 @@ fn energy_and_noise_against_volpath() {
 /// A white furnace: a non-absorbing sphere of medium under a uniform sky of radiance 1, where
 /// the radiance is 1 everywhere. Returns the image mean (the pixels outside the sphere see the
 /// sky: 1 exactly).
-fn furnace_mean(g: f32, k: u32) -> f64 {
+fn furnace_mean(g: f32, k: u32, iterations: u32) -> f64 {
     let text = format!(
         r#"LookAt 0 0 4  0 0 0  0 1 0
 Camera "perspective" "float fov" 32
 Film "rgb" "integer xresolution" 32 "integer yresolution" 32
 Sampler "zsobol" "integer pixelsamples" 4
-Integrator "pathgraph" "integer maxdepth" 1000 "integer clustersize" {k}
+Integrator "pathgraph" "integer maxdepth" 1000 "integer clustersize" {k} "integer iterations" {iterations}
 WorldBegin
 LightSource "infinite" "rgb L" [1 1 1]
 MakeNamedMedium "m" "string type" "homogeneous" "rgb sigma_s" [5 5 5] "rgb sigma_a" [0 0 0] "float g" {g}
@@ -125,15 +125,15 @@ AttributeEnd
     channel_stats(&render_scene(&scene))[1].0
 }
 
-/// Isotropic scattering: aggregation keeps every cluster's total and the furnace stays at 1.
-/// Forward scattering (g = 0.7): the method loses energy where first vertices (at the
-/// camera-facing boundary) share clusters with deeper ones, less with larger clusters — the
-/// bias the README reports. Here (32², the sphere filling most of the frame) it measures
-/// −13.6 % at K = 4 and −3.4 % at K = 64; it must shrink with K and stay under 5 % at the
-/// default K.
+/// The white furnace keeps its energy: with isotropic and forward scattering, small and large
+/// clusters, one aggregation (iterations 0) and the default 2. Counting a path's later
+/// vertices as techniques of their own made this −14 % at K = 4 (README: deviations); many
+/// iterations reuse the same samples until the bias turns positive (+3 % at 8 iterations),
+/// which the README's iteration study records.
 #[test]
-fn white_furnace_bias_is_measured() {
-    assert!((furnace_mean(0.0, 64) - 1.0).abs() < 2e-3);
-    let (small, default) = (furnace_mean(0.7, 4), furnace_mean(0.7, 64));
-    assert!(small < default && default <= 1.0 + 1e-3 && default > 0.95, "K=4: {small}, K=64: {default}");
+fn white_furnace_keeps_its_energy() {
+    for (g, k, iterations) in [(0.0, 64, 2), (0.7, 4, 0), (0.7, 64, 0), (0.7, 64, 2)] {
+        let mean = furnace_mean(g, k, iterations);
+        assert!((mean - 1.0).abs() < 0.01, "g {g}, K {k}, {iterations} iterations: mean {mean}");
+    }
 }

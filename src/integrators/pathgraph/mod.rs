@@ -83,8 +83,9 @@ impl PathGraph {
         );
         let (mut vertices, mut paths) = (Vertices::default(), Paths::default());
         for (_, mut v, mut p) in parts {
+            let path_base = paths.len() as u32;
             paths.append(&mut p, vertices.len() as u32);
-            vertices.append(&mut v);
+            vertices.append(&mut v, path_base);
         }
         (vertices, paths, stats)
     }

@@ -55,6 +55,8 @@ pub struct Vertices {
     pub edge: Vec<Rgb>,
     /// The next graph vertex on the path, or NONE.
     pub next: Vec<u32>,
+    /// The path the vertex belongs to.
+    pub path: Vec<u32>,
 }
 
 impl Vertices {
@@ -64,10 +66,11 @@ impl Vertices {
     }
 
     /// Bytes per vertex of these arrays.
-    pub const BYTES_PER_VERTEX: usize = 3 * 12 + 4 + 12 + 12 + 12 + 4 + 4 + 12 + 4 + 12 + 12 + 4;
+    pub const BYTES_PER_VERTEX: usize = 3 * 12 + 4 + 12 + 12 + 12 + 4 + 4 + 12 + 4 + 12 + 12 + 4 + 4;
 
-    /// Appends `o`, whose `next` indices are relative to its own start.
-    pub fn append(&mut self, o: &mut Vertices) {
+    /// Appends `o`, whose `next` indices are relative to its own start and whose paths are
+    /// numbered from `path_base` in the combined paths.
+    pub fn append(&mut self, o: &mut Vertices, path_base: u32) {
         let base = self.len() as u32;
         self.p.append(&mut o.p);
         self.wo.append(&mut o.wo);
@@ -83,6 +86,7 @@ impl Vertices {
         self.edge_const.append(&mut o.edge_const);
         self.edge.append(&mut o.edge);
         self.next.extend(o.next.drain(..).map(|n| if n == NONE { NONE } else { n + base }));
+        self.path.extend(o.path.drain(..).map(|p| p + path_base));
     }
 
     /// The vertices in the order `order` (a permutation; `rank` its inverse), `next`
@@ -112,6 +116,7 @@ impl Vertices {
                     if n == NONE { NONE } else { rank[n as usize] }
                 })
                 .collect(),
+            path: gather(&self.path, order),
         }
     }
 }
@@ -351,6 +356,7 @@ impl<C: Channels> Recorder<C> {
             let (sw, swp) = self.scatter_weights[k];
             vertices.scatter_pdf_light.push(if sw > 0.0 { swp / sw } else { 0.0 });
             vertices.edge_const.push(to_rgb(self.c[k]));
+            vertices.path.push(paths.len() as u32);
             if k + 1 < n {
                 vertices.edge.push(rgb_factor(self.edge[k], self.scattered[k + 1], &to_rgb));
                 vertices.next.push(base + k as u32 + 1);

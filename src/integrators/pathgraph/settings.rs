@@ -23,7 +23,7 @@ pub struct PathGraphSettings {
 
 impl Default for PathGraphSettings {
     fn default() -> Self {
-        PathGraphSettings { max_depth: 5, regularize: false, cluster_size: 64, iterations: 8, extra_direct: 0 }
+        PathGraphSettings { max_depth: 5, regularize: false, cluster_size: 64, iterations: 2, extra_direct: 0 }
     }
 }
 

@@ -42,12 +42,21 @@ impl Hg {
 const BATCH: usize = 256;
 
 /// A path graph ready to iterate: vertices in cluster order with their clusters.
+///
+/// The sampling techniques of a cluster are its paths, each represented by its earliest
+/// vertex in the cluster: a later vertex of the same path is there *because* of the earlier
+/// one's sampled direction (a short free flight kept the path inside), so counting it as an
+/// independent technique would make the set of techniques depend on the samples and bias the
+/// MIS weights — low wherever a sample led deeper into the medium (README: deviations, with
+/// the measured effect). A vertex aggregates over the other paths' techniques and itself.
 pub struct Solver<'a> {
     v: &'a Vertices,
     /// Cluster start offsets (plus the end).
     offsets: &'a [u32],
-    /// Σ over the cluster of phase densities of each vertex's continuation direction (the
-    /// marginal p_m of Eq. 17); NaN for surface vertices.
+    /// Each vertex's path's earliest vertex in its cluster (itself when it is that vertex).
+    earliest: Vec<u32>,
+    /// Σ over the cluster's techniques of the phase density of each vertex's continuation
+    /// direction (the marginal p_m of Eq. 17); NaN for surface vertices.
     marginal: Vec<f32>,
     /// Aggregated scattered direct light A⁰L⁰ (Eq. 22), constant over iterations.
     direct: Vec<Rgb>,
@@ -56,12 +65,23 @@ pub struct Solver<'a> {
 }
 
 impl<'a> Solver<'a> {
-    /// The first aggregation pass: marginal densities and the aggregated direct light.
+    /// The first aggregation pass: techniques, marginal densities and the aggregated direct
+    /// light.
     pub fn new(v: &'a Vertices, offsets: &'a [u32]) -> Solver<'a> {
         let n = v.len();
         let clusters = offsets.len() - 1;
         let batches: Vec<(usize, usize)> =
             (0..clusters).step_by(BATCH).map(|c| (c, (c + BATCH).min(clusters))).collect();
+        let mut earliest: Vec<u32> = (0..n as u32).collect();
+        // Members of a cluster are in recording order, so a path's first member is its earliest.
+        for c in 0..clusters {
+            let r = offsets[c] as usize..offsets[c + 1] as usize;
+            for i in r.clone() {
+                if let Some(e) = (r.start..i).find(|&e| v.path[e] == v.path[i]) {
+                    earliest[i] = earliest[e];
+                }
+            }
+        }
         let mut marginal = vec![0.0f32; n];
         let mut direct = vec![Rgb::ZERO; n];
         {
@@ -72,11 +92,11 @@ impl<'a> Solver<'a> {
                 for c in range.0..range.1 {
                     let r = offsets[c] as usize..offsets[c + 1] as usize;
                     let local = r.start - base..r.end - base;
-                    first_pass(v, r, &mut marginal[local.clone()], &mut direct[local], &mut scratch);
+                    first_pass(v, &earliest, r, &mut marginal[local.clone()], &mut direct[local], &mut scratch);
                 }
             });
         }
-        Solver { v, offsets, marginal, direct, batches }
+        Solver { v, offsets, earliest, marginal, direct, batches }
     }
 
     /// Aggregated scattered radiance L̄ = A⁰L⁰ + A⁺L⁺ (Eq. 25) of every vertex, into `out`.
@@ -103,19 +123,45 @@ impl<'a> Solver<'a> {
             }
             return;
         }
-        // Eq. 17: L̄⁺(xᵢ) = Σⱼ fᵢ(ωⱼ)/p_m(ωⱼ) L⁺ⱼ; the sample values over their marginal first.
+        // Eq. 17: L̄⁺(xᵢ) = Σⱼ fᵢ(ωⱼ)/p_m(ωⱼ) L⁺ⱼ; the techniques' values over their marginal
+        // first (zero for vertices that are not techniques).
         q.clear();
-        q.extend(r.clone().map(|j| l_plus[j] / self.marginal[j]));
+        q.extend(
+            r.clone().map(|j| if self.earliest[j] as usize == j { l_plus[j] / self.marginal[j] } else { Rgb::ZERO }),
+        );
         for (o, i) in out.iter_mut().zip(r.clone()) {
-            let hg = Hg::new(v.g[i], v.wo[i]);
-            let mut sum = Rgb::ZERO;
-            for (qj, j) in q.iter().zip(r.clone()) {
+            *o = self.direct[i] + self.indirect_in(r.clone(), i, l_plus, q);
+        }
+    }
+
+    /// A⁺L⁺ at vertex `i` of the medium cluster `r`, given q = L⁺/p_m of its techniques.
+    #[inline]
+    fn indirect_in(&self, r: std::ops::Range<usize>, i: usize, l_plus: &[Rgb], q: &[Rgb]) -> Rgb {
+        let v = self.v;
+        let hg = Hg::new(v.g[i], v.wo[i]);
+        let e = self.earliest[i] as usize;
+        let mut sum = Rgb::ZERO;
+        if e == i {
+            for (qj, j) in q.iter().zip(r) {
                 if *qj != Rgb::ZERO {
                     sum += hg.eval(v.wi[j]) * *qj;
                 }
             }
-            *o = self.direct[i] + sum;
+            return sum;
         }
+        // i stands in for its path's earliest vertex e: the marginal swaps p_e for p_i.
+        let he = Hg::new(v.g[e], v.wo[e]);
+        for j in r {
+            let is_technique = self.earliest[j] as usize == j && j != e;
+            if (is_technique || j == i) && l_plus[j] != Rgb::ZERO {
+                let f = hg.eval(v.wi[j]);
+                let m = self.marginal[j] - he.eval(v.wi[j]) + f;
+                if m > 0.0 {
+                    sum += f / m * l_plus[j];
+                }
+            }
+        }
+        sum
     }
 
     /// The aggregated scattered indirect light A⁺L⁺ at vertex `i` alone.
@@ -124,10 +170,12 @@ impl<'a> Solver<'a> {
         if v.g[i].is_nan() {
             return v.w[i] * l_plus[i];
         }
-        let hg = Hg::new(v.g[i], v.wo[i]);
         let r = self.offsets[cluster] as usize..self.offsets[cluster + 1] as usize;
-        r.map(|j| if l_plus[j] == Rgb::ZERO { Rgb::ZERO } else { hg.eval(v.wi[j]) * l_plus[j] / self.marginal[j] })
-            .sum()
+        let q: Vec<Rgb> = r
+            .clone()
+            .map(|j| if self.earliest[j] as usize == j { l_plus[j] / self.marginal[j] } else { Rgb::ZERO })
+            .collect();
+        self.indirect_in(r, i, l_plus, &q)
     }
 
     /// Propagation (Eq. 26): L⁺ᵢ = cᵢ + Pᵢ ∘ L̄ₙₑₓₜ₍ᵢ₎ for every vertex.
@@ -145,11 +193,19 @@ impl<'a> Solver<'a> {
 struct Scratch {
     hg: Vec<Hg>,
     light: Vec<Rgb>,
+    light_marginal: Vec<f32>,
     scatter: Vec<Rgb>,
 }
 
 /// Marginals and Eq. 22 for the cluster `r` (outputs indexed from the cluster's start).
-fn first_pass(v: &Vertices, r: std::ops::Range<usize>, marginal: &mut [f32], direct: &mut [Rgb], s: &mut Scratch) {
+fn first_pass(
+    v: &Vertices,
+    earliest: &[u32],
+    r: std::ops::Range<usize>,
+    marginal: &mut [f32],
+    direct: &mut [Rgb],
+    s: &mut Scratch,
+) {
     let i0 = r.start;
     if v.g[i0].is_nan() {
         for (k, i) in r.enumerate() {
@@ -158,51 +214,77 @@ fn first_pass(v: &Vertices, r: std::ops::Range<usize>, marginal: &mut [f32], dir
         }
         return;
     }
-    let n = r.len() as f32;
+    let technique = |j: usize| earliest[j] as usize == j;
+    let n = r.clone().filter(|&j| technique(j)).count() as f32;
     s.hg.clear();
     s.hg.extend(r.clone().map(|i| Hg::new(v.g[i], v.wo[i])));
-    let sum_pdf = |w: Vec3, hg: &[Hg]| -> f32 { hg.iter().map(|h| h.eval(w)).sum() };
+    let sum_pdf = |w: Vec3, hg: &[Hg]| -> f32 {
+        hg.iter().zip(r.clone()).filter(|&(_, l)| technique(l)).map(|(h, _)| h.eval(w)).sum()
+    };
     s.light.clear();
     s.scatter.clear();
+    s.light_marginal.clear();
     for (k, j) in r.clone().enumerate() {
         let own = &s.hg[k];
-        // Phase-sampled directions: the marginal of Eq. 17, and with K light densities that of
-        // Eq. 22's second sum.
+        // Phase-sampled directions: the marginal of Eq. 17 (its techniques' phase densities);
+        // with K light densities that of Eq. 22's second sum.
         let p_phase = sum_pdf(v.wi[j], &s.hg);
         marginal[k] = p_phase;
         // Incoming direct radiance L⁰ recovered from the path's MIS-weighted value (so that a
-        // cluster of one gives the path-traced value back exactly), over its marginal.
+        // cluster of one gives the path-traced value back exactly).
         let scatter = if v.direct_scatter[j] == Rgb::ZERO {
             Rgb::ZERO
         } else {
             let f = own.eval(v.wi[j]);
-            let l0 = v.direct_scatter[j] * ((f + v.scatter_pdf_light[j]) / f);
-            l0 / (p_phase + n * v.scatter_pdf_light[j])
+            v.direct_scatter[j] * ((f + v.scatter_pdf_light[j]) / f)
         };
         s.scatter.push(scatter);
         // Light-sampled directions (Eq. 22's first sum); a delta light (phase density 0) can
         // only be found by light sampling.
-        let light = if v.direct_light[j] == Rgb::ZERO {
-            Rgb::ZERO
+        let (light, light_marginal) = if v.direct_light[j] == Rgb::ZERO {
+            (Rgb::ZERO, 0.0)
         } else {
             let w = v.light_wi[j];
             let f = own.eval(w);
             let (pl, ps) = (v.light_pdf[j], v.light_pdf_scatter[j]);
-            let l0 = v.direct_light[j] * ((ps + pl) / f);
-            let p_m = if ps == 0.0 { n * pl } else { sum_pdf(w, &s.hg) + n * pl };
-            l0 / p_m
+            (v.direct_light[j] * ((ps + pl) / f), if ps == 0.0 { f32::NAN } else { sum_pdf(w, &s.hg) })
         };
         s.light.push(light);
+        s.light_marginal.push(light_marginal);
     }
-    for (k, _) in r.clone().enumerate() {
+    for (k, i) in r.clone().enumerate() {
         let own = &s.hg[k];
+        let e = earliest[i] as usize;
+        // i stands in for its path's earliest vertex e (no change when i is e).
+        let swap = if e == i { None } else { Some(&s.hg[e - r.start]) };
         let mut sum = Rgb::ZERO;
         for (m, j) in r.clone().enumerate() {
+            if !(technique(j) && j != e) && j != i {
+                continue;
+            }
             if s.light[m] != Rgb::ZERO {
-                sum += own.eval(v.light_wi[j]) * s.light[m];
+                let w = v.light_wi[j];
+                let f = own.eval(w);
+                let pl = n * v.light_pdf[j];
+                let p_m = match (s.light_marginal[m].is_nan(), swap) {
+                    (true, _) => pl,
+                    (false, None) => s.light_marginal[m] + pl,
+                    (false, Some(h)) => s.light_marginal[m] - h.eval(w) + f + pl,
+                };
+                if p_m > 0.0 {
+                    sum += f / p_m * s.light[m];
+                }
             }
             if s.scatter[m] != Rgb::ZERO {
-                sum += own.eval(v.wi[j]) * s.scatter[m];
+                let w = v.wi[j];
+                let f = own.eval(w);
+                let p_m = match swap {
+                    None => marginal[m],
+                    Some(h) => marginal[m] - h.eval(w) + f,
+                } + n * v.scatter_pdf_light[j];
+                if p_m > 0.0 {
+                    sum += f / p_m * s.scatter[m];
+                }
             }
         }
         direct[k] = sum;
@@ -274,6 +356,7 @@ mod tests {
             v.edge_const.push(Rgb::ZERO);
             v.edge.push(Rgb::ZERO);
             v.next.push(NONE);
+            v.path.push(v.path.len() as u32);
         }
         let offsets = [0u32, 2];
         let s = Solver::new(&v, &offsets);
@@ -305,6 +388,7 @@ mod tests {
             v.edge_const.push(Rgb::ZERO);
             v.edge.push(Rgb::ZERO);
             v.next.push(NONE);
+            v.path.push(v.path.len() as u32);
         }
         let offsets = [0u32, 2];
         let s = Solver::new(&v, &offsets);
@@ -358,6 +442,7 @@ mod estimator_tests {
                 v.edge_const.push(Rgb::ZERO);
                 v.edge.push(Rgb::ZERO);
                 v.next.push(NONE);
+                v.path.push(v.path.len() as u32);
             }
             let offsets = [0u32, 4];
             let s = Solver::new(&v, &offsets);

@@ -137,3 +137,29 @@ fn white_furnace_keeps_its_energy() {
         assert!((mean - 1.0).abs() < 0.01, "g {g}, K {k}, {iterations} iterations: mean {mean}");
     }
 }
+
+/// Without media there is nothing to cluster (surface vertices are clusters of one): the
+/// method path-traces, so the image is volpath's and costs no recording.
+#[test]
+fn surfaces_only_scene_is_volpath() {
+    let text = |integrator: &str| {
+        format!(
+            r#"LookAt 0 1 6  0 0 0  0 1 0
+Camera "perspective" "float fov" 40
+Film "rgb" "integer xresolution" 16 "integer yresolution" 16
+Sampler "zsobol" "integer pixelsamples" 4
+Integrator "{integrator}"
+WorldBegin
+LightSource "infinite" "rgb L" [0.5 0.6 0.8]
+Material "diffuse" "rgb reflectance" [0.7 0.3 0.2]
+Shape "sphere" "float radius" 1
+"#
+        )
+    };
+    let opts = BuildOptions { seed: Some(4), ..Default::default() };
+    let graph = load_scene(&text("pathgraph"), &opts);
+    let volpath = load_scene(&text("volpath"), &opts);
+    let integrator = graph.integrator.create(&graph).unwrap();
+    assert_eq!(render_with(&graph, integrator.as_ref()).pixels, render_scene(&volpath).pixels);
+    assert!(integrator.report()[0].contains("no media"), "{:?}", integrator.report());
+}

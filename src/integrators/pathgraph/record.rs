@@ -263,6 +263,20 @@ impl<C: Channels> Recorder<C> {
         vertices: &mut Vertices,
         paths: &mut Paths,
     ) {
+        // The map is linear: its columns once per path, then each conversion is a 3×4 product.
+        let columns: [Rgb; 4] = std::array::from_fn(|k| {
+            if k < C::CHANNELS {
+                let mut e = glam::Vec4::ZERO;
+                e[k] = 1.0;
+                to_rgb(C::from_lanes(e))
+            } else {
+                Rgb::ZERO
+            }
+        });
+        let to_rgb = |x: C| {
+            let l = x.to_lanes();
+            columns[0] * l.x + columns[1] * l.y + columns[2] * l.z + columns[3] * l.w
+        };
         self.graph.clear();
         self.depth.clear();
         for (d, v) in self.vertices.iter().enumerate() {

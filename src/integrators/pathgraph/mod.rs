@@ -36,6 +36,10 @@ pub struct PathGraph {
     report: Mutex<Report>,
 }
 
+/// Bytes per vertex the solve adds to the recorded arrays: L⁺, L̄, the marginal, the aggregated
+/// direct light, the technique index and the cluster index.
+const SOLVE_BYTES_PER_VERTEX: usize = 12 + 12 + 4 + 12 + 4 + 4;
+
 /// What the graph samples cost, for `--stats`.
 #[derive(Clone, Copy, Debug, Default)]
 struct Report {
@@ -143,34 +147,38 @@ impl ImageIntegrator for PathGraph {
             };
         }
         let start = Instant::now();
-        let (vertices, mut paths, stats) = match scene.transport.transport {
+        let (mut v, mut paths, stats) = match scene.transport.transport {
             Transport::Rgb => self.record::<Rgb>(scene, pass),
             Transport::Spectral => self.record::<SampledSpectrum>(scene, pass),
         };
         let recorded = Instant::now();
 
         let seed = (scene.sampler.seed as u32 as u64) << 32 | pass.sample_index() as u64;
-        let clusters = cluster::cluster(&vertices.p, |i| !vertices.g[i].is_nan(), self.settings.cluster_size, seed);
+        let mut clusters = cluster::cluster(&v.p, |i| !v.g[i].is_nan(), self.settings.cluster_size, seed);
         let mut rank = vec![0u32; clusters.order.len()];
         for (new, &old) in clusters.order.iter().enumerate() {
             rank[old as usize] = new as u32;
         }
-        let l_plus_recorded = path_traced(&vertices);
-        let v = vertices.permuted(&clusters.order, &rank);
-        let peak = (Vertices::BYTES_PER_VERTEX + 4 * 12 + 3 * 4) * v.len() + Paths::BYTES_PER_PATH * paths.len();
-        drop(vertices);
+        let l_plus_recorded = path_traced(&v);
         let mut l_plus: Vec<Rgb> = clusters.order.iter().map(|&i| l_plus_recorded[i as usize]).collect();
         drop(l_plus_recorded);
+        v.permute(&clusters.order, &rank);
         for f in paths.first.iter_mut() {
             if *f != NONE {
                 *f = rank[*f as usize];
             }
         }
         drop(rank);
+        clusters.order = Vec::new();
         let mut cluster_of = vec![0u32; v.len()];
         for c in 0..clusters.len() {
             cluster_of[clusters.range(c)].fill(c as u32);
         }
+        // The solve's peak: the vertex arrays, L⁺, L̄, the solver's marginal, aggregated direct
+        // light and techniques, each vertex's cluster; the paths; the cluster offsets.
+        let peak = (Vertices::BYTES_PER_VERTEX + SOLVE_BYTES_PER_VERTEX) * v.len()
+            + Paths::BYTES_PER_PATH * paths.len()
+            + 4 * clusters.offsets.len();
 
         let solver = solve::Solver::new(&v, &clusters.offsets);
         let mut scattered = vec![Rgb::ZERO; v.len()];
@@ -271,11 +279,15 @@ impl Integrator for PathGraph {
                 r.vertices as f64 / r.paths.max(1) as f64
             ),
             format!(
-                "pathgraph   record {:.3} s, solve {:.3} s per sample; peak {:.1} MiB ({:.0} bytes per vertex incl. paths)",
+                "pathgraph   record {:.3} s, solve {:.3} s per sample; peak {:.1} MiB: {} bytes per vertex ({} recorded + {} \
+                 solving), {} per path",
                 r.record_seconds / n,
                 r.solve_seconds / n,
                 r.peak_bytes as f64 / (1 << 20) as f64,
-                r.peak_bytes as f64 / verts.max(1.0)
+                Vertices::BYTES_PER_VERTEX + SOLVE_BYTES_PER_VERTEX,
+                Vertices::BYTES_PER_VERTEX,
+                SOLVE_BYTES_PER_VERTEX,
+                Paths::BYTES_PER_PATH
             ),
         ]
     }

@@ -89,35 +89,33 @@ impl Vertices {
         self.path.extend(o.path.drain(..).map(|p| p + path_base));
     }
 
-    /// The vertices in the order `order` (a permutation; `rank` its inverse), `next`
-    /// renumbered.
-    pub fn permuted(&self, order: &[u32], rank: &[u32]) -> Vertices {
-        fn gather<T: Copy>(v: &[T], order: &[u32]) -> Vec<T> {
-            order.iter().map(|&i| v[i as usize]).collect()
+    /// Reorders the vertices to `order` (a permutation; `rank` its inverse), renumbering
+    /// `next`. One array at a time, so the reordering needs one array's worth of memory extra.
+    pub fn permute(&mut self, order: &[u32], rank: &[u32]) {
+        fn gather<T: Copy>(v: &mut Vec<T>, order: &[u32]) {
+            *v = order.iter().map(|&i| v[i as usize]).collect();
         }
-        Vertices {
-            p: gather(&self.p, order),
-            wo: gather(&self.wo, order),
-            wi: gather(&self.wi, order),
-            g: gather(&self.g, order),
-            w: gather(&self.w, order),
-            direct_light: gather(&self.direct_light, order),
-            light_wi: gather(&self.light_wi, order),
-            light_pdf: gather(&self.light_pdf, order),
-            light_pdf_scatter: gather(&self.light_pdf_scatter, order),
-            direct_scatter: gather(&self.direct_scatter, order),
-            scatter_pdf_light: gather(&self.scatter_pdf_light, order),
-            edge_const: gather(&self.edge_const, order),
-            edge: gather(&self.edge, order),
-            next: order
-                .iter()
-                .map(|&i| {
-                    let n = self.next[i as usize];
-                    if n == NONE { NONE } else { rank[n as usize] }
-                })
-                .collect(),
-            path: gather(&self.path, order),
-        }
+        gather(&mut self.p, order);
+        gather(&mut self.wo, order);
+        gather(&mut self.wi, order);
+        gather(&mut self.g, order);
+        gather(&mut self.w, order);
+        gather(&mut self.direct_light, order);
+        gather(&mut self.light_wi, order);
+        gather(&mut self.light_pdf, order);
+        gather(&mut self.light_pdf_scatter, order);
+        gather(&mut self.direct_scatter, order);
+        gather(&mut self.scatter_pdf_light, order);
+        gather(&mut self.edge_const, order);
+        gather(&mut self.edge, order);
+        gather(&mut self.path, order);
+        self.next = order
+            .iter()
+            .map(|&i| {
+                let n = self.next[i as usize];
+                if n == NONE { NONE } else { rank[n as usize] }
+            })
+            .collect();
     }
 }
 

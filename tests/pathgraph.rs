@@ -163,3 +163,33 @@ Shape "sphere" "float radius" 1
     assert_eq!(render_with(&graph, integrator.as_ref()).pixels, render_scene(&volpath).pixels);
     assert!(integrator.report()[0].contains("no media"), "{:?}", integrator.report());
 }
+
+/// Extra light samples at the first vertex replace the path's own direct light there by light
+/// sampling alone: a different estimator of the same pixel, so with K = 1 (no aggregation)
+/// the image mean matches volpath's within noise, in RGB and in spectral transport.
+#[test]
+fn extra_direct_samples_keep_the_mean() {
+    for spectral in [false, true] {
+        let opts = BuildOptions { spp: Some(32), seed: Some(6), ..transport(spectral) };
+        let graph =
+            load_scene(&scene_text("pathgraph", r#""integer clustersize" 1 "integer extradirect" 4"#, "2 2 2"), &opts);
+        // Another seed, so the two estimators' noise is independent.
+        let volpath = load_scene(&scene_text("volpath", "", "2 2 2"), &BuildOptions { seed: Some(7), ..opts.clone() });
+        let (g, v) = (render_scene(&graph), render_scene(&volpath));
+        for c in 0..3 {
+            let (mean, se) = paired_difference(&g, &v, c);
+            let level = channel_stats(&v)[c].0;
+            assert!(mean.abs() <= 4.0 * se + 1e-3 * level, "spectral {spectral} channel {c}: difference {mean} ± {se}");
+        }
+    }
+}
+
+/// Mean per-pixel difference a − b in channel `c` and its standard error: the images' shared
+/// structure cancels, so the tolerance is the noise of the two estimators alone.
+fn paired_difference(a: &Image, b: &Image, c: usize) -> (f64, f64) {
+    let d: Vec<f64> = a.pixels.iter().zip(&b.pixels).map(|(p, q)| f64::from(p[c] - q[c])).collect();
+    let n = d.len() as f64;
+    let mean = d.iter().sum::<f64>() / n;
+    let var = d.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0);
+    (mean, (var / n).sqrt())
+}

@@ -6,6 +6,7 @@
 //! independent graph samples.
 
 mod cluster;
+mod lanes;
 mod record;
 mod settings;
 mod solve;

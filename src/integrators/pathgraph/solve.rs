@@ -7,36 +7,12 @@
 //! continuation edges. Surface vertices are clusters of one (nimbus stores no BSDF per
 //! vertex, README: deviations): their aggregate is their own path-traced estimate.
 
-use glam::Vec3;
 use rayon::prelude::*;
 
+use super::lanes::{Hg, Phases, Samples, SwapSamples};
 use super::record::Vertices;
 use crate::accel::NONE;
 use crate::color::Rgb;
-
-/// The Henyey-Greenstein phase function of one vertex as a / (b + c·(ωo·ω))^{3/2}, the same
-/// expression as [`crate::media::phase::henyey_greenstein`] with ωo folded in.
-#[derive(Clone, Copy, Debug)]
-struct Hg {
-    wo: Vec3,
-    a: f32,
-    b: f32,
-    c: f32,
-}
-
-impl Hg {
-    #[inline]
-    fn new(g: f32, wo: Vec3) -> Hg {
-        let g = g.clamp(-0.99, 0.99);
-        Hg { wo, a: (1.0 - g * g) / (4.0 * std::f32::consts::PI), b: 1.0 + g * g, c: 2.0 * g }
-    }
-
-    #[inline]
-    fn eval(&self, w: Vec3) -> f32 {
-        let d = (self.b + self.c * self.wo.dot(w)).max(0.0);
-        self.a / (d * d.sqrt())
-    }
-}
 
 /// Clusters per parallel work item.
 const BATCH: usize = 256;
@@ -103,18 +79,24 @@ impl<'a> Solver<'a> {
     pub fn aggregate(&self, l_plus: &[Rgb], out: &mut [Rgb]) {
         let parts = split_one(&self.batches, self.offsets, out);
         parts.into_par_iter().for_each(|(range, out)| {
-            let mut q = Vec::new();
+            let mut samples = (Samples::default(), SwapSamples::default());
             let base = self.offsets[range.0] as usize;
             for c in range.0..range.1 {
                 let r = self.offsets[c] as usize..self.offsets[c + 1] as usize;
                 let local = r.start - base..r.end - base;
-                self.aggregate_cluster(r, l_plus, &mut out[local], &mut q);
+                self.aggregate_cluster(r, l_plus, &mut out[local], &mut samples);
             }
         });
     }
 
     /// A⁺L⁺ + A⁰L⁰ for the cluster `r`.
-    fn aggregate_cluster(&self, r: std::ops::Range<usize>, l_plus: &[Rgb], out: &mut [Rgb], q: &mut Vec<Rgb>) {
+    fn aggregate_cluster(
+        &self,
+        r: std::ops::Range<usize>,
+        l_plus: &[Rgb],
+        out: &mut [Rgb],
+        (samples, swap): &mut (Samples, SwapSamples),
+    ) {
         let v = self.v;
         if v.g[r.start].is_nan() {
             // A surface vertex: its own estimate.
@@ -123,28 +105,48 @@ impl<'a> Solver<'a> {
             }
             return;
         }
-        // Eq. 17: L̄⁺(xᵢ) = Σⱼ fᵢ(ωⱼ)/p_m(ωⱼ) L⁺ⱼ; the techniques' values over their marginal
-        // first (zero for vertices that are not techniques).
-        q.clear();
-        q.extend(
-            r.clone().map(|j| if self.earliest[j] as usize == j { l_plus[j] / self.marginal[j] } else { Rgb::ZERO }),
-        );
+        // Eq. 17: L̄⁺(xᵢ) = Σⱼ fᵢ(ωⱼ)/p_m(ωⱼ) L⁺ⱼ over the techniques; their values over their
+        // marginal first.
+        samples.clear();
+        swap.clear();
+        for j in r.clone() {
+            if self.earliest[j] as usize == j {
+                samples.push(v.wi[j], l_plus[j] / self.marginal[j]);
+                swap.push(v.wi[j], self.marginal[j], l_plus[j]);
+            }
+        }
+        samples.seal();
+        swap.seal();
         for (o, i) in out.iter_mut().zip(r.clone()) {
-            *o = self.direct[i] + self.indirect_in(r.clone(), i, l_plus, q);
+            let hg = Hg::new(v.g[i], v.wo[i]);
+            let e = self.earliest[i] as usize;
+            let indirect = if e == i {
+                samples.weighted_sum(&hg)
+            } else {
+                // i stands in for its path's earliest vertex e: the marginal swaps p_e for p_i,
+                // e's own term leaves the sum and i's joins it.
+                let he = Hg::new(v.g[e], v.wo[e]);
+                let term = |j: usize| {
+                    let f = hg.eval(v.wi[j]);
+                    let d = self.marginal[j] - he.eval(v.wi[j]) + f;
+                    if d > 0.0 && l_plus[j] != Rgb::ZERO { f / d * l_plus[j] } else { Rgb::ZERO }
+                };
+                swap.swapped_sum(&hg, &he) - term(e) + term(i)
+            };
+            *o = self.direct[i] + indirect;
         }
     }
 
-    /// A⁺L⁺ at vertex `i` of the medium cluster `r`, given q = L⁺/p_m of its techniques.
-    #[inline]
-    fn indirect_in(&self, r: std::ops::Range<usize>, i: usize, l_plus: &[Rgb], q: &[Rgb]) -> Rgb {
+    /// A⁺L⁺ at vertex `i` of the medium cluster `r`, one term at a time.
+    fn indirect_in(&self, r: std::ops::Range<usize>, i: usize, l_plus: &[Rgb]) -> Rgb {
         let v = self.v;
         let hg = Hg::new(v.g[i], v.wo[i]);
         let e = self.earliest[i] as usize;
         let mut sum = Rgb::ZERO;
         if e == i {
-            for (qj, j) in q.iter().zip(r) {
-                if *qj != Rgb::ZERO {
-                    sum += hg.eval(v.wi[j]) * *qj;
+            for j in r {
+                if self.earliest[j] as usize == j && l_plus[j] != Rgb::ZERO {
+                    sum += hg.eval(v.wi[j]) / self.marginal[j] * l_plus[j];
                 }
             }
             return sum;
@@ -171,11 +173,7 @@ impl<'a> Solver<'a> {
             return v.w[i] * l_plus[i];
         }
         let r = self.offsets[cluster] as usize..self.offsets[cluster + 1] as usize;
-        let q: Vec<Rgb> = r
-            .clone()
-            .map(|j| if self.earliest[j] as usize == j { l_plus[j] / self.marginal[j] } else { Rgb::ZERO })
-            .collect();
-        self.indirect_in(r, i, l_plus, &q)
+        self.indirect_in(r, i, l_plus)
     }
 
     /// Propagation (Eq. 26): L⁺ᵢ = cᵢ + Pᵢ ∘ L̄ₙₑₓₜ₍ᵢ₎ for every vertex.
@@ -192,9 +190,12 @@ impl<'a> Solver<'a> {
 #[derive(Default)]
 struct Scratch {
     hg: Vec<Hg>,
+    phases: Phases,
     light: Vec<Rgb>,
     light_marginal: Vec<f32>,
     scatter: Vec<Rgb>,
+    light_samples: Samples,
+    scatter_samples: Samples,
 }
 
 /// Marginals and Eq. 22 for the cluster `r` (outputs indexed from the cluster's start).
@@ -218,9 +219,13 @@ fn first_pass(
     let n = r.clone().filter(|&j| technique(j)).count() as f32;
     s.hg.clear();
     s.hg.extend(r.clone().map(|i| Hg::new(v.g[i], v.wo[i])));
-    let sum_pdf = |w: Vec3, hg: &[Hg]| -> f32 {
-        hg.iter().zip(r.clone()).filter(|&(_, l)| technique(l)).map(|(h, _)| h.eval(w)).sum()
-    };
+    s.phases.clear();
+    for (h, l) in s.hg.iter().zip(r.clone()) {
+        if technique(l) {
+            s.phases.push(h);
+        }
+    }
+    s.phases.seal();
     s.light.clear();
     s.scatter.clear();
     s.light_marginal.clear();
@@ -228,7 +233,7 @@ fn first_pass(
         let own = &s.hg[k];
         // Phase-sampled directions: the marginal of Eq. 17 (its techniques' phase densities);
         // with K light densities that of Eq. 22's second sum.
-        let p_phase = sum_pdf(v.wi[j], &s.hg);
+        let p_phase = s.phases.sum(v.wi[j]);
         marginal[k] = p_phase;
         // Incoming direct radiance L⁰ recovered from the path's MIS-weighted value (so that a
         // cluster of one gives the path-traced value back exactly).
@@ -247,16 +252,38 @@ fn first_pass(
             let w = v.light_wi[j];
             let f = own.eval(w);
             let (pl, ps) = (v.light_pdf[j], v.light_pdf_scatter[j]);
-            (v.direct_light[j] * ((ps + pl) / f), if ps == 0.0 { f32::NAN } else { sum_pdf(w, &s.hg) })
+            (v.direct_light[j] * ((ps + pl) / f), if ps == 0.0 { f32::NAN } else { s.phases.sum(w) })
         };
         s.light.push(light);
         s.light_marginal.push(light_marginal);
     }
+    // The techniques' samples over their marginals, for the vertices that are techniques.
+    s.light_samples.clear();
+    s.scatter_samples.clear();
+    for (m, j) in r.clone().enumerate() {
+        if !technique(j) {
+            continue;
+        }
+        if s.light[m] != Rgb::ZERO {
+            let pl = n * v.light_pdf[j];
+            let p_m = if s.light_marginal[m].is_nan() { pl } else { s.light_marginal[m] + pl };
+            s.light_samples.push(v.light_wi[j], s.light[m] / p_m);
+        }
+        if s.scatter[m] != Rgb::ZERO {
+            s.scatter_samples.push(v.wi[j], s.scatter[m] / (marginal[m] + n * v.scatter_pdf_light[j]));
+        }
+    }
+    s.light_samples.seal();
+    s.scatter_samples.seal();
     for (k, i) in r.clone().enumerate() {
         let own = &s.hg[k];
         let e = earliest[i] as usize;
-        // i stands in for its path's earliest vertex e (no change when i is e).
-        let swap = if e == i { None } else { Some(&s.hg[e - r.start]) };
+        if e == i {
+            direct[k] = s.light_samples.weighted_sum(own) + s.scatter_samples.weighted_sum(own);
+            continue;
+        }
+        // i stands in for its path's earliest vertex e, one term at a time.
+        let swap = Some(&s.hg[e - r.start]);
         let mut sum = Rgb::ZERO;
         for (m, j) in r.clone().enumerate() {
             if !(technique(j) && j != e) && j != i {
@@ -323,18 +350,7 @@ fn split_by_batches<'s>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::media::phase::henyey_greenstein;
-
-    #[test]
-    fn folded_hg_is_the_phase_function() {
-        for g in [-0.7, 0.0, 0.3, 0.95] {
-            let wo = Vec3::new(0.3, -0.4, 0.866).normalize();
-            let w = Vec3::new(-0.2, 0.9, 0.1).normalize();
-            let a = Hg::new(g, wo).eval(w);
-            let b = henyey_greenstein(wo.dot(w), g);
-            assert!((a - b).abs() <= 1e-6 * b, "g={g}: {a} vs {b}");
-        }
-    }
+    use glam::Vec3;
 
     /// Two isotropic medium vertices in one cluster, no lights: Eq. 17 by hand. With p = 1/4π
     /// for both, p_m = 2/4π and L̄⁺ᵢ = Σⱼ (1/4π)/(2/4π) L⁺ⱼ = the mean of the two L⁺.
@@ -405,6 +421,7 @@ mod estimator_tests {
     use super::*;
     use crate::media::phase::HenyeyGreenstein;
     use glam::Vec2;
+    use glam::Vec3;
 
     /// Eq. 17 is unbiased when every member sees the same radiance function L(ω): over many
     /// clusters of 4 points with different ωo (g = 0.7; the first always the same) and ω sampled from each point's phase

@@ -119,6 +119,8 @@ struct CentreGrid<'a> {
     origin: Vec3,
     /// Centre ranks sorted by cell.
     sorted: Vec<u32>,
+    /// Their positions, in the same order (the search reads them contiguously).
+    sorted_p: Vec<Vec3>,
     cells: CellMap<(u32, u32)>,
     centres: &'a [u32],
 }
@@ -133,7 +135,14 @@ impl<'a> CentreGrid<'a> {
         // (points, and so centres, gather where paths scatter most).
         let mut cell = (extent.x * extent.y * extent.z / centres.len() as f32).cbrt();
         loop {
-            let mut grid = CentreGrid { cell, origin: lo, sorted: Vec::new(), cells: CellMap::default(), centres };
+            let mut grid = CentreGrid {
+                cell,
+                origin: lo,
+                sorted: Vec::new(),
+                sorted_p: Vec::new(),
+                cells: CellMap::default(),
+                centres,
+            };
             grid.fill(p);
             let crowded = centres.len() as f32 / grid.cells.len() as f32 > 4.0;
             if !crowded || cell < extent.max_element() * 1e-4 {
@@ -148,6 +157,7 @@ impl<'a> CentreGrid<'a> {
             (0..self.centres.len() as u32).map(|c| (self.cell_of(p[self.centres[c as usize] as usize]), c)).collect();
         keyed.sort_unstable_by_key(|&(k, c)| (k.x, k.y, k.z, c));
         self.sorted = keyed.iter().map(|&(_, c)| c).collect();
+        self.sorted_p = self.sorted.iter().map(|&c| p[self.centres[c as usize] as usize]).collect();
         let mut start = 0;
         while start < keyed.len() {
             let key = keyed[start].0;
@@ -168,9 +178,12 @@ impl<'a> CentreGrid<'a> {
     /// Rank of the centre nearest to `q` (the lowest rank among equally near ones).
     fn nearest(&self, p: &[Vec3], q: Vec3) -> u32 {
         let c = self.cell_of(q);
+        // How far q is from the faces of its own cell: every unsearched cell is at least this
+        // plus the searched rings away.
+        let local = (q - self.origin) / self.cell - c.as_vec3();
+        let margin = local.min(Vec3::ONE - local).min_element().max(0.0) * self.cell;
         let mut best = (f32::INFINITY, u32::MAX);
-        let consider = |rank: u32, best: &mut (f32, u32)| {
-            let d = p[self.centres[rank as usize] as usize].distance_squared(q);
+        let consider = |d: f32, rank: u32, best: &mut (f32, u32)| {
             if d < best.0 || (d == best.0 && rank < best.1) {
                 *best = (d, rank);
             }
@@ -183,23 +196,23 @@ impl<'a> CentreGrid<'a> {
                     let mut dx = -r;
                     while dx <= r {
                         if let Some(&(s, e)) = self.cells.get(&(c + IVec3::new(dx, dy, dz))) {
-                            for &rank in &self.sorted[s as usize..e as usize] {
-                                consider(rank, &mut best);
+                            let (s, e) = (s as usize, e as usize);
+                            for (&rank, &cp) in self.sorted[s..e].iter().zip(&self.sorted_p[s..e]) {
+                                consider(cp.distance_squared(q), rank, &mut best);
                             }
                         }
                         dx += step;
                     }
                 }
             }
-            // Cells beyond ring r are at least r cells away from any point of q's cell.
-            let reach = r as f32 * self.cell;
+            let reach = r as f32 * self.cell + margin;
             if best.0 <= reach * reach {
                 return best.1;
             }
         }
         // Not proven nearest within the rings searched (a sparse region): scan every centre.
         for rank in 0..self.centres.len() as u32 {
-            consider(rank, &mut best);
+            consider(p[self.centres[rank as usize] as usize].distance_squared(q), rank, &mut best);
         }
         best.1
     }

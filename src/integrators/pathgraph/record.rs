@@ -18,6 +18,7 @@
 //! any aggregation these quantities give back the path-traced pixel exactly.
 
 use glam::Vec3;
+use rayon::prelude::*;
 
 use crate::accel::NONE;
 use crate::color::{Channels, Rgb};
@@ -92,8 +93,8 @@ impl Vertices {
     /// Reorders the vertices to `order` (a permutation; `rank` its inverse), renumbering
     /// `next`. One array at a time, so the reordering needs one array's worth of memory extra.
     pub fn permute(&mut self, order: &[u32], rank: &[u32]) {
-        fn gather<T: Copy>(v: &mut Vec<T>, order: &[u32]) {
-            *v = order.iter().map(|&i| v[i as usize]).collect();
+        fn gather<T: Copy + Send + Sync>(v: &mut Vec<T>, order: &[u32]) {
+            *v = order.par_iter().with_min_len(4096).map(|&i| v[i as usize]).collect();
         }
         gather(&mut self.p, order);
         gather(&mut self.wo, order);
@@ -110,7 +111,8 @@ impl Vertices {
         gather(&mut self.edge, order);
         gather(&mut self.path, order);
         self.next = order
-            .iter()
+            .par_iter()
+            .with_min_len(4096)
             .map(|&i| {
                 let n = self.next[i as usize];
                 if n == NONE { NONE } else { rank[n as usize] }

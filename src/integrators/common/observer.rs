@@ -33,6 +33,9 @@ pub struct VertexEvent<C = Rgb> {
     /// The medium's Henyey-Greenstein asymmetry at a medium vertex (0 on surfaces): with `wo`
     /// it is all a path graph needs to evaluate the phase function for other directions.
     pub g: f32,
+    /// True at a surface whose BSDF is Lambertian reflection: f = R|cos|/π, sampled by the
+    /// cosine, so the shading normal `n` is all a path graph needs besides f/p = R.
+    pub lambertian: bool,
 }
 
 /// A next-event estimate at a vertex.

@@ -245,6 +245,7 @@ pub fn trace_path<C: Channels, O: PathObserver<C>>(
                     specular: false,
                     in_medium: true,
                     g: m.g,
+                    lambertian: false,
                 });
                 st.beta *= ps.p / ps.pdf;
                 st.r_l = st.r_u / ps.pdf;
@@ -371,6 +372,7 @@ pub fn trace_path<C: Channels, O: PathObserver<C>>(
             specular: bs.is_specular(),
             in_medium: false,
             g: 0.0,
+            lambertian: matches!(bxdf, Bxdf::Diffuse(_)),
         });
         st.beta *= f_cos / bs.pdf;
         st.r_l = if bs.pdf_is_proportional {

@@ -35,48 +35,62 @@ impl Clusters {
 /// Rings of the hash grid searched before falling back to scanning every centre.
 const MAX_RING: i32 = 12;
 
-/// Clusters the points `p` for which `clustered` is true, about `k` per cluster; every other
-/// point is a cluster of its own (after the clustered ones). `seed` picks the centres.
-pub fn cluster(p: &[Vec3], clustered: impl Fn(usize) -> bool, k: u32, seed: u64) -> Clusters {
-    let idx: Vec<u32> = (0..p.len() as u32).filter(|&i| clustered(i as usize)).collect();
+/// Clusters the points `p` by kind (`kind` 1, 2, ...: points of one kind only share clusters
+/// with each other), about `k` per cluster; points of kind 0 are clusters of their own (after
+/// the others). `seed` picks the centres.
+pub fn cluster(p: &[Vec3], kind: impl Fn(usize) -> u8, k: u32, seed: u64) -> Clusters {
     let mut out = Clusters { order: Vec::with_capacity(p.len()), offsets: vec![0] };
-    if k <= 1 {
-        out.order.extend_from_slice(&idx);
-        out.offsets.extend((1..=idx.len() as u32).collect::<Vec<_>>());
-    } else if !idx.is_empty() {
-        let threshold = u64::MAX / k as u64;
-        let mut centres: Vec<u32> = idx.iter().copied().filter(|&i| mix(seed, i as u64) < threshold).collect();
-        if centres.is_empty() {
-            centres.push(idx[0]);
-        }
-        let grid = CentreGrid::new(p, &idx, &centres);
-        let nearest: Vec<u32> = idx.par_iter().map(|&i| grid.nearest(p, p[i as usize])).collect();
-        // Counting sort by centre: members stay in index order within a cluster.
-        let mut count = vec![0u32; centres.len() + 1];
-        for &c in &nearest {
-            count[c as usize + 1] += 1;
-        }
-        for c in 0..centres.len() {
-            count[c + 1] += count[c];
-        }
-        let starts = count.clone();
-        let mut members = vec![0u32; idx.len()];
-        for (&i, &c) in idx.iter().zip(&nearest) {
-            members[count[c as usize] as usize] = i;
-            count[c as usize] += 1;
-        }
-        for c in 0..centres.len() {
-            let m = &mut members[starts[c] as usize..starts[c + 1] as usize];
-            split(p, m, 2 * k as usize, &mut out);
-        }
+    let kinds = (0..p.len()).map(&kind).max().unwrap_or(0);
+    for kd in 1..=kinds {
+        let idx: Vec<u32> = (0..p.len() as u32).filter(|&i| kind(i as usize) == kd).collect();
+        cluster_kind(p, &idx, k, seed ^ u64::from(kd), &mut out);
     }
     for i in 0..p.len() as u32 {
-        if !clustered(i as usize) {
+        if kind(i as usize) == 0 {
             out.order.push(i);
             out.offsets.push(out.order.len() as u32);
         }
     }
     out
+}
+
+/// Appends the clusters of the points `idx`.
+fn cluster_kind(p: &[Vec3], idx: &[u32], k: u32, seed: u64, out: &mut Clusters) {
+    if idx.is_empty() {
+        return;
+    }
+    if k <= 1 {
+        for &i in idx {
+            out.order.push(i);
+            out.offsets.push(out.order.len() as u32);
+        }
+        return;
+    }
+    let threshold = u64::MAX / k as u64;
+    let mut centres: Vec<u32> = idx.iter().copied().filter(|&i| mix(seed, i as u64) < threshold).collect();
+    if centres.is_empty() {
+        centres.push(idx[0]);
+    }
+    let grid = CentreGrid::new(p, idx, &centres);
+    let nearest: Vec<u32> = idx.par_iter().map(|&i| grid.nearest(p, p[i as usize])).collect();
+    // Counting sort by centre: members stay in index order within a cluster.
+    let mut count = vec![0u32; centres.len() + 1];
+    for &c in &nearest {
+        count[c as usize + 1] += 1;
+    }
+    for c in 0..centres.len() {
+        count[c + 1] += count[c];
+    }
+    let starts = count.clone();
+    let mut members = vec![0u32; idx.len()];
+    for (&i, &c) in idx.iter().zip(&nearest) {
+        members[count[c as usize] as usize] = i;
+        count[c as usize] += 1;
+    }
+    for c in 0..centres.len() {
+        let m = &mut members[starts[c] as usize..starts[c + 1] as usize];
+        split(p, m, 2 * k as usize, out);
+    }
 }
 
 /// Appends `members` as one cluster, or halves it at the median of its longest axis until
@@ -234,7 +248,7 @@ mod tests {
     #[test]
     fn every_point_once_and_clusters_near_k() {
         let p = points(20_000);
-        let c = cluster(&p, |i| i % 10 != 0, 16, 3);
+        let c = cluster(&p, |i| u8::from(i % 10 != 0), 16, 3);
         let mut seen = c.order.clone();
         seen.sort_unstable();
         assert_eq!(seen, (0..20_000).collect::<Vec<u32>>());
@@ -268,7 +282,7 @@ mod tests {
     #[test]
     fn k_one_is_one_point_per_cluster() {
         let p = points(100);
-        let c = cluster(&p, |_| true, 1, 0);
+        let c = cluster(&p, |_| 1, 1, 0);
         assert_eq!(c.len(), 100);
     }
 }

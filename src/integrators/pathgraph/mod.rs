@@ -155,7 +155,18 @@ impl ImageIntegrator for PathGraph {
         let recorded = Instant::now();
 
         let seed = (scene.sampler.seed as u32 as u64) << 32 | pass.sample_index() as u64;
-        let mut clusters = cluster::cluster(&v.p, |i| !v.g[i].is_nan(), self.settings.cluster_size, seed);
+        // Medium vertices cluster with medium vertices, Lambertian surface vertices with
+        // Lambertian ones; other surface vertices are clusters of one.
+        let kind = |i: usize| {
+            if !v.g[i].is_nan() {
+                1
+            } else if v.n[i] != glam::Vec3::ZERO {
+                2
+            } else {
+                0
+            }
+        };
+        let mut clusters = cluster::cluster(&v.p, kind, self.settings.cluster_size, seed);
         let mut rank = vec![0u32; clusters.order.len()];
         for (new, &old) in clusters.order.iter().enumerate() {
             rank[old as usize] = new as u32;

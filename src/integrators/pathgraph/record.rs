@@ -33,9 +33,11 @@ pub struct Vertices {
     pub wo: Vec<Vec3>,
     /// Continuation direction (the phase- or BSDF-sampled direction).
     pub wi: Vec<Vec3>,
-    /// Henyey-Greenstein asymmetry of a medium vertex; NaN marks a surface vertex, which is
-    /// not clustered (its BSDF is not stored).
+    /// Henyey-Greenstein asymmetry of a medium vertex; NaN at surface vertices.
     pub g: Vec<f32>,
+    /// Shading normal of a Lambertian surface vertex, on the side of `wo`; zero at medium
+    /// vertices and at other surfaces (which are not clustered: their BSDF is not stored).
+    pub n: Vec<Vec3>,
     /// f/p of the continuation direction.
     pub w: Vec<Rgb>,
     /// Light-sampled direct light, MIS-weighted, per unit of β.
@@ -67,7 +69,7 @@ impl Vertices {
     }
 
     /// Bytes per vertex of these arrays.
-    pub const BYTES_PER_VERTEX: usize = 3 * 12 + 4 + 12 + 12 + 12 + 4 + 4 + 12 + 4 + 12 + 12 + 4 + 4;
+    pub const BYTES_PER_VERTEX: usize = 3 * 12 + 4 + 12 + 12 + 12 + 12 + 4 + 4 + 12 + 4 + 12 + 12 + 4 + 4;
 
     /// Appends `o`, whose `next` indices are relative to its own start and whose paths are
     /// numbered from `path_base` in the combined paths.
@@ -77,6 +79,7 @@ impl Vertices {
         self.wo.append(&mut o.wo);
         self.wi.append(&mut o.wi);
         self.g.append(&mut o.g);
+        self.n.append(&mut o.n);
         self.w.append(&mut o.w);
         self.direct_light.append(&mut o.direct_light);
         self.light_wi.append(&mut o.light_wi);
@@ -100,6 +103,7 @@ impl Vertices {
         gather(&mut self.wo, order);
         gather(&mut self.wi, order);
         gather(&mut self.g, order);
+        gather(&mut self.n, order);
         gather(&mut self.w, order);
         gather(&mut self.direct_light, order);
         gather(&mut self.light_wi, order);
@@ -360,6 +364,7 @@ impl<C: Channels> Recorder<C> {
             vertices.wo.push(v.wo);
             vertices.wi.push(v.wi);
             vertices.g.push(if v.in_medium { v.g } else { f32::NAN });
+            vertices.n.push(if v.lambertian { if v.n.dot(v.wo) < 0.0 { -v.n } else { v.n } } else { Vec3::ZERO });
             vertices.w.push(rgb_factor(self.w[k], self.l_plus[k], &to_rgb));
             vertices.direct_light.push(to_rgb(self.e[k]));
             let (light_wi, light_pdf, light_pdf_scatter) = self.light[k];

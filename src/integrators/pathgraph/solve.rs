@@ -7,12 +7,13 @@
 //! continuation edges. Surface vertices are clusters of one (nimbus stores no BSDF per
 //! vertex, README: deviations): their aggregate is their own path-traced estimate.
 
+use glam::Vec3;
 use rayon::prelude::*;
 
 use super::lanes::{Hg, Phases, Samples, SwapSamples};
 use super::record::Vertices;
 use crate::accel::NONE;
-use crate::color::Rgb;
+use crate::color::{Channels, Rgb};
 
 /// Clusters per parallel work item.
 const BATCH: usize = 256;
@@ -99,9 +100,9 @@ impl<'a> Solver<'a> {
     ) {
         let v = self.v;
         if v.g[r.start].is_nan() {
-            // A surface vertex: its own estimate.
-            for (o, i) in out.iter_mut().zip(r) {
-                *o = self.direct[i] + v.w[i] * l_plus[i];
+            // Surface vertices: Lambertian clusters one term at a time, others their own estimate.
+            for (o, i) in out.iter_mut().zip(r.clone()) {
+                *o = self.direct[i] + self.indirect_in(r.clone(), i, l_plus);
             }
             return;
         }
@@ -140,6 +141,12 @@ impl<'a> Solver<'a> {
     /// A⁺L⁺ at vertex `i` of the medium cluster `r`, one term at a time.
     fn indirect_in(&self, r: std::ops::Range<usize>, i: usize, l_plus: &[Rgb]) -> Rgb {
         let v = self.v;
+        if v.g[i].is_nan() {
+            if v.n[i] == Vec3::ZERO {
+                return v.w[i] * l_plus[i];
+            }
+            return v.w[i] * lambertian_indirect(v, &self.earliest, &self.marginal, r, i, l_plus);
+        }
         let hg = Hg::new(v.g[i], v.wo[i]);
         let e = self.earliest[i] as usize;
         let mut sum = Rgb::ZERO;
@@ -168,10 +175,6 @@ impl<'a> Solver<'a> {
 
     /// The aggregated scattered indirect light A⁺L⁺ at vertex `i` alone.
     pub fn indirect_at(&self, cluster: usize, i: usize, l_plus: &[Rgb]) -> Rgb {
-        let v = self.v;
-        if v.g[i].is_nan() {
-            return v.w[i] * l_plus[i];
-        }
         let r = self.offsets[cluster] as usize..self.offsets[cluster + 1] as usize;
         self.indirect_in(r, i, l_plus)
     }
@@ -209,6 +212,9 @@ fn first_pass(
 ) {
     let i0 = r.start;
     if v.g[i0].is_nan() {
+        if v.n[i0] != Vec3::ZERO {
+            return lambertian_first_pass(v, earliest, r, marginal, direct, &mut s.light_marginal);
+        }
         for (k, i) in r.enumerate() {
             marginal[k] = f32::NAN;
             direct[k] = v.direct_light[i] + v.direct_scatter[i];
@@ -318,6 +324,94 @@ fn first_pass(
     }
 }
 
+/// The cosine density of a Lambertian vertex with normal `n` (on the side of its ωo).
+#[inline]
+fn cosine_pdf(n: Vec3, w: Vec3) -> f32 {
+    n.dot(w).max(0.0) * std::f32::consts::FRAC_1_PI
+}
+
+/// Eq. 17 at a Lambertian vertex `i` of cluster `r`, before its reflectance: Σⱼ pᵢ(ωⱼ) L⁺ⱼ /
+/// p_m(ωⱼ) over the other paths' techniques and i itself (f = R·p for cosine sampling, so the
+/// reflectance R = w multiplies the sum).
+fn lambertian_indirect(
+    v: &Vertices,
+    earliest: &[u32],
+    marginal: &[f32],
+    r: std::ops::Range<usize>,
+    i: usize,
+    l_plus: &[Rgb],
+) -> Rgb {
+    let e = earliest[i] as usize;
+    let mut sum = Rgb::ZERO;
+    for j in r {
+        let is_technique = earliest[j] as usize == j && j != e;
+        if (is_technique || j == i) && l_plus[j] != Rgb::ZERO {
+            let p = cosine_pdf(v.n[i], v.wi[j]);
+            // i stands in for its path's earliest vertex e in the marginal.
+            let m = if e == i { marginal[j] } else { marginal[j] - cosine_pdf(v.n[e], v.wi[j]) + p };
+            if p > 0.0 && m > 0.0 {
+                sum += p / m * l_plus[j];
+            }
+        }
+    }
+    sum
+}
+
+/// Marginals and Eq. 22 for a cluster of Lambertian vertices (f = R·p, p the cosine density):
+/// the direct light each sample brought, per unit of its own R and p, over the marginal.
+fn lambertian_first_pass(
+    v: &Vertices,
+    earliest: &[u32],
+    r: std::ops::Range<usize>,
+    marginal: &mut [f32],
+    direct: &mut [Rgb],
+    light_marginal: &mut Vec<f32>,
+) {
+    let technique = |j: usize| earliest[j] as usize == j;
+    let count = r.clone().filter(|&j| technique(j)).count() as f32;
+    let sum_pdf = |w: Vec3| -> f32 { r.clone().filter(|&l| technique(l)).map(|l| cosine_pdf(v.n[l], w)).sum() };
+    let safe_div = |a: Rgb, b: Rgb| a.zip_map(b, |a, b| if b != 0.0 { a / b } else { 0.0 });
+    // The marginals of the phase-sampled and of the light-sampled directions (NaN: a delta
+    // light, found by light sampling only).
+    light_marginal.clear();
+    for (k, j) in r.clone().enumerate() {
+        marginal[k] = sum_pdf(v.wi[j]);
+        light_marginal.push(if v.light_pdf_scatter[j] == 0.0 { f32::NAN } else { sum_pdf(v.light_wi[j]) });
+    }
+    for (k, i) in r.clone().enumerate() {
+        let e = earliest[i] as usize;
+        let mut sum = Rgb::ZERO;
+        for (m, j) in r.clone().enumerate() {
+            if !(technique(j) && j != e) && j != i {
+                continue;
+            }
+            let swap = |w: Vec3, p_i: f32| if e == i { 0.0 } else { p_i - cosine_pdf(v.n[e], w) };
+            if v.direct_light[j] != Rgb::ZERO {
+                let w = v.light_wi[j];
+                let (pl, ps) = (v.light_pdf[j], v.light_pdf_scatter[j]);
+                let own = cosine_pdf(v.n[j], w);
+                let l0 = safe_div(v.direct_light[j] * ((ps + pl) / own), v.w[j]);
+                let p_i = cosine_pdf(v.n[i], w);
+                let p_m = if ps == 0.0 { count * pl } else { light_marginal[m] + swap(w, p_i) + count * pl };
+                if p_i > 0.0 && p_m > 0.0 && own > 0.0 {
+                    sum += p_i / p_m * l0;
+                }
+            }
+            if v.direct_scatter[j] != Rgb::ZERO {
+                let w = v.wi[j];
+                let own = cosine_pdf(v.n[j], w);
+                let l0 = safe_div(v.direct_scatter[j] * ((own + v.scatter_pdf_light[j]) / own), v.w[j]);
+                let p_i = cosine_pdf(v.n[i], w);
+                let p_m = marginal[m] + swap(w, p_i) + count * v.scatter_pdf_light[j];
+                if p_i > 0.0 && p_m > 0.0 && own > 0.0 {
+                    sum += p_i / p_m * l0;
+                }
+            }
+        }
+        direct[k] = v.w[i] * sum;
+    }
+}
+
 type Batch<'s, T> = ((usize, usize), &'s mut [T]);
 
 /// `out` cut into the vertex ranges of `batches`.
@@ -350,7 +444,6 @@ fn split_by_batches<'s>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use glam::Vec3;
 
     /// Two isotropic medium vertices in one cluster, no lights: Eq. 17 by hand. With p = 1/4π
     /// for both, p_m = 2/4π and L̄⁺ᵢ = Σⱼ (1/4π)/(2/4π) L⁺ⱼ = the mean of the two L⁺.
@@ -373,6 +466,7 @@ mod tests {
             v.edge.push(Rgb::ZERO);
             v.next.push(NONE);
             v.path.push(v.path.len() as u32);
+            v.n.push(Vec3::ZERO);
         }
         let offsets = [0u32, 2];
         let s = Solver::new(&v, &offsets);
@@ -381,6 +475,41 @@ mod tests {
         s.aggregate(&l_plus, &mut out);
         for o in out {
             assert!((o - Rgb::new(2.0, 1.0, 2.0)).abs().max_element() < 1e-5, "{o}");
+        }
+    }
+
+    /// Two Lambertian vertices with the same normal and reflectance R: with cosine sampling
+    /// both densities agree, p_m = 2p, and each gets R × the mean of the two L⁺.
+    #[test]
+    fn lambertian_cluster_averages_indirect_light() {
+        let mut v = Vertices::default();
+        for k in 0..2 {
+            v.p.push(Vec3::ZERO);
+            v.wo.push(Vec3::new(0.3, 0.0, 1.0).normalize());
+            v.wi.push(if k == 0 { Vec3::new(0.6, 0.0, 0.8) } else { Vec3::new(0.0, -0.28, 0.96) });
+            v.g.push(f32::NAN);
+            v.n.push(Vec3::Z);
+            v.w.push(Rgb::new(0.5, 0.25, 1.0));
+            v.direct_light.push(Rgb::ZERO);
+            v.light_wi.push(Vec3::Z);
+            v.light_pdf.push(0.0);
+            v.light_pdf_scatter.push(0.0);
+            v.direct_scatter.push(Rgb::ZERO);
+            v.scatter_pdf_light.push(0.0);
+            v.edge_const.push(Rgb::ZERO);
+            v.edge.push(Rgb::ZERO);
+            v.next.push(NONE);
+            v.path.push(k);
+        }
+        let offsets = [0u32, 2];
+        let s = Solver::new(&v, &offsets);
+        let l_plus = [Rgb::new(1.0, 2.0, 3.0), Rgb::new(3.0, 0.0, 1.0)];
+        let mut out = [Rgb::ZERO; 2];
+        s.aggregate(&l_plus, &mut out);
+        // p(ω₀) ≠ p(ω₁), but both points have the same density: each sample's weight is 1/2.
+        let expected = Rgb::new(0.5, 0.25, 1.0) * Rgb::new(2.0, 1.0, 2.0);
+        for o in out {
+            assert!((o - expected).abs().max_element() < 1e-5, "{o} vs {expected}");
         }
     }
 
@@ -405,6 +534,7 @@ mod tests {
             v.edge.push(Rgb::ZERO);
             v.next.push(NONE);
             v.path.push(v.path.len() as u32);
+            v.n.push(Vec3::ZERO);
         }
         let offsets = [0u32, 2];
         let s = Solver::new(&v, &offsets);
@@ -460,6 +590,8 @@ mod estimator_tests {
                 v.edge.push(Rgb::ZERO);
                 v.next.push(NONE);
                 v.path.push(v.path.len() as u32);
+                v.n.push(Vec3::ZERO);
+                v.n.push(Vec3::ZERO);
             }
             let offsets = [0u32, 4];
             let s = Solver::new(&v, &offsets);

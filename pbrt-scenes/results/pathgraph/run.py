@@ -17,6 +17,7 @@ idle machine (timings are 2 threads):
 4. A K study (cluster size): error, mean and time per sample: k-study.png.
 5. Where it fails: a direct-light-dominated haze, a surfaces-only scene, a very anisotropic
    cloud (g = 0.95), each at equal time (EQUAL_TIME s): failure-<case>/.
+6. Every pbrt-scenes scene at equal time (EQUAL_TIME s): the table only.
 Writes results.md and results.json beside this script.
 """
 
@@ -297,6 +298,25 @@ def main():
                 md.append(f"| {what} | {integ} | {t['spp']} | {float(t['relmse']):.3g} | {float(t['mpe']):.2e} | "
                           f"{float(t['mne']):.2e} | {mean:+.2f}% |")
                 results.setdefault("failures", {}).setdefault(name, {})[integ] = t
+        md.append("")
+
+        # 6. Every pbrt-scenes scene at equal time.
+        md += [f"## Every pbrt-scenes scene at equal time ({EQUAL_TIME} s)", "",
+               "| scene | volpath spp | volpath MSE | pathgraph spp | pathgraph MSE | MSE ratio volpath : pathgraph | "
+               "pathgraph mean vs ref |", "|---|--:|--:|--:|--:|--:|--:|"]
+        for f in sorted(os.listdir(SCENES)):
+            if not f.endswith(".pbrt") or f.startswith("_") or f == "default.pbrt":
+                continue
+            s = f[:-5]
+            rows = compare(os.path.join(SCENES, f), os.path.join(REFS, s + ".exr"), os.path.join(work, "all-" + s),
+                           EQUAL_TIME)
+            fin = finals(rows)
+            v, g = fin[("volpath", "equal-time")], fin[("pathgraph", "equal-time")]
+            mean = 100 * (float(g["mean"]) / float(g["mean_reference"]) - 1)
+            ratio = float(v["mse"]) / float(g["mse"])
+            results.setdefault("all_scenes", {})[s] = {"volpath": v, "pathgraph": g, "mse_ratio": ratio}
+            md.append(f"| {s} | {v['spp']} | {float(v['mse']):.3g} | {g['spp']} | {float(g['mse']):.3g} | "
+                      f"{ratio:.2f}× | {mean:+.2f}% |")
         md.append("")
     finally:
         shutil.rmtree(work, ignore_errors=True)

@@ -233,7 +233,7 @@ impl<C: Channels> PathObserver<C> for Recorder<C> {
 
 /// Component-wise a/b with 0 where b is 0.
 #[inline]
-fn div<C: Channels>(a: C, b: C) -> C {
+pub(super) fn div<C: Channels>(a: C, b: C) -> C {
     a.zip_map(b, |a, b| if b != 0.0 { a / b } else { 0.0 })
 }
 

@@ -11,9 +11,9 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use super::lanes::{Hg, Phases, Samples, SwapSamples};
-use super::record::Vertices;
+use super::record::{Vertices, div};
 use crate::accel::NONE;
-use crate::color::{Channels, Rgb};
+use crate::color::Rgb;
 
 /// Clusters per parallel work item.
 const BATCH: usize = 256;
@@ -370,7 +370,6 @@ fn lambertian_first_pass(
     let technique = |j: usize| earliest[j] as usize == j;
     let count = r.clone().filter(|&j| technique(j)).count() as f32;
     let sum_pdf = |w: Vec3| -> f32 { r.clone().filter(|&l| technique(l)).map(|l| cosine_pdf(v.n[l], w)).sum() };
-    let safe_div = |a: Rgb, b: Rgb| a.zip_map(b, |a, b| if b != 0.0 { a / b } else { 0.0 });
     // The marginals of the phase-sampled and of the light-sampled directions (NaN: a delta
     // light, found by light sampling only).
     light_marginal.clear();
@@ -390,7 +389,7 @@ fn lambertian_first_pass(
                 let w = v.light_wi[j];
                 let (pl, ps) = (v.light_pdf[j], v.light_pdf_scatter[j]);
                 let own = cosine_pdf(v.n[j], w);
-                let l0 = safe_div(v.direct_light[j] * ((ps + pl) / own), v.w[j]);
+                let l0 = div(v.direct_light[j] * ((ps + pl) / own), v.w[j]);
                 let p_i = cosine_pdf(v.n[i], w);
                 let p_m = if ps == 0.0 { count * pl } else { light_marginal[m] + swap(w, p_i) + count * pl };
                 if p_i > 0.0 && p_m > 0.0 && own > 0.0 {
@@ -400,7 +399,7 @@ fn lambertian_first_pass(
             if v.direct_scatter[j] != Rgb::ZERO {
                 let w = v.wi[j];
                 let own = cosine_pdf(v.n[j], w);
-                let l0 = safe_div(v.direct_scatter[j] * ((own + v.scatter_pdf_light[j]) / own), v.w[j]);
+                let l0 = div(v.direct_scatter[j] * ((own + v.scatter_pdf_light[j]) / own), v.w[j]);
                 let p_i = cosine_pdf(v.n[i], w);
                 let p_m = marginal[m] + swap(w, p_i) + count * v.scatter_pdf_light[j];
                 if p_i > 0.0 && p_m > 0.0 && own > 0.0 {

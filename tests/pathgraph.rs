@@ -40,16 +40,16 @@ fn max_abs_diff(a: &Image, b: &Image) -> f32 {
 
 /// K = 1 makes every shading point its own cluster: aggregation then gives back each path's
 /// own estimates, so the image is volpath's at the same seed (to float rounding), in RGB and
-/// in spectral transport, with surfaces (diffuse floor) and media vertices.
+/// in spectral transport, with surfaces (diffuse floor) and media vertices. (In chromatic media
+/// the graph's paths apply spectral MIS per segment, a different unbiased estimator: see
+/// `chromatic_media_keep_the_mean`.)
 #[test]
 fn cluster_size_one_is_volpath() {
-    for (sigma_s, spectral) in [("2 2 2", false), ("1 2 4", true)] {
+    for spectral in [false, true] {
         let opts = BuildOptions { seed: Some(3), ..transport(spectral) };
         let graph =
-            load_scene(&scene_text("pathgraph", r#""integer clustersize" 1 "integer iterations" 4"#, sigma_s), &opts);
-        let volpath = load_scene(&scene_text("volpath", "", sigma_s), &opts);
-        // Chromatic media are a known bias of the method, said at load time.
-        assert_eq!(graph.warnings.iter().any(|w| w.message.contains("chromatic")), spectral);
+            load_scene(&scene_text("pathgraph", r#""integer clustersize" 1 "integer iterations" 4"#, "2 2 2"), &opts);
+        let volpath = load_scene(&scene_text("volpath", "", "2 2 2"), &opts);
         let (g, v) = (render_scene(&graph), render_scene(&volpath));
         let peak = v.pixels.iter().map(|p| p.max_element()).fold(0.0, f32::max);
         let d = max_abs_diff(&g, &v);
@@ -194,4 +194,31 @@ fn paired_difference(a: &Image, b: &Image, c: usize) -> (f64, f64) {
     let mean = d.iter().sum::<f64>() / n;
     let var = d.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0);
     (mean, (var / n).sqrt())
+}
+
+/// In a chromatic medium the graph's paths draw a hero wavelength per segment (so that each
+/// edge factor is unbiased when aggregation splices paths): with K = 1 (path tracing with the
+/// per-segment MIS) the image mean matches volpath's within noise, and with the default K
+/// within the method's bias measured on the gray version of this scene (+1.1 to +1.5 % in
+/// this paired comparison), in RGB and spectral transport. Splicing whole-path hero
+/// estimates measured +5 % (red) here and +10.8 % on the rgbgrid-smoke parity scene.
+#[test]
+fn chromatic_media_keep_the_mean() {
+    for spectral in [false, true] {
+        let opts = BuildOptions { spp: Some(32), seed: Some(8), ..transport(spectral) };
+        let volpath = load_scene(&scene_text("volpath", "", "1 2 4"), &BuildOptions { seed: Some(9), ..opts.clone() });
+        let v = render_scene(&volpath);
+        for (k, bias) in [(1, 0.0), (64, 0.02)] {
+            let graph = load_scene(&scene_text("pathgraph", &format!(r#""integer clustersize" {k}"#), "1 2 4"), &opts);
+            let g = render_scene(&graph);
+            for c in 0..3 {
+                let (mean, se) = paired_difference(&g, &v, c);
+                let level = channel_stats(&v)[c].0;
+                assert!(
+                    mean.abs() <= 4.0 * se + bias * level,
+                    "spectral {spectral} K {k} channel {c}: difference {mean} ± {se} (level {level})"
+                );
+            }
+        }
+    }
 }

@@ -976,17 +976,6 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions) -> Result<Scene
     };
     let interfaces = interfaces.into_inner();
     let has_chromatic_media = media.iter().any(|m| m.chromatic);
-    if let (IntegratorSettings::PathGraph(_), Some(m)) = (&integrator, media.iter().find(|m| m.chromatic)) {
-        // A known limitation, measured (src/integrators/pathgraph/README.md): said, not hidden.
-        warnings.push(Warning::new(
-            &desc.integrator.loc,
-            format!(
-                "pathgraph: medium \"{}\" is chromatic; splicing paths across their hero wavelengths biases the \
-                 aggregation there (+11 % on the rgbgrid-smoke parity scene); volpath is exact",
-                m.name
-            ),
-        ));
-    }
     let geometry_seconds = tg.elapsed().as_secs_f64();
 
     let sb_bounds = surfaces.bounds();

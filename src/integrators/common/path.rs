@@ -4,7 +4,8 @@
 //! Russian roulette, `interface` surfaces crossed without counting a bounce. MIS uses
 //! pbrt-v4's rescaled path probabilities: `r_u` (unidirectional) and `r_l` (light sampling)
 //! per channel, with the balance heuristic; in chromatic media the channels are pbrt-v4's
-//! wavelengths, one of them (`hero`, chosen per path) driving distance sampling.
+//! wavelengths, one of them (`hero`, chosen per path, or per segment for path graphs)
+//! driving distance sampling.
 
 use glam::{Vec2, Vec3};
 
@@ -38,12 +39,18 @@ pub struct PathConfig {
     /// use them for the pixel's direct light (Hu et al. 2024, Sec. 4). 0 for every per-ray
     /// method.
     pub extra_direct: u32,
+    /// In chromatic media, draw the hero wavelength anew at every scattering vertex and apply
+    /// the spectral MIS over the hero choice per segment (β and r_u divided by the mean of r_u
+    /// there) instead of over the whole path: unbiased as well, and it makes every segment's
+    /// factor unbiased on its own, which path graphs need when they splice one path's suffix
+    /// onto another's prefix. pbrt-v4's volpath keeps one hero per path.
+    pub hero_per_segment: bool,
 }
 
 impl PathConfig {
     /// pbrt-v4's volpath loop: next-event estimation, no extra samples.
     pub fn volpath(max_depth: u32, regularize: bool) -> PathConfig {
-        PathConfig { max_depth, regularize, next_event: true, extra_direct: 0 }
+        PathConfig { max_depth, regularize, next_event: true, extra_direct: 0, hero_per_segment: false }
     }
 }
 
@@ -116,6 +123,7 @@ pub fn trace_path<C: Channels, O: PathObserver<C>>(
     let mut l = C::ZERO;
     // Chromatic media need a randomly chosen hero channel for spectral MIS.
     let hero = if scene.has_chromatic_media { C::hero_channel(sampler.get_1d()) } else { 0 };
+    let per_segment = config.hero_per_segment && scene.has_chromatic_media;
     let mut st = PathState { beta: C::ONE, r_u: C::ONE, r_l: C::ONE, hero };
     let mut specular_bounce = false;
     let mut any_non_specular = false;
@@ -126,6 +134,8 @@ pub fn trace_path<C: Channels, O: PathObserver<C>>(
 
     loop {
         stats.bounce += 1;
+        // The hero of this segment (one per path unless `hero_per_segment`).
+        let hero = st.hero;
         let hit = scene.surfaces.intersect(&ray, f32::INFINITY);
 
         // Delta tracking through the current medium up to the surface.
@@ -197,6 +207,9 @@ pub fn trace_path<C: Channels, O: PathObserver<C>>(
                 return l;
             }
             if scattered {
+                if per_segment {
+                    end_segment(&mut st, sampler);
+                }
                 // Real scattering: next-event estimation, then sample the phase function.
                 let phase = HenyeyGreenstein::new(m.g);
                 let wo = -ray.d;
@@ -318,6 +331,9 @@ pub fn trace_path<C: Channels, O: PathObserver<C>>(
             break;
         }
         depth += 1;
+        if per_segment {
+            end_segment(&mut st, sampler);
+        }
         if config.regularize && any_non_specular {
             bxdf.regularize();
         }
@@ -393,6 +409,23 @@ pub fn trace_path<C: Channels, O: PathObserver<C>>(
         }
     }
     l
+}
+
+/// Ends a segment of a path in chromatic media ([`PathConfig::hero_per_segment`]): the spectral
+/// MIS over the segment's hero choice (the balance heuristic, f / mean of the channels'
+/// densities = β / mean of r_u), then a new hero for the next segment.
+#[inline]
+fn end_segment<C: Channels>(st: &mut PathState<C>, sampler: &mut Sampler) {
+    let a = st.r_u.average();
+    if a > 0.0 {
+        st.beta /= a;
+    }
+    // The segment's densities are accounted for: the next one starts its own ratios, with a
+    // hero drawn uniformly among the channels (the path's wavelengths are fixed by now, so
+    // the next segment's one-sample MIS needs its own uniform choice; for the first segment
+    // pbrt's random first wavelength is that choice).
+    st.r_u = C::ONE;
+    st.hero = ((sampler.get_1d() * C::CHANNELS as f32) as usize).min(C::CHANNELS - 1);
 }
 
 /// Russian roulette on the throughput with refraction's radiance scaling undone; true

@@ -60,6 +60,7 @@ pub fn create(settings: &PathGraphSettings, _scene: &Scene) -> Result<PathGraph,
         settings: settings.clone(),
         config: PathConfig {
             extra_direct: settings.extra_direct,
+            hero_per_segment: true,
             ..PathConfig::volpath(settings.max_depth, settings.regularize)
         },
         report: Mutex::new(Report::default()),

@@ -226,9 +226,6 @@ impl ImageIntegrator for PathGraph {
             r.solve_seconds += (solved - recorded).as_secs_f64();
             r.peak_bytes = r.peak_bytes.max(peak);
         }
-        // Keep `paths` alive until here: `values` borrows nothing from it, but the memory
-        // figure counts it.
-        paths.pixel.clear();
         (values, stats)
     }
 }

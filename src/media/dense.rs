@@ -79,11 +79,20 @@ impl<T: GridValue> DenseGrid<T> {
     /// x fastest, then y, then z.
     #[inline]
     pub fn corners<U>(&self, c: IVec3, f: impl Fn(T) -> U) -> [U; 8] {
-        std::array::from_fn(|i| {
-            let o = IVec3::new((i & 1) as i32, ((i >> 1) & 1) as i32, (i >> 2) as i32);
-            let q = c + o;
-            f(self.at(q.x, q.y, q.z))
-        })
+        let n = self.n.as_ivec3();
+        // Written out rather than through `array::from_fn`, whose per-element closure the
+        // compiler left uninlined here: a spectral rgbgrid lookup converts 8 corners per grid.
+        if c.cmpge(IVec3::ZERO).all() && (c + IVec3::ONE).cmplt(n).all() {
+            // A cell inside the grid (nearly every lookup): one index, fixed offsets.
+            let (dx, dy) = (1, n.x as usize);
+            let dz = dy * n.y as usize;
+            let b = (c.z as usize * n.y as usize + c.y as usize) * n.x as usize + c.x as usize;
+            let v = &self.values[b..=b + dx + dy + dz];
+            [f(v[0]), f(v[dx]), f(v[dy]), f(v[dx + dy]), f(v[dz]), f(v[dx + dz]), f(v[dy + dz]), f(v[dx + dy + dz])]
+        } else {
+            let at = |x: i32, y: i32, z: i32| f(self.at(c.x + x, c.y + y, c.z + z));
+            [at(0, 0, 0), at(1, 0, 0), at(0, 1, 0), at(1, 1, 0), at(0, 0, 1), at(1, 0, 1), at(0, 1, 1), at(1, 1, 1)]
+        }
     }
 
     /// Trilinear interpolation at `p` in [0, 1]³ of the samples mapped by `f` (zero outside):

@@ -99,7 +99,7 @@ impl RgbGridMedium {
                         *values = g.corners(cell, |v| C::from_voxel(v, role, self.space, lambda).to_lanes());
                     }
                 }
-                *m = CellMemo { grid: id, cell, lambda: key, values: m.values };
+                (m.grid, m.cell, m.lambda) = (id, cell, key);
             }
             let [sigma_a, sigma_s, le] = std::array::from_fn(|i| match grids[i].0 {
                 Some(_) => C::from_lanes(trilinear(&m.values[i], d)),

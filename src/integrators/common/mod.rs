@@ -5,7 +5,7 @@ pub mod media;
 pub mod observer;
 pub mod path;
 
-pub use observer::{EmissionEvent, NeeEvent, NoObserver, PathObserver, VertexEvent};
+pub use observer::{EmissionEvent, GuidedSample, NeeEvent, NoObserver, PathObserver, VertexEvent};
 pub use path::{PathConfig, medium_after, shading_frame, trace_path};
 
 /// Rays traced, for `--stats`.

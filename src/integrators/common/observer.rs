@@ -6,6 +6,7 @@
 use glam::Vec3;
 
 use crate::color::{Channels, Rgb};
+use crate::media::phase::HenyeyGreenstein;
 
 /// A scattering vertex: where the path scattered and how it continued.
 #[derive(Clone, Copy, Debug)]
@@ -70,9 +71,51 @@ pub struct EmissionEvent<C = Rgb> {
     pub pdf_light: f32,
 }
 
+/// A continuation direction drawn by path guiding at a medium vertex instead of by the phase
+/// function.
+#[derive(Clone, Copy, Debug)]
+pub struct GuidedSample {
+    /// The direction, pointing away from the vertex.
+    pub wi: Vec3,
+    /// The estimator's factor for it: the phase value over the effective density of the
+    /// technique (for resampling, p·W/q: Deng et al. 2020, Eq. 5). β is multiplied by it.
+    pub weight: f32,
+    /// The density that MIS with light sampling uses for `wi` (the same function as
+    /// [`PathObserver::guide_medium_pdf`]).
+    pub pdf: f32,
+}
+
 /// Receives the path loop's events, in the channels the path carries (RGB or the path's
-/// sampled wavelengths).
+/// sampled wavelengths), and may guide its scattering in media.
 pub trait PathObserver<C: Channels> {
+    /// Whether this observer guides scattering in media ([`PathObserver::guide_medium`]).
+    /// The loop draws the guide's random number only then, so observers that do not guide
+    /// leave the sampler's dimensions, hence volpath's images, unchanged.
+    #[inline]
+    fn guides(&self) -> bool {
+        false
+    }
+    /// Path guiding at a real scattering event at `p` in medium `medium`, with phase
+    /// function `phase` and `wo` pointing back along the path: a direction from a learned
+    /// distribution, or `None` for the phase function's own sampling. `u` seeds the guide's
+    /// random numbers.
+    #[inline]
+    fn guide_medium(
+        &mut self,
+        _medium: u32,
+        _p: Vec3,
+        _wo: Vec3,
+        _phase: &HenyeyGreenstein,
+        _u: f32,
+    ) -> Option<GuidedSample> {
+        None
+    }
+    /// The MIS density of direction `wi` under [`PathObserver::guide_medium`] at the same
+    /// vertex, or `None` where it would not guide (the phase density applies).
+    #[inline]
+    fn guide_medium_pdf(&self, _medium: u32, _p: Vec3, _wo: Vec3, _phase: &HenyeyGreenstein, _wi: Vec3) -> Option<f32> {
+        None
+    }
     /// A scattering vertex was sampled.
     #[inline]
     fn on_vertex(&mut self, _v: &VertexEvent<C>) {}

@@ -104,6 +104,11 @@ struct PathState<C: Channels> {
     r_u: C,
     r_l: C,
     hero: usize,
+    /// What Russian roulette multiplies β by: the inverse of the factors path guiding put
+    /// into β. Roulette on a guided path's β would kill the paths guiding sent towards the
+    /// light (their factor is small because the guide's density there is high) and undo the
+    /// guiding; on β·scale it survives as an unguided path would. 1 on unguided paths.
+    rr_scale: f32,
 }
 
 /// Radiance arriving along `ray` (from the camera, in medium `medium`) at the wavelengths
@@ -124,7 +129,7 @@ pub fn trace_path<C: Channels, O: PathObserver<C>>(
     // Chromatic media need a randomly chosen hero channel for spectral MIS.
     let hero = if scene.has_chromatic_media { C::hero_channel(sampler.get_1d()) } else { 0 };
     let per_segment = config.hero_per_segment && scene.has_chromatic_media;
-    let mut st = PathState { beta: C::ONE, r_u: C::ONE, r_l: C::ONE, hero };
+    let mut st = PathState { beta: C::ONE, r_u: C::ONE, r_l: C::ONE, hero, rr_scale: 1.0 };
     let mut specular_bounce = false;
     let mut any_non_specular = false;
     let mut eta_scale = 1.0f32;
@@ -239,11 +244,29 @@ pub fn trace_path<C: Channels, O: PathObserver<C>>(
                         observer.on_extra_direct(depth - 1, c);
                     }
                 }
-                let u = sampler.get_2d();
-                let Some(ps) = phase.sample_p(wo, u) else {
-                    return l;
+                // The continuation: (direction, phase value, β's factor, MIS density), from
+                // the guide when the observer guides here, else from the phase function.
+                let guided = if observer.guides() {
+                    let u = sampler.get_1d();
+                    observer.guide_medium(medium, scatter_p, wo, &phase, u).map(|gs| (gs, phase.p(wo, gs.wi)))
+                } else {
+                    None
                 };
-                if ps.pdf == 0.0 {
+                let (wi, p, factor, pdf) = match guided {
+                    Some((gs, p)) => {
+                        // The phase function's own sampling has factor p/pdf = 1.
+                        st.rr_scale = (st.rr_scale / gs.weight).clamp(1e-20, 1e20);
+                        (gs.wi, p, gs.weight, gs.pdf)
+                    }
+                    None => {
+                        let u = sampler.get_2d();
+                        let Some(ps) = phase.sample_p(wo, u) else {
+                            return l;
+                        };
+                        (ps.wi, ps.p, ps.p / ps.pdf, ps.pdf)
+                    }
+                };
+                if pdf == 0.0 || factor == 0.0 || !factor.is_finite() {
                     return l;
                 }
                 observer.on_vertex(&VertexEvent {
@@ -251,21 +274,21 @@ pub fn trace_path<C: Channels, O: PathObserver<C>>(
                     p: scatter_p,
                     n: Vec3::ZERO,
                     wo,
-                    wi: ps.wi,
-                    pdf: ps.pdf,
-                    f: C::splat(ps.p),
+                    wi,
+                    pdf,
+                    f: C::splat(p),
                     beta: st.beta,
                     specular: false,
                     in_medium: true,
                     g: m.g,
                     lambertian: false,
                 });
-                st.beta *= ps.p / ps.pdf;
-                st.r_l = st.r_u / ps.pdf;
+                st.beta *= factor;
+                st.r_l = st.r_u / pdf;
                 prev_p = scatter_p;
                 specular_bounce = false;
                 any_non_specular = true;
-                ray = Ray::new(scatter_p, ps.wi);
+                ray = Ray::new(scatter_p, wi);
                 if rr(&mut st, eta_scale, depth, sampler) {
                     return l;
                 }
@@ -435,7 +458,7 @@ fn rr<C: Channels>(st: &mut PathState<C>, eta_scale: f32, depth: u32, sampler: &
     if st.beta.is_zero() || !st.beta.is_finite() {
         return true;
     }
-    let rr_beta = st.beta * eta_scale / st.r_u.average();
+    let rr_beta = st.beta * (eta_scale * st.rr_scale) / st.r_u.average();
     let rr_max = rr_beta.max_element();
     let u_rr = sampler.get_1d();
     if rr_max < 1.0 && depth > 1 {
@@ -507,6 +530,13 @@ fn sample_direct<C: Channels, O: PathObserver<C>>(
     if f.is_zero() {
         return None;
     }
+    // Where the path is guided, the scattering technique MIS weighs against is the guide's.
+    let pdf_scatter = match scatterer {
+        Scatterer::Medium { phase, wo } if hit.is_none() && observer.guides() => {
+            observer.guide_medium_pdf(medium, p, *wo, phase, ls.wi).unwrap_or(pdf_scatter)
+        }
+        _ => pdf_scatter,
+    };
     // A shadow ray leaving a surface starts in the medium on the side it leaves towards.
     let (n, medium) = match hit {
         Some(h) => (h.surface.n, medium_after(scene, h, ls.wi, medium)),

@@ -4,6 +4,7 @@ mod bench;
 mod check;
 mod common;
 mod compare;
+mod guided;
 mod media;
 mod pathgraph;
 mod radiancegraph;

@@ -47,6 +47,10 @@ pub struct RenderArgs {
     /// built first, with the scene's `.json` config if there is one.
     #[arg(long, value_name = "FILE")]
     graph_data: Option<PathBuf>,
+    /// Trained trees for `guided`: loaded when the file matches the scene (its media and
+    /// lights), else trained and saved there for later renders and other cameras.
+    #[arg(long, value_name = "FILE")]
+    guide_cache: Option<PathBuf>,
     /// Render progressively for this many seconds instead of to the scene's spp.
     #[arg(long)]
     time: Option<f64>,
@@ -93,6 +97,7 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
         integrator: args.integrator.clone(),
         scene_file: (args.scene.as_os_str() != "-").then(|| args.scene.clone()),
         graph_data: args.graph_data.clone(),
+        guide_cache: args.guide_cache.clone(),
         spp: args.spp,
         seed: args.seed,
         quick: args.quick,
@@ -127,10 +132,13 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
             return Ok(ExitCode::FAILURE);
         }
     };
+    // A method's precomputation (guide training, graph building) counts in the budget.
+    let setup = t_built.elapsed().as_secs_f64();
+    let time_budget = args.time.map(|t| (t - setup).max(0.0));
     let result = nimbus::render::render(
         &scene,
         integrator.as_ref(),
-        &nimbus::render::RenderOptions { time_budget: args.time, quiet: args.quiet },
+        &nimbus::render::RenderOptions { time_budget, quiet: args.quiet },
     );
     let t_rendered = Instant::now();
     let mut image = result.image;

@@ -2,6 +2,7 @@
 //! scenes and `--integrator` use to settings readers and implementations.
 
 pub mod common;
+pub mod guided;
 pub mod pathgraph;
 pub mod radiancegraph;
 pub mod simplevolpath;
@@ -27,6 +28,8 @@ pub enum IntegratorSettings {
     RadianceGraph(radiancegraph::RadianceGraphSettings),
     /// `pathgraph`
     PathGraph(pathgraph::PathGraphSettings),
+    /// `guided`
+    Guided(guided::GuidedSettings),
 }
 
 /// The integrator a scene's name stands for: the radiance-graph thesis's scenes name their
@@ -41,7 +44,7 @@ pub fn canonical_name(name: &str) -> &str {
 }
 
 /// Names of the integrators nimbus has.
-pub const INTEGRATOR_NAMES: &[&str] = &["volpath", "simplevolpath", "radiancegraph", "pathgraph"];
+pub const INTEGRATOR_NAMES: &[&str] = &["volpath", "simplevolpath", "radiancegraph", "pathgraph", "guided"];
 
 impl IntegratorSettings {
     /// Reads the integrator entity; `name_override` replaces the scene's choice (the
@@ -56,6 +59,7 @@ impl IntegratorSettings {
                 Ok(IntegratorSettings::RadianceGraph(radiancegraph::RadianceGraphSettings::from_entity(e)?))
             }
             "pathgraph" => Ok(IntegratorSettings::PathGraph(pathgraph::PathGraphSettings::from_entity(e)?)),
+            "guided" => Ok(IntegratorSettings::Guided(guided::GuidedSettings::from_entity(e)?)),
             other => Err(Error::new(
                 &e.loc,
                 format!("integrator \"{other}\" is not available in nimbus (it has: {})", INTEGRATOR_NAMES.join(", ")),
@@ -70,6 +74,7 @@ impl IntegratorSettings {
             IntegratorSettings::SimpleVolPath(_) => "simplevolpath",
             IntegratorSettings::RadianceGraph(_) => "radiancegraph",
             IntegratorSettings::PathGraph(_) => "pathgraph",
+            IntegratorSettings::Guided(_) => "guided",
         }
     }
 
@@ -83,6 +88,7 @@ impl IntegratorSettings {
             IntegratorSettings::SimpleVolPath(s) => Box::new(simplevolpath::SimpleVolPath::new(s, scene)),
             IntegratorSettings::RadianceGraph(s) => Box::new(radiancegraph::create(s, scene)?),
             IntegratorSettings::PathGraph(s) => Box::new(pathgraph::create(s, scene)?),
+            IntegratorSettings::Guided(s) => Box::new(guided::create(s, scene)?),
         })
     }
 }

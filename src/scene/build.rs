@@ -52,6 +52,9 @@ pub struct BuildOptions {
     pub scene_file: Option<std::path::PathBuf>,
     /// `--graph-data`: a graph file for the radiance-graph method.
     pub graph_data: Option<std::path::PathBuf>,
+    /// `--guide-cache`: trained trees for the guided method (loaded if they match the scene,
+    /// else trained and saved there).
+    pub guide_cache: Option<std::path::PathBuf>,
     /// `--spp`
     pub spp: Option<u32>,
     /// `--seed`
@@ -842,6 +845,9 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions) -> Result<Scene
         s.graph_data = opts.graph_data.clone();
         // graph_maker's default config: the scene's name with `.json`.
         s.config = opts.scene_file.as_ref().map(|f| f.with_extension("json")).filter(|c| c.exists());
+    }
+    if let IntegratorSettings::Guided(s) = &mut integrator {
+        s.cache = opts.guide_cache.clone();
     }
 
     // The film's sensor (pbrt-v4's imaging ratio: exposure time × ISO / 100).

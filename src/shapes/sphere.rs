@@ -195,7 +195,8 @@ impl Sphere {
         self.area() * s * s
     }
 
-    fn sample_area(&self, u: Vec2) -> Option<ShapeSample> {
+    /// A point uniform in area on the (clipped) sphere, density per unit area.
+    pub fn sample_area(&self, u: Vec2) -> Option<ShapeSample> {
         // Uniform on the full sphere, rejected against the clipping (rarely used: partial
         // sphere lights).
         for i in 0..16 {

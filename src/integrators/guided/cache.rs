@@ -1,0 +1,268 @@
+//! `--guide-cache FILE`: the trained trees are view-independent, so a later render (another
+//! camera, another spp) reuses them. The file is nimbus's own little-endian binary: a magic
+//! number, a version, a hash of what the trees depend on in the scene (its media, probed, its
+//! lights and its extent) and one of the training parameters, then the trees. A file from
+//! another scene, other training settings or another nimbus version is refused by name.
+
+use std::path::Path;
+
+use glam::{Affine3A, Vec3};
+
+use super::dtree::DTree;
+use super::sdtree::SdTree;
+use super::settings::GuidedSettings;
+use super::train::{Guide, TrainingStats};
+use crate::color::Rgb;
+use crate::geometry::Bounds3;
+use crate::media::{Medium, MediumKind};
+use crate::scene::Scene;
+
+const MAGIC: &[u8; 8] = b"NIMBUSGD";
+const VERSION: u32 = 2;
+
+/// FNV-1a, 64-bit: stable across Rust versions.
+struct Fnv(u64);
+
+impl Fnv {
+    fn new() -> Fnv {
+        Fnv(0xcbf2_9ce4_8422_2325)
+    }
+    fn bytes(&mut self, b: &[u8]) {
+        for &x in b {
+            self.0 = (self.0 ^ u64::from(x)).wrapping_mul(0x100_0000_01b3);
+        }
+    }
+    fn f32(&mut self, v: f32) {
+        self.bytes(&v.to_le_bytes());
+    }
+}
+
+/// Probes a grid medium at 16³ points of its box (σa and σs), so equal media hash equally
+/// whatever file they were read from, and changed ones differently.
+fn probe(h: &mut Fnv, m: &Medium, from_world: &Affine3A, bounds: &Bounds3) {
+    let world_from = from_world.inverse();
+    let n = 16;
+    for z in 0..n {
+        for y in 0..n {
+            for x in 0..n {
+                let t = (Vec3::new(x as f32, y as f32, z as f32) + 0.5) / n as f32;
+                let p = world_from.transform_point3(bounds.min + (bounds.max - bounds.min) * t);
+                let mp = m.sample_point::<Rgb>(p, &());
+                mp.sigma_a.to_array().iter().chain(mp.sigma_s.to_array().iter()).for_each(|&v| h.f32(v));
+            }
+        }
+    }
+}
+
+/// A hash of what the trees depend on in `scene`.
+pub fn scene_hash(scene: &Scene) -> u64 {
+    let mut h = Fnv::new();
+    for m in &scene.media {
+        h.bytes(m.name.as_bytes());
+        h.f32(m.g);
+        match &m.kind {
+            MediumKind::Homogeneous { sigma_a, sigma_s, le } => {
+                h.bytes(format!("{sigma_a:?}{sigma_s:?}{le:?}").as_bytes())
+            }
+            MediumKind::Grid(g) => probe(&mut h, m, &g.medium_from_world, &g.bounds),
+            MediumKind::RgbGrid(g) => probe(&mut h, m, &g.medium_from_world, &g.bounds),
+        }
+    }
+    for light in &scene.lights {
+        h.bytes(format!("{light:?}").as_bytes());
+    }
+    h.f32(scene.sphere.radius);
+    scene.sphere.center.to_array().iter().for_each(|&v| h.f32(v));
+    h.0
+}
+
+/// A hash of the parameters training depends on.
+fn settings_hash(s: &GuidedSettings) -> u64 {
+    let mut h = Fnv::new();
+    // `refractedshare` ends training early when no medium will be guided.
+    let key = (
+        s.max_depth,
+        s.training_iterations,
+        s.photons,
+        s.stree_threshold,
+        s.dtree_threshold,
+        s.max_memory_mib,
+        s.refracted_share,
+    );
+    h.bytes(format!("{key:?}").as_bytes());
+    h.0
+}
+
+/// Writes the trees of `guide`, trained for `scene` with `settings`.
+pub fn save(path: &Path, scene: &Scene, settings: &GuidedSettings, guide: &Guide) -> Result<(), String> {
+    let mut out = Vec::new();
+    out.extend_from_slice(MAGIC);
+    out.extend_from_slice(&VERSION.to_le_bytes());
+    out.extend_from_slice(&scene_hash(scene).to_le_bytes());
+    out.extend_from_slice(&settings_hash(settings).to_le_bytes());
+    let s = &guide.stats;
+    out.extend_from_slice(&s.photons.to_le_bytes());
+    out.extend_from_slice(&s.deposits.to_le_bytes());
+    out.extend_from_slice(&s.seconds.to_le_bytes());
+    out.extend_from_slice(&(guide.trees.len() as u32).to_le_bytes());
+    for (t, r) in guide.trees.iter().zip(&guide.refracted) {
+        out.extend_from_slice(&r.to_le_bytes());
+        match t {
+            None => out.push(0),
+            Some(t) => {
+                out.push(1);
+                t.write(&mut out);
+            }
+        }
+    }
+    std::fs::write(path, out).map_err(|e| format!("cannot write the guide cache {}: {e}", path.display()))
+}
+
+/// A cursor over a cache file's bytes that reports truncation.
+pub struct Reader<'a> {
+    bytes: &'a [u8],
+    at: usize,
+}
+
+impl Reader<'_> {
+    /// The next `n` bytes.
+    pub fn take(&mut self, n: usize) -> Result<&[u8], String> {
+        let end = self.at.checked_add(n).filter(|&e| e <= self.bytes.len()).ok_or("the file is truncated")?;
+        let s = &self.bytes[self.at..end];
+        self.at = end;
+        Ok(s)
+    }
+    /// A little-endian u32.
+    pub fn u32(&mut self) -> Result<u32, String> {
+        Ok(u32::from_le_bytes(self.take(4)?.try_into().unwrap()))
+    }
+    /// A little-endian u64.
+    pub fn u64(&mut self) -> Result<u64, String> {
+        Ok(u64::from_le_bytes(self.take(8)?.try_into().unwrap()))
+    }
+    /// A little-endian f32.
+    pub fn f32(&mut self) -> Result<f32, String> {
+        Ok(f32::from_le_bytes(self.take(4)?.try_into().unwrap()))
+    }
+    /// A count of items of at least `item_bytes` each, checked against what is left.
+    pub fn count(&mut self, item_bytes: usize) -> Result<usize, String> {
+        let n = self.u32()? as usize;
+        if n.saturating_mul(item_bytes) > self.bytes.len() - self.at {
+            return Err(format!("a count of {n} exceeds the file"));
+        }
+        Ok(n)
+    }
+}
+
+/// Reads trees saved for `scene` and `settings` from `path`.
+pub fn load(path: &Path, scene: &Scene, settings: &GuidedSettings) -> Result<Guide, String> {
+    let name = path.display();
+    let bytes = std::fs::read(path).map_err(|e| format!("cannot read the guide cache {name}: {e}"))?;
+    let mut r = Reader { bytes: &bytes, at: 0 };
+    let bad = |m: String| format!("the guide cache {name} cannot be used: {m}");
+    if r.take(8).map_err(bad)? != MAGIC {
+        return Err(bad("it is not a nimbus guide cache".into()));
+    }
+    let version = r.u32().map_err(bad)?;
+    if version != VERSION {
+        return Err(bad(format!("it was written by another nimbus (format {version}, this one reads {VERSION})")));
+    }
+    if r.u64().map_err(bad)? != scene_hash(scene) {
+        return Err(bad("it was trained for another scene (its media, lights or extent differ); \
+                        delete it or name another file to train anew"
+            .into()));
+    }
+    if r.u64().map_err(bad)? != settings_hash(settings) {
+        return Err(bad("it was trained with other training parameters (maxdepth, trainingiterations, photons, \
+                        streethreshold, dtreethreshold, maxmemory or refractedshare)"
+            .into()));
+    }
+    let stats = TrainingStats {
+        photons: r.u64().map_err(bad)?,
+        deposits: r.u64().map_err(bad)?,
+        seconds: f64::from_le_bytes(r.take(8).map_err(bad)?.try_into().unwrap()),
+    };
+    let n = r.count(1).map_err(bad)?;
+    if n != scene.media.len() {
+        return Err(bad(format!("it has trees for {n} media, the scene has {}", scene.media.len())));
+    }
+    let (mut trees, mut refracted) = (Vec::with_capacity(n), Vec::with_capacity(n));
+    for _ in 0..n {
+        let share = r.f32().map_err(bad)?;
+        if !(0.0..=1.0).contains(&share) {
+            return Err(bad(format!("a medium's refracted share is {share}")));
+        }
+        refracted.push(share);
+        trees.push(match r.take(1).map_err(bad)?[0] {
+            0 => None,
+            1 => Some(SdTree::read(&mut r).map_err(bad)?),
+            t => return Err(bad(format!("unknown tree tag {t}"))),
+        });
+    }
+    if r.at != bytes.len() {
+        return Err(bad("it has bytes after its trees".into()));
+    }
+    let active = trees.iter().map(Option::is_some).collect();
+    Ok(Guide { trees, refracted, active, stats })
+}
+
+/// Serialisation of the trees (here, so the tree modules stay about trees).
+impl SdTree {
+    fn write(&self, out: &mut Vec<u8>) {
+        let b = self.bounds();
+        for v in [b.min, b.max] {
+            v.to_array().iter().for_each(|x| out.extend_from_slice(&x.to_le_bytes()));
+        }
+        let (nodes, dtrees) = self.parts();
+        out.extend_from_slice(&(nodes.len() as u32).to_le_bytes());
+        for &(axis, child, dtree) in &nodes {
+            out.push(axis);
+            out.extend_from_slice(&child.to_le_bytes());
+            out.extend_from_slice(&dtree.to_le_bytes());
+        }
+        out.extend_from_slice(&(dtrees.len() as u32).to_le_bytes());
+        for d in dtrees {
+            let (count, nodes) = d.parts();
+            out.extend_from_slice(&count.to_le_bytes());
+            out.extend_from_slice(&(nodes.len() as u32).to_le_bytes());
+            for (sums, children) in nodes {
+                sums.iter().for_each(|x| out.extend_from_slice(&x.to_le_bytes()));
+                children.iter().for_each(|x| out.extend_from_slice(&x.to_le_bytes()));
+            }
+        }
+    }
+
+    fn read(r: &mut Reader<'_>) -> Result<SdTree, String> {
+        let mut v = [0.0f32; 6];
+        for x in &mut v {
+            *x = r.f32()?;
+        }
+        let bounds = Bounds3::new(Vec3::new(v[0], v[1], v[2]), Vec3::new(v[3], v[4], v[5]));
+        let n = r.count(9)?;
+        let mut nodes = Vec::with_capacity(n);
+        for _ in 0..n {
+            let axis = r.take(1)?[0];
+            nodes.push((axis, r.u32()?, r.u32()?));
+        }
+        let n = r.count(12)?;
+        let mut dtrees = Vec::with_capacity(n);
+        for _ in 0..n {
+            let count = r.u64()?;
+            let m = r.count(32)?;
+            let mut dn = Vec::with_capacity(m);
+            for _ in 0..m {
+                let mut sums = [0.0f32; 4];
+                for s in &mut sums {
+                    *s = r.f32()?;
+                }
+                let mut children = [0u32; 4];
+                for c in &mut children {
+                    *c = r.u32()?;
+                }
+                dn.push((sums, children));
+            }
+            dtrees.push(DTree::from_parts(count, dn)?);
+        }
+        SdTree::from_parts(bounds, nodes, dtrees)
+    }
+}

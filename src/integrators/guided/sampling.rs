@@ -49,8 +49,13 @@ fn guide_pdf(tree: &DTree, eps: f32, d: Vec3) -> f32 {
 #[inline]
 fn sample_guide(tree: &DTree, eps: f32, rng: &mut Pcg32) -> Option<(Vec3, f32)> {
     let u = Vec2::new(rng.uniform(), rng.uniform());
-    let d = if rng.uniform() < eps { uniform_sphere(u) } else { tree.sample(u)?.0 };
-    Some((d, guide_pdf(tree, eps, d)))
+    if rng.uniform() < eps {
+        let d = uniform_sphere(u);
+        return Some((d, guide_pdf(tree, eps, d)));
+    }
+    // The tree's own density comes with its sample (one descent instead of two).
+    let (d, pdf) = tree.sample(u)?;
+    Some((d, (1.0 - eps) * pdf + eps * UNIFORM_SPHERE_PDF))
 }
 
 /// Draws the continuation at a medium vertex with phase function `phase` (`wo` pointing back
@@ -85,19 +90,18 @@ pub fn sample(
     let mut w_sum = 0.0f32;
     let mut chosen: Option<(Vec3, f32, f32)> = None;
     for _ in 0..s.candidates {
-        let wi = if rng.uniform() < lambda {
+        // (direction, phase value, guide density), each computed once.
+        let (wi, p, gp) = if rng.uniform() < lambda {
             match phase.sample_p(wo, Vec2::new(rng.uniform(), rng.uniform())) {
-                Some(ps) => ps.wi,
+                Some(ps) => (ps.wi, ps.p, guide_pdf(tree, eps, ps.wi)),
                 None => continue,
             }
         } else {
             match sample_guide(tree, eps, rng) {
-                Some((d, _)) => d,
+                Some((d, gp)) => (d, phase.p(wo, d), gp),
                 None => continue,
             }
         };
-        let p = phase.p(wo, wi);
-        let gp = guide_pdf(tree, eps, wi);
         let source = lambda * p + (1.0 - lambda) * gp;
         if source <= 0.0 {
             continue;

@@ -183,3 +183,48 @@ fn bad_parameters_name_the_place() {
         assert!(!out.status.success() && err.contains("bad.pbrt:5") && err.contains(name), "{params}: {err}");
     }
 }
+
+/// A medium lit directly (no refractive boundary) is not guided by default: the image is
+/// volpath's bit for bit (the training costs, the render does not). With `refractedshare 0`
+/// it is guided, and photons find it from an area light inside it whose shape names the
+/// medium on both sides (`MediumInterface "fog" "fog"`), as well as from one with no
+/// interface of its own.
+#[test]
+fn unguided_media_render_volpath_and_lights_inside_media_are_found() {
+    let scene = |integrator: &str, params: &str, light_interface: &str| {
+        format!(
+            r#"LookAt 0 1 4  0 0.5 0  0 1 0
+Camera "perspective" "float fov" 40
+Film "rgb" "integer xresolution" 16 "integer yresolution" 16
+Sampler "zsobol" "integer pixelsamples" 4
+Integrator "{integrator}" "integer maxdepth" 8 {params}
+MediumInterface "fog" "fog"
+WorldBegin
+MakeNamedMedium "fog" "string type" "homogeneous" "rgb sigma_a" [0.02 0.02 0.02] "rgb sigma_s" [0.3 0.3 0.3]
+AttributeBegin
+  MediumInterface "fog" ""
+  Material "interface"
+  Shape "sphere" "float radius" 10
+AttributeEnd
+AttributeBegin
+  {light_interface}
+  Translate 0.5 1 0
+  AreaLightSource "diffuse" "rgb L" [5 5 5]
+  Shape "sphere" "float radius" 0.2
+AttributeEnd
+Material "diffuse" "rgb reflectance" [0.5 0.5 0.5]
+Shape "trianglemesh" "integer indices" [0 1 2 0 2 3] "point3 P" [-4 0 -4  4 0 -4  4 0 4  -4 0 4]
+"#
+        )
+    };
+    let opts = BuildOptions { seed: Some(2), ..Default::default() };
+    let fog = r#"MediumInterface "fog" "fog""#;
+    let guided = load_scene(&scene("guided", SMALL, fog), &opts);
+    let volpath = load_scene(&scene("volpath", "", fog), &opts);
+    assert_eq!(render_scene(&guided).pixels, render_scene(&volpath).pixels);
+    for light_interface in [fog, ""] {
+        let all = load_scene(&scene("guided", &format!(r#"{SMALL} "float refractedshare" 0"#), light_interface), &opts);
+        let report = all.integrator.create(&all).unwrap().report().join("\n");
+        assert!(report.contains("fog guided (0 % refracted)"), "{light_interface:?}: {report}");
+    }
+}

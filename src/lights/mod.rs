@@ -65,6 +65,9 @@ pub enum LightKind {
         two_sided: bool,
         /// Surface area (world space).
         area: f32,
+        /// The emitting shape's medium interface index, or [`crate::accel::NONE`]: the media on
+        /// its two sides (light tracing starts in the one it leaves towards).
+        interface: u32,
     },
 }
 

@@ -537,7 +537,13 @@ impl ShapeBuilder<'_> {
                 let l = area_light_radiance(&settings, al_entity, area, &self.spectra)?;
                 prim.area_light = self.lights.len() as u32;
                 self.lights.push(Light {
-                    kind: LightKind::Area { geometry: prim.geometry, l, two_sided: settings.two_sided, area },
+                    kind: LightKind::Area {
+                        geometry: prim.geometry,
+                        l,
+                        two_sided: settings.two_sided,
+                        area,
+                        interface: prim.interface,
+                    },
                     medium: NONE,
                 });
             }

@@ -85,14 +85,17 @@ impl Guided {
 /// The path loop's observer: guides scattering in media, records nothing.
 struct GuidingObserver<'a> {
     guide: &'a Guide,
+    /// Whether any medium is guided.
+    any_active: bool,
     scene: &'a Scene,
     strategy: &'a Strategy,
 }
 
 impl<C: Channels> PathObserver<C> for GuidingObserver<'_> {
+    /// Only where a medium is guided: otherwise the path is volpath's, sample for sample.
     #[inline]
     fn guides(&self) -> bool {
-        true
+        self.any_active
     }
 
     fn guide_medium(
@@ -126,7 +129,12 @@ impl Guided {
         sampler: &mut Sampler,
         stats: &mut RayStats,
     ) -> C {
-        let mut observer = GuidingObserver { guide: &self.guide, scene, strategy: &self.strategy };
+        let mut observer = GuidingObserver {
+            guide: &self.guide,
+            any_active: self.guide.active.iter().any(|&a| a),
+            scene,
+            strategy: &self.strategy,
+        };
         trace_path(scene, ray, scene.camera_medium, lambda, sampler, &self.config, &mut observer, stats)
     }
 }

@@ -122,6 +122,7 @@ impl Emitter {
             };
             (d, pdf)
         };
+        let mut medium = light.medium;
         let (ray, power) = match &light.kind {
             LightKind::Point { p, i } => {
                 let (d, pdf) = leave(*p, &warp::uniform_sphere, &|_| warp::UNIFORM_SPHERE_PDF);
@@ -149,7 +150,7 @@ impl Emitter {
                 let (ray, area) = from_infinity(w, u);
                 (ray, l * (area / pdf))
             }
-            LightKind::Area { geometry, l, two_sided, .. } => {
+            LightKind::Area { geometry, l, two_sided, interface, .. } => {
                 let shapes = &scene.surfaces.shapes;
                 let s = match *geometry {
                     Geometry::Triangle { mesh, tri } => triangle_sample(&shapes.meshes[mesh as usize], tri, u),
@@ -177,13 +178,38 @@ impl Emitter {
                     return None;
                 }
                 let power = C::eval(l, lambda) * (cos.abs() / (pdf * s.pdf));
-                (spawn_ray(s.p, if cos > 0.0 { n } else { -n }, d), power)
+                let ray = spawn_ray(s.p, if cos > 0.0 { n } else { -n }, d);
+                // The medium on the side the photon leaves towards: the shape's interface says,
+                // else the medium whose boundary encloses the light.
+                medium = if *interface != NONE {
+                    let [inside, outside] = scene.interfaces[*interface as usize];
+                    if cos > 0.0 { outside } else { inside }
+                } else {
+                    medium_containing(scene, ray)
+                };
+                (ray, power)
             }
         };
         let power = power / pick.pmf;
         let delta = matches!(light.kind, LightKind::Point { .. } | LightKind::Spot { .. } | LightKind::Distant { .. });
-        (power.max_element() > 0.0 && power.is_finite()).then_some(Photon { ray, medium: light.medium, power, delta })
+        (power.max_element() > 0.0 && power.is_finite()).then_some(Photon { ray, medium, power, delta })
     }
+}
+
+/// The medium a ray starts in, found from the first medium boundary it crosses (the side it
+/// came from), passing through other surfaces; [`NONE`] when it crosses none. Camera paths
+/// learn their media from the camera's; a light without a medium interface of its own is
+/// found this way, as a path from the camera reaching it would be in that medium.
+fn medium_containing(scene: &Scene, mut ray: Ray) -> u32 {
+    for _ in 0..64 {
+        let Some(hit) = scene.surfaces.intersect(&ray, f32::INFINITY) else { return NONE };
+        if hit.prim.interface != NONE {
+            let [inside, outside] = scene.interfaces[hit.prim.interface as usize];
+            return if ray.d.dot(hit.surface.n) > 0.0 { inside } else { outside };
+        }
+        ray = spawn_ray(hit.surface.p, hit.surface.n, ray.d);
+    }
+    NONE
 }
 
 /// Traces `photon` for at most `max_depth` scattering events (in media and at surfaces), and

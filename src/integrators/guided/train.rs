@@ -171,7 +171,9 @@ fn trace_photons_in<C: Channels>(
 pub fn train(scene: &Scene, settings: &GuidedSettings) -> Guide {
     let t0 = Instant::now();
     let mut stats = TrainingStats::default();
-    let Some(mut emitter) = Emitter::new(scene) else {
+    // Without media there is nothing to learn (and no photon is traced).
+    let emitter = if scene.media.is_empty() { None } else { Emitter::new(scene) };
+    let Some(mut emitter) = emitter else {
         let n = scene.media.len();
         return Guide { trees: vec![None; n], refracted: vec![0.0; n], active: vec![false; n], stats };
     };

@@ -40,6 +40,10 @@ pub struct BenchArgs {
     /// Also write the results as JSON.
     #[arg(long)]
     json: Option<PathBuf>,
+    /// Time this integrator instead of the scenes' (its precomputation, e.g. guided's
+    /// training, counts in the time), against pbrt-v4's VolPath figures.
+    #[arg(long)]
+    integrator: Option<String>,
 }
 
 /// pbrt-v4's figures for one scene.
@@ -112,8 +116,14 @@ fn baseline_seconds() -> f64 {
 }
 
 /// The build options of one timed run.
-fn options(spp: u32, seed: i32, mode: SpectralMode) -> BuildOptions {
-    BuildOptions { spp: Some(spp), seed: Some(seed), spectral: Some(mode), ..Default::default() }
+fn options(spp: u32, seed: i32, mode: SpectralMode, integrator: Option<&str>) -> BuildOptions {
+    BuildOptions {
+        spp: Some(spp),
+        seed: Some(seed),
+        spectral: Some(mode),
+        integrator: integrator.map(String::from),
+        ..Default::default()
+    }
 }
 
 /// One run: parse, build and render (pbrt-v4's wall time includes them all).
@@ -188,6 +198,9 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode> {
     let pool = rayon::ThreadPoolBuilder::new().num_threads(args.nthreads.max(1)).build()?;
     let base = baseline_seconds();
     println!("baseline (fixed CPU workload): {base:.3} s; {} threads, {} spp", args.nthreads, args.spp);
+    if let Some(i) = &args.integrator {
+        println!("integrator: {i} (the scenes' own otherwise); pbrt-v4's figures are its VolPath's");
+    }
     println!("equal error: speed-up = (pbrt-v4 s × pbrt-v4 MSE) / (nimbus s × nimbus MSE), as MSE ∝ 1/time");
     println!(
         "| scene | transport | nimbus s | pbrt-v4 s | speed-up (equal spp) | nimbus MSE | pbrt-v4 MSE | speed-up (equal error) |"
@@ -214,7 +227,9 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode> {
             let mut transport = "";
             let mut failed = None;
             for k in 0..args.repeat.max(2) {
-                match pool.install(|| run_once(path, &options(args.spp, 1 + (k % 2) as i32, mode))) {
+                match pool.install(|| {
+                    run_once(path, &options(args.spp, 1 + (k % 2) as i32, mode, args.integrator.as_deref()))
+                }) {
                     Ok((t, img, tr)) => {
                         times.push(t);
                         transport = tr;
@@ -276,7 +291,8 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode> {
     if let Some(path) = &args.json {
         let rows: Vec<serde_json::Value> = rows.iter().map(Row::to_json).collect();
         let doc = serde_json::json!({
-            "baseline_seconds": base, "spp": args.spp, "threads": args.nthreads, "rows": rows, "failures": failures,
+            "baseline_seconds": base, "spp": args.spp, "threads": args.nthreads, "integrator": args.integrator,
+            "rows": rows, "failures": failures,
         });
         std::fs::write(path, serde_json::to_string_pretty(&doc)?)
             .with_context(|| format!("{}: cannot write", path.display()))?;

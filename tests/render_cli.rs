@@ -72,14 +72,35 @@ fn time_budget_renders_progressively() {
 fn unknown_integrator_lists_the_available_ones() {
     let dir = scratch_dir("render-integrator");
     let scene = dir.join("s.pbrt");
-    std::fs::write(&scene, SMALL.replace("WorldBegin", "Integrator \"bdpt\"\nWorldBegin")).unwrap();
-    let out = nimbus(&["render", scene.to_str().unwrap(), "--quiet", "--outfile", dir.join("x.exr").to_str().unwrap()]);
+    let exr = dir.join("x.exr");
+    let render = |integrator: &str, extra: &[&str]| {
+        std::fs::write(&scene, SMALL.replace("WorldBegin", &format!("Integrator \"{integrator}\"\nWorldBegin")))
+            .unwrap();
+        let mut args = vec!["render", scene.to_str().unwrap(), "--quiet", "--outfile", exr.to_str().unwrap()];
+        args.extend_from_slice(extra);
+        nimbus(&args)
+    };
+    let out = render("nosuchmethod", &[]);
     assert_eq!(out.status.code(), Some(1));
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(
-        stderr.contains("s.pbrt:5:1: error: integrator \"bdpt\" is not available in nimbus (it has: volpath"),
+        stderr.contains("s.pbrt:5:1: error: integrator \"nosuchmethod\" is not available in nimbus (it has: volpath"),
         "{stderr}"
     );
+    // pbrt-v4's integrators nimbus lacks are refused with the one that computes their image...
+    let out = render("bdpt", &[]);
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("s.pbrt:5:1: error: integrator \"bdpt\"") && stderr.contains("\"volpath\""), "{stderr}");
+    // ...unless --integrator chooses another, which is no complaint.
+    let out = render("bdpt", &["--integrator", "volpath"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(!String::from_utf8_lossy(&out.stderr).contains("bdpt"));
+    // pbrt-v4's surface path tracer runs as volpath, with a note.
+    let out = render("path", &[]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("integrator \"path\"") && stderr.contains("runs as \"volpath\""), "{stderr}");
     let out = nimbus(&["render", dir.join("nope.pbrt").to_str().unwrap(), "--quiet"]);
     assert_eq!(out.status.code(), Some(1));
 }

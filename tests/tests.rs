@@ -5,6 +5,7 @@ mod check;
 mod common;
 mod compare;
 mod guided;
+mod materials;
 mod media;
 mod pathgraph;
 mod radiancegraph;

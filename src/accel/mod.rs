@@ -11,7 +11,9 @@ use obvhs::ray::{Ray as BvhRay, RayHit};
 use obvhs::{Boundable, BvhBuildParams};
 
 use crate::geometry::{Bounds3, Ray};
-use crate::shapes::{Cylinder, Disk, Mesh, Sphere, SurfaceHit, transform_normal, triangle_hit};
+use crate::shapes::{
+    Cylinder, Disk, Mesh, Sphere, SurfaceHit, transform_normal, transform_normal_unnormalized, triangle_hit,
+};
 
 /// Marks an absent index (no area light, no medium interface, not instanced).
 pub const NONE: u32 = u32::MAX;
@@ -310,6 +312,9 @@ impl Surfaces {
                 ns: transform_normal(&inst.instance_from_world, local.ns),
                 uv: local.uv,
                 dpdu: w.transform_vector3(local.dpdu),
+                dpdv: w.transform_vector3(local.dpdv),
+                dndu: transform_normal_unnormalized(&inst.instance_from_world, local.dndu),
+                dndv: transform_normal_unnormalized(&inst.instance_from_world, local.dndv),
             }
         };
         Some(Hit { surface, prim: c.prim })

@@ -1,7 +1,9 @@
-//! Geometry shared by shapes and integrators: rays, bounds and mesh file formats.
+//! Geometry shared by shapes and integrators: rays, bounds, mesh file formats and mesh
+//! refinement.
 
 mod bounds;
 pub mod gltf;
+pub mod loop_subdiv;
 pub mod obj;
 pub mod ply;
 mod ray;

@@ -43,6 +43,32 @@ pub fn canonical_name(name: &str) -> &str {
     }
 }
 
+/// What nimbus says about a pbrt-v4 integrator it does not have: `Ok(note)` when the scene
+/// renders with `volpath` instead (the note says why that is the same image), `Err(reason)`
+/// when it is refused (the reason names the nimbus integrator that computes its image).
+/// `None` for names nimbus has or does not know.
+pub fn pbrt_v4_substitute(name: &str) -> Option<Result<&'static str, &'static str>> {
+    Some(match name {
+        "path" | "simplepath" => {
+            Ok("pbrt-v4's surface path tracer runs as \"volpath\", which computes the same image for surfaces \
+             (and, unlike it, also renders the scene's participating media)")
+        }
+        "randomwalk" => Ok("pbrt-v4's random-walk integrator runs as \"volpath\": the same image (the random walk's \
+             expectation) with next-event estimation and far less noise"),
+        "bdpt" => Err("bidirectional path tracing is not in nimbus; \"volpath\" converges to the same image"),
+        "mlt" => Err("Metropolis light transport is not in nimbus; \"volpath\" converges to the same image"),
+        "sppm" => {
+            Err("stochastic progressive photon mapping is not in nimbus; \"volpath\" converges to the same image")
+        }
+        "lightpath" => Err("light tracing is not in nimbus; \"volpath\" converges to the same image"),
+        "ambientocclusion" => {
+            Err("ambient occlusion is not light transport and nimbus has no integrator that computes it")
+        }
+        "function" => Err("pbrt-v4's function-integration test harness is not a renderer; nimbus has none"),
+        _ => return None,
+    })
+}
+
 /// Names of the integrators nimbus has.
 pub const INTEGRATOR_NAMES: &[&str] = &["volpath", "simplevolpath", "radiancegraph", "pathgraph", "guided"];
 
@@ -60,10 +86,34 @@ impl IntegratorSettings {
             }
             "pathgraph" => Ok(IntegratorSettings::PathGraph(pathgraph::PathGraphSettings::from_entity(e)?)),
             "guided" => Ok(IntegratorSettings::Guided(guided::GuidedSettings::from_entity(e)?)),
-            other => Err(Error::new(
-                &e.loc,
-                format!("integrator \"{other}\" is not available in nimbus (it has: {})", INTEGRATOR_NAMES.join(", ")),
-            )),
+            other => match pbrt_v4_substitute(other) {
+                Some(Ok(_)) => Ok(IntegratorSettings::VolPath(volpath::VolPathSettings::from_entity(e)?)),
+                Some(Err(reason)) => Err(Error::new(
+                    &e.loc,
+                    format!(
+                        "integrator \"{other}\": {reason} (use `Integrator \"volpath\"` or `--integrator volpath`)"
+                    ),
+                )),
+                None => Err(Error::new(
+                    &e.loc,
+                    format!(
+                        "integrator \"{other}\" is not available in nimbus (it has: {})",
+                        INTEGRATOR_NAMES.join(", ")
+                    ),
+                )),
+            },
+        }
+    }
+
+    /// The note for a scene whose integrator runs as another (pbrt-v4's `path` as
+    /// `volpath`), unless `name_override` chose the method.
+    pub fn substitution_note(e: &Entity, name_override: Option<&str>) -> Option<nimbus_parser::Warning> {
+        if name_override.is_some() {
+            return None;
+        }
+        match pbrt_v4_substitute(&e.name) {
+            Some(Ok(note)) => Some(nimbus_parser::Warning::new(&e.loc, format!("integrator \"{}\": {note}", e.name))),
+            _ => None,
         }
     }
 

@@ -1,10 +1,14 @@
 //! Materials at render time: texture inputs resolved to [`Tex`], turned into a BxDF at each
 //! surface hit.
 
+use glam::Vec3;
+
 use super::bxdf::{
-    Bxdf, CoatedDiffuseBxdf, ConductorBxdf, DielectricBxdf, DiffuseBxdf, ThinDielectricBxdf, TrowbridgeReitz,
+    Bxdf, CoatedConductorBxdf, CoatedDiffuseBxdf, ConductorBxdf, DielectricBxdf, DiffuseBxdf, DiffuseTransmissionBxdf,
+    ThinDielectricBxdf, TrowbridgeReitz,
 };
 use crate::color::Channels;
+use crate::sampling::rng::murmur_hash64a;
 use crate::spectra::{RgbRole, SpectrumValue};
 use crate::textures::{Tex, TexContext, Textures};
 
@@ -40,6 +44,38 @@ pub enum ConductorInput {
     },
     /// Normal-incidence reflectance (spectrum texture).
     Reflectance(Tex),
+}
+
+impl ConductorInput {
+    fn bxdf<C: Channels>(
+        &self,
+        d: TrowbridgeReitz,
+        textures: &Textures,
+        ctx: &TexContext,
+        lambda: &C::Lambda,
+    ) -> ConductorBxdf<C> {
+        match self {
+            ConductorInput::EtaK { eta, k, scale } => {
+                let eta = textures.eval::<C>(*eta, ctx, lambda, RgbRole::Unbounded);
+                let k = textures.eval::<C>(*k, ctx, lambda, RgbRole::Unbounded);
+                ConductorBxdf::new(d, eta, k).with_fresnel_scale(C::eval(scale, lambda))
+            }
+            ConductorInput::Reflectance(r) => {
+                let r = textures.eval::<C>(*r, ctx, lambda, RgbRole::Albedo);
+                ConductorBxdf::from_reflectance(d, r)
+            }
+        }
+    }
+
+    fn chromatic(&self, textures: &Textures) -> Option<&'static str> {
+        let chromatic = |t: &Tex| textures.is_chromatic(*t);
+        match self {
+            ConductorInput::EtaK { eta, k, scale } => {
+                (chromatic(eta) || chromatic(k) || !scale.is_constant()).then_some("eta/k")
+            }
+            ConductorInput::Reflectance(r) => chromatic(r).then_some("reflectance"),
+        }
+    }
 }
 
 /// A material ready to produce BxDFs.
@@ -88,8 +124,81 @@ pub enum Material {
         /// Walks per evaluation.
         n_samples: u32,
     },
+    /// Dielectric coating over a conductor.
+    CoatedConductor {
+        /// Coating roughness.
+        interface_roughness: RoughnessTex,
+        /// Coating thickness (float texture).
+        thickness: Tex,
+        /// Coating IOR.
+        interface_eta: SpectrumValue,
+        /// The conductor's optical constants (relative to vacuum: divided by the coating's η
+        /// per hit).
+        conductor: ConductorInput,
+        /// The conductor's roughness.
+        conductor_roughness: RoughnessTex,
+        /// Albedo of the medium in the coating.
+        albedo: Tex,
+        /// Its asymmetry (float texture).
+        g: Tex,
+        /// Random-walk depth.
+        max_depth: u32,
+        /// Walks per evaluation.
+        n_samples: u32,
+    },
+    /// Lambertian reflection and transmission.
+    DiffuseTransmission {
+        /// Reflectance (spectrum texture).
+        reflectance: Tex,
+        /// Transmittance (spectrum texture).
+        transmittance: Tex,
+        /// Factor on both.
+        scale: f32,
+    },
+    /// One of two materials per hit, chosen by [`resolve`].
+    Mix {
+        /// Indices of the two materials in the scene's table.
+        materials: [u32; 2],
+        /// Probability of the second (float texture).
+        amount: Tex,
+    },
     /// A medium boundary with no scattering of its own.
     Interface,
+}
+
+/// The material a hit at `ctx.p` seen from `wo` scatters with: `mix` materials are resolved
+/// by pbrt-v4's deterministic choice (`MixMaterial::ChooseMaterial`): the second material
+/// where a hash of the hit point, `wo` and the pair is below `amount`. The hash makes the
+/// choice the same for every ray that reaches the same point from the same direction
+/// (shadow rays and camera rays agree); pbrt-v4 hashes the materials' addresses, nimbus
+/// their indices, so the pattern differs while its statistics do not.
+/// Returns the chosen material's index.
+pub fn resolve(materials: &[Material], id: u32, textures: &Textures, ctx: &TexContext, wo: Vec3) -> u32 {
+    let mut id = id;
+    // Mix cycles are refused when the scene is built, so this ends.
+    while let Material::Mix { materials: pair, amount } = &materials[id as usize] {
+        let amount = textures.eval_float(*amount, ctx);
+        let second = if amount <= 0.0 {
+            false
+        } else if amount >= 1.0 {
+            true
+        } else {
+            amount >= mix_hash(ctx.p, wo, *pair)
+        };
+        id = pair[second as usize];
+    }
+    id
+}
+
+/// A uniform number in [0, 1) from the bytes of `p`, `wo` and the pair (pbrt-v4's `HashFloat`).
+fn mix_hash(p: Vec3, wo: Vec3, pair: [u32; 2]) -> f32 {
+    let mut bytes = [0u8; 32];
+    for (i, x) in [p.x, p.y, p.z, wo.x, wo.y, wo.z].iter().enumerate() {
+        bytes[4 * i..4 * i + 4].copy_from_slice(&x.to_le_bytes());
+    }
+    bytes[24..28].copy_from_slice(&pair[0].to_le_bytes());
+    bytes[28..32].copy_from_slice(&pair[1].to_le_bytes());
+    (murmur_hash64a(&bytes, 0) as u32) as f32 * (1.0 / 4_294_967_296.0)
 }
 
 impl Material {
@@ -100,15 +209,32 @@ impl Material {
     }
 
     /// The first input that varies with wavelength, by parameter name, or `None` when RGB
-    /// transport carries the material exactly (every input gray, η constant).
-    pub fn chromatic_input(&self, textures: &Textures) -> Option<&'static str> {
+    /// transport carries the material exactly (every input gray, η constant). `materials`
+    /// is the scene's table, for the parts of a `mix`.
+    pub fn chromatic_input(&self, materials: &[Material], textures: &Textures) -> Option<&'static str> {
         let chromatic = |t: &Tex| textures.is_chromatic(*t);
         match self {
             Material::Diffuse { reflectance } => chromatic(reflectance).then_some("reflectance"),
-            Material::Conductor { input: ConductorInput::EtaK { eta, k, scale }, .. } => {
-                (chromatic(eta) || chromatic(k) || !scale.is_constant()).then_some("eta/k")
+            Material::Conductor { input, .. } => input.chromatic(textures),
+            Material::CoatedConductor { interface_eta, conductor, albedo, .. } => {
+                conductor.chromatic(textures).or_else(|| {
+                    if chromatic(albedo) {
+                        Some("albedo")
+                    } else {
+                        (!interface_eta.is_constant()).then_some("interface.eta (dispersion)")
+                    }
+                })
             }
-            Material::Conductor { input: ConductorInput::Reflectance(r), .. } => chromatic(r).then_some("reflectance"),
+            Material::DiffuseTransmission { reflectance, transmittance, .. } => {
+                if chromatic(reflectance) {
+                    Some("reflectance")
+                } else {
+                    chromatic(transmittance).then_some("transmittance")
+                }
+            }
+            Material::Mix { materials: pair, .. } => {
+                pair.iter().find_map(|&i| materials[i as usize].chromatic_input(materials, textures))
+            }
             Material::Dielectric { eta, .. } | Material::ThinDielectric { eta } => {
                 (!eta.is_constant()).then_some("eta (dispersion)")
             }
@@ -133,19 +259,40 @@ impl Material {
         Some(match self {
             Material::Diffuse { reflectance } => Bxdf::Diffuse(DiffuseBxdf::new(albedo(*reflectance, lambda))),
             Material::Conductor { input, roughness } => {
-                let d = roughness.distribution(textures, ctx);
-                match input {
-                    ConductorInput::EtaK { eta, k, scale } => {
-                        let eta = textures.eval::<C>(*eta, ctx, lambda, RgbRole::Unbounded);
-                        let k = textures.eval::<C>(*k, ctx, lambda, RgbRole::Unbounded);
-                        Bxdf::Conductor(ConductorBxdf::new(d, eta, k).with_fresnel_scale(C::eval(scale, lambda)))
-                    }
-                    ConductorInput::Reflectance(r) => {
-                        let r = textures.eval::<C>(*r, ctx, lambda, RgbRole::Albedo);
-                        Bxdf::Conductor(ConductorBxdf::from_reflectance(d, r))
-                    }
-                }
+                Bxdf::Conductor(input.bxdf::<C>(roughness.distribution(textures, ctx), textures, ctx, lambda))
             }
+            Material::CoatedConductor {
+                interface_roughness,
+                thickness,
+                interface_eta,
+                conductor,
+                conductor_roughness,
+                albedo: medium_albedo,
+                g,
+                max_depth,
+                n_samples,
+            } => {
+                let eta = C::eta(interface_eta, lambda);
+                let eta = if eta == 0.0 { 1.0 } else { eta };
+                let top = DielectricBxdf::new(eta, interface_roughness.distribution(textures, ctx));
+                let bottom = conductor
+                    .bxdf::<C>(conductor_roughness.distribution(textures, ctx), textures, ctx, lambda)
+                    .relative_to(eta);
+                Bxdf::CoatedConductor(CoatedConductorBxdf::new(
+                    top,
+                    bottom,
+                    textures.eval_float(*thickness, ctx),
+                    albedo(*medium_albedo, lambda),
+                    textures.eval_float(*g, ctx).clamp(-1.0, 1.0),
+                    *max_depth,
+                    *n_samples,
+                ))
+            }
+            Material::DiffuseTransmission { reflectance, transmittance, scale } => {
+                let scaled = |t: Tex| (textures.eval::<C>(t, ctx, lambda, RgbRole::Albedo) * *scale).clamp(0.0, 1.0);
+                Bxdf::DiffuseTransmission(DiffuseTransmissionBxdf::new(scaled(*reflectance), scaled(*transmittance)))
+            }
+            Material::Mix { .. } => unreachable!("mix materials are resolved before their BxDF is asked for"),
             Material::Dielectric { eta, roughness } => {
                 Bxdf::Dielectric(DielectricBxdf::new(C::eta(eta, lambda), roughness.distribution(textures, ctx)))
             }

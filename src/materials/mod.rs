@@ -3,5 +3,7 @@
 
 pub mod bxdf;
 mod material;
+mod shading;
 
-pub use material::{ConductorInput, Material, RoughnessTex};
+pub use material::{ConductorInput, Material, RoughnessTex, resolve};
+pub use shading::ShadingPerturbation;

@@ -32,7 +32,7 @@ use crate::geometry::Bounds3;
 use crate::geometry::ply::read_ply;
 use crate::integrators::IntegratorSettings;
 use crate::lights::{EnvironmentMap, Light, LightKind, LightSampler, SceneSphere};
-use crate::materials::{ConductorInput, Material, RoughnessTex};
+use crate::materials::{ConductorInput, Material, RoughnessTex, ShadingPerturbation, resolve};
 use crate::math::Frame;
 use crate::media::dense::DenseGrid;
 use crate::media::grid::VdbFile;
@@ -40,7 +40,7 @@ use crate::media::{Density, Emission, Field, Medium};
 use crate::shapes::{Cylinder, Disk, Mesh, Sphere, uniform_scale};
 use crate::spectra::RgbRole;
 use crate::spectra::{BlackbodyRgbTable, PixelSensor, SpectrumValue};
-use crate::textures::{Tex, TexMapping, TexNode, Textures, Wrap};
+use crate::textures::{Tex, TexContext, TexMapping, TexNode, Textures, Wrap};
 
 /// Command-line choices that override the scene file (pbrt-v4's flags).
 #[derive(Clone, Debug, Default)]
@@ -102,6 +102,8 @@ pub struct Scene {
     pub surfaces: Surfaces,
     /// Materials, indexed by primitives.
     pub materials: Vec<Material>,
+    /// Each material's bump or normal map, indexed like `materials`.
+    pub shading: Vec<ShadingPerturbation>,
     /// Texture nodes.
     pub textures: Textures,
     /// Lights (area lights first, one per emitting primitive).
@@ -135,6 +137,19 @@ pub struct Scene {
 }
 
 impl Scene {
+    /// The material that scatters at `hit` seen from `wo` (`mix` resolved), with the hit's
+    /// shading normal and tangents replaced by the material's bump or normal map.
+    #[inline]
+    pub fn surface_material(&self, hit: &mut crate::accel::Hit, wo: Vec3) -> &Material {
+        let s = &mut hit.surface;
+        let id = resolve(&self.materials, hit.prim.material, &self.textures, &TexContext { p: s.p, uv: s.uv }, wo);
+        let shading = &self.shading[id as usize];
+        if !shading.is_none() {
+            shading.apply(&self.textures, s);
+        }
+        &self.materials[id as usize]
+    }
+
     /// The matrix from what the film accumulates to output RGB: for RGB transport samples are
     /// output RGB already and only the imaging ratio is left; for spectral transport they are
     /// sensor RGB (imaging ratio included), converted as pbrt-v4's RGB film does.
@@ -159,7 +174,7 @@ fn first_chromatic(
     let shapes = desc.shapes.iter().chain(desc.instance_definitions.iter().flat_map(|d| d.shapes.iter()));
     for shape in shapes {
         let id = material_ids(&shape.material) as usize;
-        if let Some(input) = materials.get(id).and_then(|m| m.chromatic_input(textures)) {
+        if let Some(input) = materials.get(id).and_then(|m| m.chromatic_input(materials, textures)) {
             let loc = match &shape.material {
                 MaterialRef::Index(i) => desc.materials.get(*i).map(|m| &m.loc),
                 MaterialRef::Named(n) => desc.named_materials.iter().find(|m| &m.name == n).map(|m| &m.entity.loc),
@@ -299,6 +314,15 @@ impl TextureBuilder<'_> {
                 b: self.input(tex2, cs, &e.loc)?,
                 mapping: mapping(m),
             },
+            TextureKind::Bilerp { v, mapping: m } => TexNode::Bilerp {
+                v: [
+                    self.input(&v[0], cs, &e.loc)?,
+                    self.input(&v[1], cs, &e.loc)?,
+                    self.input(&v[2], cs, &e.loc)?,
+                    self.input(&v[3], cs, &e.loc)?,
+                ],
+                mapping: mapping(m),
+            },
             TextureKind::ImageMap { filename, scale, invert, wrap, encoding, mapping: m } => {
                 let image = load_texture_image(filename, encoding).map_err(|m| err(&e.loc, m))?;
                 let wrap = match wrap.as_str() {
@@ -370,35 +394,137 @@ fn eta_value(eta: &Eta, tb: &TextureBuilder, cs: ColorSpace, loc: &FileLoc) -> R
     tb.spectra.eta(eta, cs).map_err(|e| err(loc, e.to_string()))
 }
 
-fn material(e: &nimbus_parser::Entity, tb: &TextureBuilder, warnings: &mut Vec<Warning>) -> Result<Material, Error> {
+fn conductor_input(
+    spec: &ConductorSpec,
+    tb: &TextureBuilder,
+    cs: ColorSpace,
+    loc: &FileLoc,
+) -> Result<ConductorInput, Error> {
+    Ok(match spec {
+        ConductorSpec::Reflectance(r) => ConductorInput::Reflectance(tb.spectrum(r, cs, loc)?),
+        ConductorSpec::EtaK { eta: SpectrumInput::Value(eta), k: SpectrumInput::Value(k) } => {
+            let c = tb.spectra.conductor(eta, k, cs).map_err(|m| err(loc, m.to_string()))?;
+            ConductorInput::EtaK { eta: Tex::Const(c.eta), k: Tex::Const(c.k), scale: c.scale }
+        }
+        ConductorSpec::EtaK { eta, k } => {
+            // Textured optical constants: used per channel as given.
+            let as_tex = |s: &SpectrumInput| -> Result<Tex, Error> {
+                Ok(match s {
+                    SpectrumInput::Value(v) => {
+                        let c = tb.spectra.conductor(v, v, cs).map_err(|m| err(loc, m.to_string()))?;
+                        Tex::Const(c.eta)
+                    }
+                    t => tb.spectrum_as(t, cs, loc, true)?,
+                })
+            };
+            ConductorInput::EtaK { eta: as_tex(eta)?, k: as_tex(k)?, scale: SpectrumValue::constant(1.0) }
+        }
+    })
+}
+
+/// Points each `mix` material at its two named parts: pbrt-v4 requires them to exist and
+/// not be `interface`; nimbus also refuses a mix that contains itself.
+fn resolve_mixes(
+    desc: &SceneDescription,
+    materials: &mut [Material],
+    named: &HashMap<String, u32>,
+) -> Result<(), Error> {
+    let entities = desc.materials.iter().chain(desc.named_materials.iter().map(|m| &m.entity));
+    let mut parts = Vec::new();
+    for (i, e) in entities.enumerate() {
+        if e.name != "mix" {
+            continue;
+        }
+        let names = e.params.get_strings("materials")?;
+        let loc = e.params.loc("materials").unwrap_or(&e.loc);
+        let mut pair = [0u32; 2];
+        for (slot, name) in pair.iter_mut().zip(names) {
+            let Some(&id) = named.get(name) else {
+                return Err(err(loc, format!("mix: named material \"{name}\" not found")));
+            };
+            if materials[id as usize].is_interface() {
+                return Err(err(
+                    loc,
+                    format!("mix: \"{name}\" is an \"interface\" material, which cannot be part of a mix"),
+                ));
+            }
+            *slot = id;
+        }
+        parts.push((i, pair, loc));
+    }
+    for &(i, pair, _) in &parts {
+        if let Material::Mix { materials: p, .. } = &mut materials[i] {
+            *p = pair;
+        }
+    }
+    // A mix reachable from itself would never resolve.
+    for &(i, _, loc) in &parts {
+        let mut stack = vec![(i as u32, 0usize)];
+        while let Some((m, depth)) = stack.pop() {
+            if let Material::Mix { materials: pair, .. } = &materials[m as usize] {
+                for &p in pair {
+                    if p as usize == i || depth > materials.len() {
+                        return Err(err(loc, "mix: the material contains itself"));
+                    }
+                    stack.push((p, depth + 1));
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+fn material(
+    e: &nimbus_parser::Entity,
+    tb: &TextureBuilder,
+    warnings: &mut Vec<Warning>,
+) -> Result<(Material, ShadingPerturbation), Error> {
     let settings = MaterialSettings::from_entity(e, warnings)?;
     let cs = e.color_space;
     let loc = &e.loc;
-    Ok(match &settings.kind {
+    // pbrt-v4 applies the normal map when a material has both.
+    let shading = if let Some(path) = &settings.normal_map {
+        let image = load_texture_image(path, "linear").map_err(|m| err(e.params.loc("normalmap").unwrap_or(loc), m))?;
+        ShadingPerturbation::NormalMap(Arc::new(image))
+    } else if let Some(d) = &settings.displacement {
+        ShadingPerturbation::Bump(tb.float(d, loc)?)
+    } else {
+        ShadingPerturbation::None
+    };
+    let material = match &settings.kind {
         MaterialKind::Diffuse { reflectance } => Material::Diffuse { reflectance: tb.spectrum(reflectance, cs, loc)? },
         MaterialKind::Conductor { spec, roughness: r } => {
-            let input = match spec {
-                ConductorSpec::Reflectance(r) => ConductorInput::Reflectance(tb.spectrum(r, cs, loc)?),
-                ConductorSpec::EtaK { eta: SpectrumInput::Value(eta), k: SpectrumInput::Value(k) } => {
-                    let c = tb.spectra.conductor(eta, k, cs).map_err(|m| err(loc, m.to_string()))?;
-                    ConductorInput::EtaK { eta: Tex::Const(c.eta), k: Tex::Const(c.k), scale: c.scale }
-                }
-                ConductorSpec::EtaK { eta, k } => {
-                    // Textured optical constants: used per channel as given.
-                    let as_tex = |s: &SpectrumInput| -> Result<Tex, Error> {
-                        Ok(match s {
-                            SpectrumInput::Value(v) => {
-                                let c = tb.spectra.conductor(v, v, cs).map_err(|m| err(loc, m.to_string()))?;
-                                Tex::Const(c.eta)
-                            }
-                            t => tb.spectrum_as(t, cs, loc, true)?,
-                        })
-                    };
-                    ConductorInput::EtaK { eta: as_tex(eta)?, k: as_tex(k)?, scale: SpectrumValue::constant(1.0) }
-                }
-            };
-            Material::Conductor { input, roughness: roughness(r, tb, loc)? }
+            Material::Conductor { input: conductor_input(spec, tb, cs, loc)?, roughness: roughness(r, tb, loc)? }
         }
+        MaterialKind::CoatedConductor {
+            interface_roughness,
+            thickness,
+            interface_eta,
+            conductor,
+            conductor_roughness,
+            albedo,
+            g,
+            max_depth,
+            n_samples,
+        } => Material::CoatedConductor {
+            interface_roughness: roughness(interface_roughness, tb, loc)?,
+            thickness: tb.float(thickness, loc)?,
+            interface_eta: eta_value(interface_eta, tb, cs, loc)?,
+            conductor: conductor_input(conductor, tb, cs, loc)?,
+            conductor_roughness: roughness(conductor_roughness, tb, loc)?,
+            albedo: tb.spectrum(albedo, cs, loc)?,
+            g: tb.float(g, loc)?,
+            max_depth: *max_depth,
+            n_samples: *n_samples,
+        },
+        MaterialKind::DiffuseTransmission { reflectance, transmittance, scale } => Material::DiffuseTransmission {
+            reflectance: tb.spectrum(reflectance, cs, loc)?,
+            transmittance: tb.spectrum(transmittance, cs, loc)?,
+            scale: *scale,
+        },
+        // The parts are named materials, some perhaps defined later: `resolve_mixes` sets
+        // them once every material exists.
+        MaterialKind::Mix { amount, .. } => Material::Mix { materials: [0, 0], amount: tb.float(amount, loc)? },
         MaterialKind::Dielectric { eta, roughness: r } => {
             Material::Dielectric { eta: eta_value(eta, tb, cs, loc)?, roughness: roughness(r, tb, loc)? }
         }
@@ -417,7 +543,8 @@ fn material(e: &nimbus_parser::Entity, tb: &TextureBuilder, warnings: &mut Vec<W
             }
         }
         MaterialKind::Unsupported(_) => Material::Diffuse { reflectance: Tex::Const(SpectrumValue::constant(0.5)) },
-    })
+    };
+    Ok((material, shading))
 }
 
 /// Emission of an area light: pbrt-v4's photometric normalisation and `power`.
@@ -491,6 +618,12 @@ impl ShapeBuilder<'_> {
                 let tris: Vec<u32> =
                     m.indices.chunks_exact(4).flat_map(|q| [q[0], q[1], q[3], q[0], q[3], q[2]]).collect();
                 let mesh = Mesh::new(&world, rev, m.positions, m.normals, m.uvs, tris);
+                self.add_mesh(mesh, material, interface, prims, bounds);
+            }
+            ShapeKind::LoopSubdiv { mesh: m, levels } => {
+                let sub = crate::geometry::loop_subdiv::loop_subdivide(m.positions, &m.indices, *levels)
+                    .map_err(|m| err(&e.loc, format!("loopsubdiv: {m}")))?;
+                let mesh = Mesh::new(&world, rev, &sub.positions, &sub.normals, &[], sub.indices);
                 self.add_mesh(mesh, material, interface, prims, bounds);
             }
             ShapeKind::PlyMesh(path) => {
@@ -836,10 +969,10 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions) -> Result<Scene
     let camera = Camera::new(&camera_settings, &world_from_camera.start, film.resolution);
     let pixel_bounds = pixel_bounds(&film, opts, &desc.film.loc)?;
     let mut sampler = SamplerSettings::from_entity(&desc.sampler, desc.options.seed, &mut warnings)?;
+    // An explicit --spp is what the user asked for: --quick only quarters the scene's count.
     if let Some(spp) = opts.spp {
         sampler.pixel_samples = spp.max(1);
-    }
-    if opts.quick {
+    } else if opts.quick {
         sampler.pixel_samples = (sampler.pixel_samples / 4).max(1);
     }
     if let Some(seed) = opts.seed {
@@ -847,6 +980,7 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions) -> Result<Scene
     }
     let filter = Filter::new(&FilterSettings::from_entity(&desc.filter)?);
     let mut integrator = IntegratorSettings::from_entity(&desc.integrator, opts.integrator.as_deref())?;
+    warnings.extend(IntegratorSettings::substitution_note(&desc.integrator, opts.integrator.as_deref()));
     if let IntegratorSettings::RadianceGraph(s) = &mut integrator {
         s.graph_data = opts.graph_data.clone();
         // graph_maker's default config: the scene's name with `.json`.
@@ -875,14 +1009,20 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions) -> Result<Scene
 
     // Materials: anonymous ones by index, then named ones.
     let mut materials = Vec::with_capacity(desc.materials.len() + desc.named_materials.len());
+    let mut shading = Vec::with_capacity(materials.capacity());
     for m in &desc.materials {
-        materials.push(material(m, &tb, &mut warnings)?);
+        let (m, s) = material(m, &tb, &mut warnings)?;
+        materials.push(m);
+        shading.push(s);
     }
     let mut named = HashMap::new();
     for m in &desc.named_materials {
         named.insert(m.name.clone(), materials.len() as u32);
-        materials.push(material(&m.entity, &tb, &mut warnings)?);
+        let (m, s) = material(&m.entity, &tb, &mut warnings)?;
+        materials.push(m);
+        shading.push(s);
     }
+    resolve_mixes(desc, &mut materials, &named)?;
     let has_interfaces = materials.iter().any(Material::is_interface);
     let material_ids = |r: &MaterialRef| -> u32 {
         match r {
@@ -1013,6 +1153,7 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions) -> Result<Scene
         integrator,
         surfaces,
         materials,
+        shading,
         textures: tb.textures,
         lights,
         light_sampler,

@@ -130,6 +130,7 @@ pub fn check_scene(scene: &SceneDescription) -> Result<SceneCheck, Error> {
     let sampler = SamplerSettings::from_entity(&scene.sampler, scene.options.seed, &mut warnings)?;
     unused(&scene.sampler.params, &mut warnings);
     IntegratorSettings::from_entity(&scene.integrator, None)?;
+    warnings.extend(IntegratorSettings::substitution_note(&scene.integrator, None));
     unused(&scene.integrator.params, &mut warnings);
     if scene.accelerator.name != "bvh" && scene.accelerator.name != "kdtree" {
         return Err(Error::new(

@@ -89,6 +89,43 @@ pub enum MaterialKind {
         /// Samples per evaluation.
         n_samples: u32,
     },
+    /// `coatedconductor`: a dielectric coating over a conductor.
+    CoatedConductor {
+        /// Coating roughness (`interface.roughness`, ...).
+        interface_roughness: Roughness,
+        /// Coating thickness.
+        thickness: FloatInput,
+        /// Coating index of refraction (`interface.eta`).
+        interface_eta: Eta,
+        /// The conductor's optical constants (`conductor.eta`/`conductor.k` or `reflectance`).
+        conductor: ConductorSpec,
+        /// The conductor's roughness (`conductor.roughness`, ...).
+        conductor_roughness: Roughness,
+        /// Albedo of the medium between coating and base.
+        albedo: SpectrumInput,
+        /// Asymmetry of that medium.
+        g: FloatInput,
+        /// Random-walk depth of the layered evaluation.
+        max_depth: u32,
+        /// Samples per evaluation.
+        n_samples: u32,
+    },
+    /// `diffusetransmission`: Lambertian reflection and transmission.
+    DiffuseTransmission {
+        /// Reflectance.
+        reflectance: SpectrumInput,
+        /// Transmittance.
+        transmittance: SpectrumInput,
+        /// Factor on both.
+        scale: f32,
+    },
+    /// `mix`: one of two named materials, chosen per hit.
+    Mix {
+        /// The two named materials.
+        materials: [String; 2],
+        /// Probability of the second (float texture).
+        amount: FloatInput,
+    },
     /// A material nimbus lacks, rendered as gray diffuse.
     Unsupported(String),
 }
@@ -98,36 +135,72 @@ pub enum MaterialKind {
 pub struct MaterialSettings {
     /// The material.
     pub kind: MaterialKind,
+    /// Bump map: displacement along the shading normal (float texture).
+    pub displacement: Option<FloatInput>,
+    /// Normal map image (resolved path).
+    pub normal_map: Option<std::path::PathBuf>,
 }
 
 fn roughness(e: &Entity) -> Result<Roughness, Error> {
+    prefixed_roughness(e, "")
+}
+
+/// `{prefix}roughness`, `{prefix}uroughness`, `{prefix}vroughness` (coatedconductor's
+/// `interface.` and `conductor.` parameters).
+fn prefixed_roughness(e: &Entity, prefix: &str) -> Result<Roughness, Error> {
     let p = &e.params;
-    let r = float_input(p, "roughness")?.unwrap_or(FloatInput::Value(0.0));
-    let u = float_input(p, "uroughness")?.unwrap_or_else(|| r.clone());
-    let v = float_input(p, "vroughness")?.unwrap_or_else(|| r.clone());
-    for (name, x) in [("uroughness", &u), ("vroughness", &v)] {
+    let (rn, un, vn) = (format!("{prefix}roughness"), format!("{prefix}uroughness"), format!("{prefix}vroughness"));
+    let r = float_input(p, &rn)?.unwrap_or(FloatInput::Value(0.0));
+    let u = float_input(p, &un)?.unwrap_or_else(|| r.clone());
+    let v = float_input(p, &vn)?.unwrap_or_else(|| r.clone());
+    for (name, x) in [(&un, &u), (&vn, &v)] {
         if let FloatInput::Value(x) = x
             && *x < 0.0
         {
-            return Err(Error::new(
-                p.loc(name).or(p.loc("roughness")).unwrap_or(&e.loc),
-                "roughness cannot be negative",
-            ));
+            return Err(Error::new(p.loc(name).or(p.loc(&rn)).unwrap_or(&e.loc), "roughness cannot be negative"));
         }
     }
     Ok(Roughness { u, v, remap: p.get_one_bool("remaproughness", true)? })
 }
 
 fn eta(e: &Entity, default: f32) -> Result<Eta, Error> {
+    named_eta(e, "eta", default)
+}
+
+fn named_eta(e: &Entity, name: &str, default: f32) -> Result<Eta, Error> {
     let p = &e.params;
     // pbrt-v4 accepts "float eta" or "spectrum eta".
-    if let Some(peek) = p.peek("eta")
+    if let Some(peek) = p.peek(name)
         && peek.ty != nimbus_parser::ParamType::Float
     {
-        return Ok(Eta::Spectrum(spectrum(p, "eta")?.expect("peeked")));
+        return Ok(Eta::Spectrum(spectrum(p, name)?.expect("peeked")));
     }
-    let v = checked_float(p, "eta", default, |v| v > 0.0, "the index of refraction must be positive")?;
+    let v = checked_float(p, name, default, |v| v > 0.0, "the index of refraction must be positive")?;
     Ok(Eta::Constant(v))
+}
+
+/// A conductor's optical constants from `{prefix}eta`/`{prefix}k` or `reflectance`, copper by
+/// default (pbrt-v4's conductor and coatedconductor materials).
+fn conductor_spec(e: &Entity, prefix: &str) -> Result<ConductorSpec, Error> {
+    let p = &e.params;
+    let (eta_name, k_name) = (format!("{prefix}eta"), format!("{prefix}k"));
+    Ok(match spectrum_input(p, "reflectance")? {
+        Some(r) => {
+            if !prefix.is_empty() && (p.peek(&eta_name).is_some() || p.peek(&k_name).is_some()) {
+                return Err(Error::new(
+                    p.loc("reflectance").unwrap_or(&e.loc),
+                    format!("\"reflectance\" and \"{eta_name}\"/\"{k_name}\" cannot both be given"),
+                ));
+            }
+            ConductorSpec::Reflectance(r)
+        }
+        None => ConductorSpec::EtaK {
+            eta: spectrum_input(p, &eta_name)?
+                .unwrap_or_else(|| SpectrumInput::Value(SpectrumSpec::Named("metal-Cu-eta".into()))),
+            k: spectrum_input(p, &k_name)?
+                .unwrap_or_else(|| SpectrumInput::Value(SpectrumSpec::Named("metal-Cu-k".into()))),
+        },
+    })
 }
 
 fn gray(v: f32) -> SpectrumInput {
@@ -138,33 +211,60 @@ impl MaterialSettings {
     /// Reads a material entity. Unknown types give a warning naming them and gray diffuse.
     pub fn from_entity(e: &Entity, warnings: &mut Vec<Warning>) -> Result<MaterialSettings, Error> {
         let p = &e.params;
-        if let Some(d) = p.get_texture("displacement")? {
-            return Err(Error::new(
-                p.loc("displacement").unwrap_or(&e.loc),
-                format!("displacement (texture \"{d}\") is not supported by nimbus"),
-            ));
-        }
-        if let Some(n) = p.get_opt_string("normalmap")? {
-            return Err(Error::new(
-                p.loc("normalmap").unwrap_or(&e.loc),
-                format!("normal maps (\"{n}\") are not supported by nimbus"),
-            ));
-        }
+        let displacement = float_input(p, "displacement")?;
+        let normal_map = match p.get_opt_string("normalmap")? {
+            Some(name) => {
+                let loc = p.loc("normalmap").unwrap_or(&e.loc);
+                let path = loc.resolve(name);
+                if !path.is_file() {
+                    return Err(Error::new(
+                        loc,
+                        format!("normal map \"{name}\" not found (tried {})", nimbus_parser::loc_shown(&path)),
+                    ));
+                }
+                Some(path)
+            }
+            None => None,
+        };
         let kind = match e.name.as_str() {
             "diffuse" => {
                 MaterialKind::Diffuse { reflectance: spectrum_input(p, "reflectance")?.unwrap_or_else(|| gray(0.5)) }
             }
-            "conductor" => {
-                let spec = match spectrum_input(p, "reflectance")? {
-                    Some(r) => ConductorSpec::Reflectance(r),
-                    None => ConductorSpec::EtaK {
-                        eta: spectrum_input(p, "eta")?
-                            .unwrap_or_else(|| SpectrumInput::Value(SpectrumSpec::Named("metal-Cu-eta".into()))),
-                        k: spectrum_input(p, "k")?
-                            .unwrap_or_else(|| SpectrumInput::Value(SpectrumSpec::Named("metal-Cu-k".into()))),
-                    },
-                };
-                MaterialKind::Conductor { spec, roughness: roughness(e)? }
+            "conductor" => MaterialKind::Conductor { spec: conductor_spec(e, "")?, roughness: roughness(e)? },
+            "coatedconductor" => MaterialKind::CoatedConductor {
+                interface_roughness: prefixed_roughness(e, "interface.")?,
+                thickness: float_input(p, "thickness")?.unwrap_or(FloatInput::Value(0.01)),
+                interface_eta: named_eta(e, "interface.eta", 1.5)?,
+                conductor: conductor_spec(e, "conductor.")?,
+                conductor_roughness: prefixed_roughness(e, "conductor.")?,
+                albedo: spectrum_input(p, "albedo")?.unwrap_or_else(|| gray(0.0)),
+                g: float_input(p, "g")?.unwrap_or(FloatInput::Value(0.0)),
+                max_depth: checked_int(p, "maxdepth", 10, |v| v > 0, "must be positive")? as u32,
+                n_samples: checked_int(p, "nsamples", 1, |v| v > 0, "must be positive")? as u32,
+            },
+            "diffusetransmission" => MaterialKind::DiffuseTransmission {
+                reflectance: spectrum_input(p, "reflectance")?.unwrap_or_else(|| gray(0.25)),
+                transmittance: spectrum_input(p, "transmittance")?.unwrap_or_else(|| gray(0.25)),
+                scale: checked_float(
+                    p,
+                    "scale",
+                    1.0,
+                    |v| v >= 0.0 && v.is_finite(),
+                    "must be finite and not negative",
+                )?,
+            },
+            "mix" => {
+                let names = p.get_strings("materials")?;
+                let [a, b] = <[String; 2]>::try_from(names.to_vec()).map_err(|_| {
+                    Error::new(
+                        p.loc("materials").unwrap_or(&e.loc),
+                        "the mix material needs two values for \"string materials\"",
+                    )
+                })?;
+                MaterialKind::Mix {
+                    materials: [a, b],
+                    amount: float_input(p, "amount")?.unwrap_or(FloatInput::Value(0.5)),
+                }
             }
             "dielectric" => MaterialKind::Dielectric { eta: eta(e, 1.5)?, roughness: roughness(e)? },
             "thindielectric" => MaterialKind::ThinDielectric { eta: eta(e, 1.5)? },
@@ -187,6 +287,6 @@ impl MaterialSettings {
                 MaterialKind::Unsupported(other.to_string())
             }
         };
-        Ok(MaterialSettings { kind })
+        Ok(MaterialSettings { kind, displacement, normal_map })
     }
 }

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use nimbus_parser::loc_shown as shown;
 use nimbus_parser::{Error, FileLoc, ShapeEntity};
 
-use super::values::{FloatInput, checked_float, float_input};
+use super::values::{FloatInput, checked_float, checked_int, float_input};
 
 /// A triangle or bilinear-patch mesh given inline.
 #[derive(Clone, Debug, PartialEq)]
@@ -61,6 +61,13 @@ pub enum ShapeKind<'a> {
     TriangleMesh(InlineMesh<'a>),
     /// `bilinearmesh` (split into two triangles per patch)
     BilinearMesh(InlineMesh<'a>),
+    /// `loopsubdiv`: a control mesh refined at load.
+    LoopSubdiv {
+        /// The control mesh (`P`, `indices`).
+        mesh: InlineMesh<'a>,
+        /// Subdivision levels.
+        levels: u32,
+    },
     /// `plymesh`
     PlyMesh(PathBuf),
     /// `objmesh` (nimbus extension: a Wavefront OBJ file)
@@ -156,7 +163,7 @@ fn inline_mesh<'a>(shape: &'a ShapeEntity, per_face: usize) -> Result<InlineMesh
 }
 
 impl<'a> ShapeSettings<'a> {
-    /// Reads a shape entity. Shapes nimbus lacks (curve, loopsubdiv, ...) are reported by name.
+    /// Reads a shape entity. Shapes nimbus lacks (curve, ...) are reported by name.
     pub fn from_entity(shape: &'a ShapeEntity) -> Result<ShapeSettings<'a>, Error> {
         let e = &shape.entity;
         let p = &e.params;
@@ -191,6 +198,12 @@ impl<'a> ShapeSettings<'a> {
             },
             "trianglemesh" => ShapeKind::TriangleMesh(inline_mesh(shape, 3)?),
             "bilinearmesh" => ShapeKind::BilinearMesh(inline_mesh(shape, 4)?),
+            "loopsubdiv" => ShapeKind::LoopSubdiv {
+                mesh: inline_mesh(shape, 3)?,
+                // pbrt-v4's default; each level quadruples the triangles, so 12 (16 M per
+                // control triangle) bounds what fits in memory.
+                levels: checked_int(p, "levels", 3, |v| (0..=12).contains(&v), "must be between 0 and 12")? as u32,
+            },
             "plymesh" => {
                 if let Some(d) = p.get_texture("displacement")? {
                     return Err(Error::new(
@@ -207,7 +220,7 @@ impl<'a> ShapeSettings<'a> {
                 return Err(Error::new(
                     &e.loc,
                     format!(
-                        "shape \"{other}\" is not supported by nimbus (it has sphere, disk, cylinder, trianglemesh, bilinearmesh, plymesh, and the extensions objmesh and gltfmesh)"
+                        "shape \"{other}\" is not supported by nimbus (it has sphere, disk, cylinder, trianglemesh, bilinearmesh, loopsubdiv, plymesh, and the extensions objmesh and gltfmesh)"
                     ),
                 ));
             }

@@ -78,6 +78,13 @@ pub enum TextureKind {
         /// Mapping.
         mapping: Mapping,
     },
+    /// `bilerp`: bilinear interpolation of four corner values over (s, t).
+    Bilerp {
+        /// Values at (0, 0), (0, 1), (1, 0), (1, 1): `v00`, `v01`, `v10`, `v11`.
+        v: [TexInput; 4],
+        /// Mapping.
+        mapping: Mapping,
+    },
     /// `imagemap`
     ImageMap {
         /// The image.
@@ -170,6 +177,10 @@ impl TextureSettings {
                     mapping: mapping(t)?,
                 }
             }
+            "bilerp" => TextureKind::Bilerp {
+                v: [input(t, "v00", 0.0)?, input(t, "v01", 1.0)?, input(t, "v10", 0.0)?, input(t, "v11", 1.0)?],
+                mapping: mapping(t)?,
+            },
             "imagemap" => {
                 let Some(name) = p.get_opt_string("filename")? else {
                     return Err(Error::new(&e.loc, "imagemap: missing \"string filename\""));

@@ -4,7 +4,10 @@ use std::f32::consts::PI;
 
 use glam::{Affine3A, Vec2, Vec3};
 
-use super::{ShapeSample, SurfaceHit, swaps_handedness, transform_normal, uniform_scale};
+use super::{
+    ShapeSample, SurfaceHit, swaps_handedness, transform_normal, transform_normal_unnormalized, uniform_scale,
+    weingarten,
+};
 use crate::geometry::{Bounds3, Ray};
 
 /// An open cylinder of the given radius between z_min and z_max.
@@ -102,6 +105,10 @@ impl Cylinder {
         if self.flip_normal {
             n = -n;
         }
+        // pbrt-v4's Cylinder::InteractionFromIntersection: only ∂²p/∂u² is non-zero.
+        let dpdv = Vec3::new(0.0, 0.0, self.z_max - self.z_min);
+        let d2pduu = -self.phi_max * self.phi_max * Vec3::new(p_obj.x, p_obj.y, 0.0);
+        let (dndu, dndv) = weingarten(dpdu, dpdv, d2pduu, Vec3::ZERO, Vec3::ZERO);
         SurfaceHit {
             t,
             p: self.world_from_object.transform_point3(p_obj),
@@ -109,6 +116,9 @@ impl Cylinder {
             ns: n,
             uv,
             dpdu: self.world_from_object.transform_vector3(dpdu),
+            dpdv: self.world_from_object.transform_vector3(dpdv),
+            dndu: transform_normal_unnormalized(&self.object_from_world, dndu),
+            dndv: transform_normal_unnormalized(&self.object_from_world, dndv),
         }
     }
 

@@ -88,7 +88,23 @@ impl Disk {
             n = -n;
         }
         let dpdu = self.world_from_object.transform_vector3(dpdu);
-        SurfaceHit { t, p: self.world_from_object.transform_point3(p_obj), n, ns: n, uv, dpdu }
+        // pbrt-v4's Disk: ∂p/∂v points inwards; a plane does not bend (∂n = 0).
+        let dpdv = if r > 0.0 {
+            Vec3::new(p_obj.x, p_obj.y, 0.0) * ((self.inner_radius - self.radius) / r)
+        } else {
+            Vec3::ZERO
+        };
+        SurfaceHit {
+            t,
+            p: self.world_from_object.transform_point3(p_obj),
+            n,
+            ns: n,
+            uv,
+            dpdu,
+            dpdv: self.world_from_object.transform_vector3(dpdv),
+            dndu: Vec3::ZERO,
+            dndv: Vec3::ZERO,
+        }
     }
 
     /// Uniform area sample (pdf per world-space area). `None` when the transform is not a

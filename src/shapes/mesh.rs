@@ -150,8 +150,26 @@ pub fn triangle_hit(mesh: &Mesh, i: u32, t: f32, b1: f32, b2: f32) -> SurfaceHit
     let dp02 = p0 - p2;
     let dp12 = p1 - p2;
     let det = duv02.x * duv12.y - duv02.y * duv12.x;
-    let dpdu = if det.abs() > 1e-9 { (duv12.y * dp02 - duv02.y * dp12) / det } else { Vec3::ZERO };
-    SurfaceHit { t, p, n, ns, uv, dpdu }
+    let (dpdu, dpdv) = if det.abs() > 1e-9 {
+        ((duv12.y * dp02 - duv02.y * dp12) / det, (duv02.x * dp12 - duv12.x * dp02) / det)
+    } else {
+        (Vec3::ZERO, Vec3::ZERO)
+    };
+    if mesh.normals.is_empty() {
+        return SurfaceHit { t, p, n, ns, uv, dpdu, dpdv, dndu: Vec3::ZERO, dndv: Vec3::ZERO };
+    }
+    // pbrt-v4's shading geometry with per-vertex normals: ∂p/∂u made perpendicular to ns,
+    // ∂p/∂v = ns × ∂p/∂u, and ∂n/∂u, ∂n/∂v from the normals' differences over uv.
+    let ts = ns.cross(dpdu);
+    let (ss, ts) = if ts.length_squared() > 0.0 { (ts.cross(ns), ts) } else { (Vec3::ZERO, Vec3::ZERO) };
+    let (dndu, dndv) = if det.abs() > 1e-9 {
+        let dn1 = mesh.normals[idx[0]] - mesh.normals[idx[2]];
+        let dn2 = mesh.normals[idx[1]] - mesh.normals[idx[2]];
+        ((duv12.y * dn1 - duv02.y * dn2) / det, (duv02.x * dn2 - duv12.x * dn1) / det)
+    } else {
+        (Vec3::ZERO, Vec3::ZERO)
+    };
+    SurfaceHit { t, p, n, ns, uv, dpdu: ss, dpdv: ts, dndu, dndv }
 }
 
 /// Uniform area sample on triangle `i`.

@@ -30,6 +30,12 @@ pub struct SurfaceHit {
     pub uv: Vec2,
     /// ∂p/∂u: the shading frame's first tangent.
     pub dpdu: Vec3,
+    /// ∂p/∂v (shading: for meshes with normals, ns × ∂p/∂u as pbrt-v4 sets it).
+    pub dpdv: Vec3,
+    /// ∂n/∂u of the shading normal (bump mapping's curvature term).
+    pub dndu: Vec3,
+    /// ∂n/∂v of the shading normal.
+    pub dndv: Vec3,
 }
 
 /// A point sampled on a shape's surface.
@@ -65,7 +71,25 @@ pub fn uniform_scale(m: &Affine3A) -> Option<f32> {
 /// world-from-object transform, given as its inverse.
 #[inline]
 pub fn transform_normal(object_from_world: &Affine3A, n: Vec3) -> Vec3 {
-    // (M^-1)^T n: component i is column i of M^-1 dotted with n.
+    transform_normal_unnormalized(object_from_world, n).normalize_or_zero()
+}
+
+/// (M⁻¹)ᵀ n without normalising: how pbrt-v4 transforms ∂n/∂u and ∂n/∂v.
+pub fn transform_normal_unnormalized(object_from_world: &Affine3A, n: Vec3) -> Vec3 {
+    // Component i is column i of M^-1 dotted with n.
     let m = object_from_world.matrix3;
-    Vec3::new(m.x_axis.dot(n.into()), m.y_axis.dot(n.into()), m.z_axis.dot(n.into())).normalize_or_zero()
+    Vec3::new(m.x_axis.dot(n.into()), m.y_axis.dot(n.into()), m.z_axis.dot(n.into()))
+}
+
+/// ∂n/∂u and ∂n/∂v of a parametric surface from its first and second derivatives: the
+/// Weingarten equations (pbrt-v4 §6.2.3, with n = normalize(∂p/∂u × ∂p/∂v)).
+pub fn weingarten(dpdu: Vec3, dpdv: Vec3, d2pduu: Vec3, d2pduv: Vec3, d2pdvv: Vec3) -> (Vec3, Vec3) {
+    let (e1, f1, g1) = (dpdu.dot(dpdu), dpdu.dot(dpdv), dpdv.dot(dpdv));
+    let n = dpdu.cross(dpdv).normalize_or_zero();
+    let (e, f, g) = (n.dot(d2pduu), n.dot(d2pduv), n.dot(d2pdvv));
+    let egf2 = e1 * g1 - f1 * f1;
+    let inv = if egf2 == 0.0 { 0.0 } else { 1.0 / egf2 };
+    let dndu = (f * f1 - e * g1) * inv * dpdu + (e * f1 - f * e1) * inv * dpdv;
+    let dndv = (g * f1 - f * g1) * inv * dpdu + (f * f1 - g * e1) * inv * dpdv;
+    (dndu, dndv)
 }

@@ -4,7 +4,10 @@ use std::f32::consts::PI;
 
 use glam::{Affine3A, DVec3, Vec2, Vec3};
 
-use super::{ShapeSample, SurfaceHit, swaps_handedness, transform_normal, uniform_scale};
+use super::{
+    ShapeSample, SurfaceHit, swaps_handedness, transform_normal, transform_normal_unnormalized, uniform_scale,
+    weingarten,
+};
 use crate::geometry::{Bounds3, Ray};
 use crate::math::Frame;
 use crate::sampling::warp;
@@ -123,12 +126,32 @@ impl Sphere {
         let theta = cos_theta.acos();
         let uv = Vec2::new(phi / self.phi_max, (theta - self.theta_z_min) / (self.theta_z_max - self.theta_z_min));
         let dpdu_obj = Vec3::new(-self.phi_max * p_obj.y, self.phi_max * p_obj.x, 0.0);
+        // pbrt-v4's Sphere::InteractionFromIntersection: ∂p/∂v and the second derivatives.
+        let z_radius = (p_obj.x * p_obj.x + p_obj.y * p_obj.y).sqrt();
+        let (cos_phi, sin_phi) = if z_radius > 0.0 { (p_obj.x / z_radius, p_obj.y / z_radius) } else { (1.0, 0.0) };
+        let sin_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
+        let dtheta = self.theta_z_max - self.theta_z_min;
+        let dpdv_obj = dtheta * Vec3::new(p_obj.z * cos_phi, p_obj.z * sin_phi, -self.radius * sin_theta);
+        let d2pduu = -self.phi_max * self.phi_max * Vec3::new(p_obj.x, p_obj.y, 0.0);
+        let d2pduv = dtheta * p_obj.z * self.phi_max * Vec3::new(-sin_phi, cos_phi, 0.0);
+        let d2pdvv = -dtheta * dtheta * p_obj;
+        let (dndu, dndv) = weingarten(dpdu_obj, dpdv_obj, d2pduu, d2pduv, d2pdvv);
         let mut n = transform_normal(&self.object_from_world, p_obj);
         if self.flip_normal {
             n = -n;
         }
         let p = self.world_from_object.transform_point3(p_obj);
-        SurfaceHit { t, p, n, ns: n, uv, dpdu: self.world_from_object.transform_vector3(dpdu_obj) }
+        SurfaceHit {
+            t,
+            p,
+            n,
+            ns: n,
+            uv,
+            dpdu: self.world_from_object.transform_vector3(dpdu_obj),
+            dpdv: self.world_from_object.transform_vector3(dpdv_obj),
+            dndu: transform_normal_unnormalized(&self.object_from_world, dndu),
+            dndv: transform_normal_unnormalized(&self.object_from_world, dndv),
+        }
     }
 
     /// Samples a point on the sphere as seen from `reference`: uniformly within the cone of

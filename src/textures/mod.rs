@@ -132,6 +132,13 @@ pub enum TexNode {
         /// Mapping.
         mapping: TexMapping,
     },
+    /// pbrt-v4's `bilerp`: (1−s)(1−t)·v00 + (1−s)t·v01 + s(1−t)·v10 + st·v11.
+    Bilerp {
+        /// v00, v01, v10, v11.
+        v: [Tex; 4],
+        /// Mapping.
+        mapping: TexMapping,
+    },
     /// A bilinearly filtered image.
     Image {
         /// Pixels (linear).
@@ -193,6 +200,7 @@ impl Textures {
                     self.is_chromatic(*a) || self.is_chromatic(*b) || self.is_chromatic(*amount)
                 }
                 TexNode::Checkerboard { a, b, .. } => self.is_chromatic(*a) || self.is_chromatic(*b),
+                TexNode::Bilerp { v, .. } => v.iter().any(|t| self.is_chromatic(*t)),
                 TexNode::Image { gray, .. } => !gray,
             },
         }
@@ -217,6 +225,14 @@ impl Textures {
                 } else {
                     self.eval(*b, ctx, lambda, role)
                 }
+            }
+            TexNode::Bilerp { v, mapping } => {
+                let st = mapping.map(ctx);
+                let (s, t) = (st.x, st.y);
+                self.eval::<C>(v[0], ctx, lambda, role) * ((1.0 - s) * (1.0 - t))
+                    + self.eval::<C>(v[1], ctx, lambda, role) * ((1.0 - s) * t)
+                    + self.eval::<C>(v[2], ctx, lambda, role) * (s * (1.0 - t))
+                    + self.eval::<C>(v[3], ctx, lambda, role) * (s * t)
             }
             TexNode::Image { image, mapping, scale, invert, wrap, space, .. } => {
                 let mut st = mapping.map(ctx);
@@ -246,7 +262,7 @@ fn texel(image: &Image, x: i64, y: i64, wrap: Wrap) -> Rgb {
 }
 
 /// Bilinear lookup with pixel centres at half-integers (pbrt-v4's Image::Bilerp).
-fn bilerp(image: &Image, st: Vec2, wrap: Wrap) -> Rgb {
+pub(crate) fn bilerp(image: &Image, st: Vec2, wrap: Wrap) -> Rgb {
     let x = st.x * image.width as f32 - 0.5;
     let y = st.y * image.height as f32 - 0.5;
     let (xi, yi) = (x.floor(), y.floor());

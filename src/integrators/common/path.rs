@@ -302,7 +302,7 @@ pub fn trace_path<C: Channels, O: PathObserver<C>>(
             }
         }
 
-        let Some(hit) = hit else {
+        let Some(mut hit) = hit else {
             // Escaped: environment emission.
             for &i in &scene.infinite_lights {
                 let light = &scene.lights[i as usize];
@@ -342,7 +342,8 @@ pub fn trace_path<C: Channels, O: PathObserver<C>>(
             }
         }
 
-        let material = &scene.materials[hit.prim.material as usize];
+        let material = scene.surface_material(&mut hit, wo);
+        let s = &hit.surface;
         let tex_ctx = TexContext { p: s.p, uv: s.uv };
         let Some(mut bxdf) = material.bxdf::<C>(&scene.textures, &tex_ctx, lambda) else {
             // An interface: cross it without counting a bounce.

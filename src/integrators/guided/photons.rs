@@ -283,10 +283,11 @@ pub fn trace<C: Channels>(
                 continue;
             }
         }
-        let Some(hit) = hit else { return };
+        let Some(mut hit) = hit else { return };
+        let material = scene.surface_material(&mut hit, -ray.d);
         let s = &hit.surface;
-        let material = &scene.materials[hit.prim.material as usize];
-        let Some(bxdf) = material.bxdf::<C>(&scene.textures, &TexContext { p: s.p, uv: s.uv }, lambda) else {
+        let tex_ctx = TexContext { p: s.p, uv: s.uv };
+        let Some(bxdf) = material.bxdf::<C>(&scene.textures, &tex_ctx, lambda) else {
             medium = medium_after(scene, &hit, ray.d, medium);
             ray = spawn_ray(s.p, s.n, ray.d);
             continue;

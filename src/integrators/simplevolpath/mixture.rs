@@ -139,13 +139,13 @@ impl<C: Channels> Scatterer<'_, C> {
 
     /// Whether other densities may be mixed in. Not for purely specular BSDFs (the mixture
     /// degenerates to the BSDF: no other density can produce a delta direction), nor for the
-    /// coated diffuse BSDF, whose `f` and `pdf` are stochastic estimates (Eq. 2 needs the exact
+    /// coated (layered) BSDFs, whose `f` and `pdf` are stochastic estimates (Eq. 2 needs the exact
     /// density; its own sample weight f/pdf is unbiased, so it is sampled alone).
     #[inline]
     pub fn mixes(&self) -> bool {
         match self {
             Scatterer::Surface { bxdf, .. } => {
-                bxdf.flags().is_non_specular() && !matches!(bxdf, Bxdf::CoatedDiffuse(_))
+                bxdf.flags().is_non_specular() && !matches!(bxdf, Bxdf::CoatedDiffuse(_) | Bxdf::CoatedConductor(_))
             }
             Scatterer::Medium { .. } => true,
         }

@@ -203,13 +203,14 @@ pub fn trace<C: Channels>(
                 l += path.weigh(escaped(scene, isect.ray.d, lambda));
                 break;
             }
-            Event::Surface(hit) => {
-                let s = &hit.surface;
+            Event::Surface(mut hit) => {
                 if hit.prim.area_light != NONE {
-                    l += path.weigh(scene.lights[hit.prim.area_light as usize].emitted(s, wo, lambda));
+                    l += path.weigh(scene.lights[hit.prim.area_light as usize].emitted(&hit.surface, wo, lambda));
                 }
-                let material = &scene.materials[hit.prim.material as usize];
-                let Some(b) = material.bxdf::<C>(&scene.textures, &TexContext { p: s.p, uv: s.uv }, lambda) else {
+                let material = scene.surface_material(&mut hit, wo);
+                let s = &hit.surface;
+                let tex_ctx = TexContext { p: s.p, uv: s.uv };
+                let Some(b) = material.bxdf::<C>(&scene.textures, &tex_ctx, lambda) else {
                     // An emissive `interface`: its light is counted; the ray goes on.
                     let medium = medium_after(scene, &hit, isect.ray.d, isect.medium);
                     let seed = Seed::draw(scene, sampler);

@@ -42,6 +42,14 @@ impl<C: Channels> ConductorBxdf<C> {
         ConductorBxdf::new(distrib, C::ONE, k)
     }
 
+    /// The same conductor under a dielectric of index `eta_outside` instead of vacuum: η and
+    /// k relative to it (pbrt-v4's `CoatedConductorMaterial` divides both by the coating's η).
+    pub fn relative_to(mut self, eta_outside: f32) -> ConductorBxdf<C> {
+        self.eta *= 1.0 / eta_outside;
+        self.k *= 1.0 / eta_outside;
+        self
+    }
+
     /// The microfacet distribution.
     pub fn distribution(&self) -> &TrowbridgeReitz {
         &self.distrib

@@ -1,6 +1,7 @@
-//! A dielectric coating over a diffuse base: pbrt-v4's `CoatedDiffuseBxDF`, i.e.
-//! `LayeredBxDF<DielectricBxDF, DiffuseBxDF, twoSided = true>` (pbrt-v4 §14.3; Guo et al.
-//! 2018, "Position-Free Monte Carlo Simulation for Arbitrary Layered BSDFs").
+//! A dielectric coating over a base: pbrt-v4's `LayeredBxDF<DielectricBxDF, Base, twoSided =
+//! true>` (pbrt-v4 §14.3; Guo et al. 2018, "Position-Free Monte Carlo Simulation for
+//! Arbitrary Layered BSDFs"), instantiated as `CoatedDiffuseBxDF` (a diffuse base) and
+//! `CoatedConductorBxDF` (a conductor base).
 //!
 //! The two interfaces are separated by a slab of thickness `thickness` filled with a medium
 //! of unit extinction, single-scattering albedo `albedo` and Henyey-Greenstein asymmetry `g`.
@@ -13,7 +14,7 @@ use std::f32::consts::PI;
 
 use glam::{Vec2, Vec3};
 
-use super::{BsdfSample, BxdfFlags, DielectricBxdf, DiffuseBxdf, ReflTransFlags, TransportMode};
+use super::{BsdfSample, BxdfFlags, ConductorBxdf, DielectricBxdf, DiffuseBxdf, ReflTransFlags, TransportMode};
 use crate::color::{Channels, Rgb};
 use crate::math::{abs_cos_theta, same_hemisphere};
 use crate::media::phase::HenyeyGreenstein;
@@ -23,15 +24,108 @@ use crate::sampling::warp::{ONE_MINUS_EPSILON, power_heuristic};
 /// pbrt-v4's `Options->seed` default, which it hashes into every layered-BSDF generator.
 const PBRT_SEED: i32 = 0;
 
-/// pbrt-v4 instantiates `CoatedDiffuseBxDF` with `twoSided = true`: directions below the
+/// pbrt-v4 instantiates both coated BxDFs with `twoSided = true`: directions below the
 /// surface are mirrored above it, so both faces show the coating.
 const TWO_SIDED: bool = true;
 
-/// A dielectric coating over a diffuse base.
+/// The BxDF under the coating: what the random walks need of it.
+pub trait LayerBase: Copy {
+    /// The channels it scatters.
+    type C: Channels;
+    /// pbrt-v4's `f`.
+    fn f(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> Self::C;
+    /// pbrt-v4's `Sample_f`.
+    fn sample_f(
+        &self,
+        wo: Vec3,
+        uc: f32,
+        u: Vec2,
+        mode: TransportMode,
+        flags: ReflTransFlags,
+    ) -> Option<BsdfSample<Self::C>>;
+    /// pbrt-v4's `PDF`.
+    fn pdf(&self, wo: Vec3, wi: Vec3, mode: TransportMode, flags: ReflTransFlags) -> f32;
+    /// pbrt-v4's `Flags`.
+    fn flags(&self) -> BxdfFlags;
+    /// pbrt-v4's `Regularize`.
+    fn regularize(&mut self);
+}
+
+impl<C: Channels> LayerBase for DiffuseBxdf<C> {
+    type C = C;
+
+    #[inline]
+    fn f(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> C {
+        DiffuseBxdf::f(self, wo, wi, mode)
+    }
+    #[inline]
+    fn sample_f(
+        &self,
+        wo: Vec3,
+        uc: f32,
+        u: Vec2,
+        mode: TransportMode,
+        flags: ReflTransFlags,
+    ) -> Option<BsdfSample<C>> {
+        DiffuseBxdf::sample_f(self, wo, uc, u, mode, flags)
+    }
+    #[inline]
+    fn pdf(&self, wo: Vec3, wi: Vec3, mode: TransportMode, flags: ReflTransFlags) -> f32 {
+        DiffuseBxdf::pdf(self, wo, wi, mode, flags)
+    }
+    #[inline]
+    fn flags(&self) -> BxdfFlags {
+        DiffuseBxdf::flags(self)
+    }
+    /// A diffuse base has nothing to roughen.
+    #[inline]
+    fn regularize(&mut self) {}
+}
+
+impl<C: Channels> LayerBase for ConductorBxdf<C> {
+    type C = C;
+
+    #[inline]
+    fn f(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> C {
+        ConductorBxdf::f(self, wo, wi, mode)
+    }
+    #[inline]
+    fn sample_f(
+        &self,
+        wo: Vec3,
+        uc: f32,
+        u: Vec2,
+        mode: TransportMode,
+        flags: ReflTransFlags,
+    ) -> Option<BsdfSample<C>> {
+        ConductorBxdf::sample_f(self, wo, uc, u, mode, flags)
+    }
+    #[inline]
+    fn pdf(&self, wo: Vec3, wi: Vec3, mode: TransportMode, flags: ReflTransFlags) -> f32 {
+        ConductorBxdf::pdf(self, wo, wi, mode, flags)
+    }
+    #[inline]
+    fn flags(&self) -> BxdfFlags {
+        ConductorBxdf::flags(self)
+    }
+    #[inline]
+    fn regularize(&mut self) {
+        ConductorBxdf::regularize(self)
+    }
+}
+
+/// A dielectric coating over a diffuse base (pbrt-v4's `CoatedDiffuseBxDF`).
+pub type CoatedDiffuseBxdf<C = Rgb> = LayeredBxdf<DiffuseBxdf<C>, C>;
+
+/// A dielectric coating over a conductor (pbrt-v4's `CoatedConductorBxDF`); the conductor's
+/// η and k are relative to the coating (the material divides them by its η).
+pub type CoatedConductorBxdf<C = Rgb> = LayeredBxdf<ConductorBxdf<C>, C>;
+
+/// A dielectric coating over the base `B`.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct CoatedDiffuseBxdf<C = Rgb> {
+pub struct LayeredBxdf<B, C = Rgb> {
     top: DielectricBxdf,
-    bottom: DiffuseBxdf<C>,
+    bottom: B,
     thickness: f32,
     albedo: C,
     g: f32,
@@ -41,14 +135,14 @@ pub struct CoatedDiffuseBxdf<C = Rgb> {
 
 /// One of the two interfaces of the layered BxDF (pbrt-v4's `TopOrBottomBxDF`).
 #[derive(Clone, Copy)]
-enum Interface<'a, C> {
+enum Interface<'a, B> {
     Top(&'a DielectricBxdf),
-    Bottom(&'a DiffuseBxdf<C>),
+    Bottom(&'a B),
 }
 
-impl<C: Channels> Interface<'_, C> {
+impl<B: LayerBase> Interface<'_, B> {
     #[inline]
-    fn f(self, wo: Vec3, wi: Vec3, mode: TransportMode) -> C {
+    fn f(self, wo: Vec3, wi: Vec3, mode: TransportMode) -> B::C {
         match self {
             Interface::Top(b) => b.f(wo, wi, mode),
             Interface::Bottom(b) => b.f(wo, wi, mode),
@@ -56,7 +150,14 @@ impl<C: Channels> Interface<'_, C> {
     }
 
     #[inline]
-    fn sample_f(self, wo: Vec3, uc: f32, u: Vec2, mode: TransportMode, flags: ReflTransFlags) -> Option<BsdfSample<C>> {
+    fn sample_f(
+        self,
+        wo: Vec3,
+        uc: f32,
+        u: Vec2,
+        mode: TransportMode,
+        flags: ReflTransFlags,
+    ) -> Option<BsdfSample<B::C>> {
         match self {
             Interface::Top(b) => b.sample_f(wo, uc, u, mode, flags),
             Interface::Bottom(b) => b.sample_f(wo, uc, u, mode, flags),
@@ -117,20 +218,20 @@ impl Stream {
     }
 }
 
-impl<C: Channels> CoatedDiffuseBxdf<C> {
+impl<C: Channels, B: LayerBase<C = C>> LayeredBxdf<B, C> {
     /// A coating `top` over `bottom`, separated by a medium of the given `thickness`
     /// (clamped to the smallest positive float), `albedo` and asymmetry `g`; the walks stop
     /// after `max_depth` scattering events, and `f`/`pdf` average `n_samples` walks.
     pub fn new(
         top: DielectricBxdf,
-        bottom: DiffuseBxdf<C>,
+        bottom: B,
         thickness: f32,
         albedo: C,
         g: f32,
         max_depth: u32,
         n_samples: u32,
-    ) -> CoatedDiffuseBxdf<C> {
-        CoatedDiffuseBxdf { top, bottom, thickness: thickness.max(f32::MIN_POSITIVE), albedo, g, max_depth, n_samples }
+    ) -> LayeredBxdf<B, C> {
+        LayeredBxdf { top, bottom, thickness: thickness.max(f32::MIN_POSITIVE), albedo, g, max_depth, n_samples }
     }
 
     /// The coating.
@@ -139,7 +240,7 @@ impl<C: Channels> CoatedDiffuseBxdf<C> {
     }
 
     /// The base.
-    pub fn bottom(&self) -> &DiffuseBxdf<C> {
+    pub fn bottom(&self) -> &B {
         &self.bottom
     }
 
@@ -157,12 +258,12 @@ impl<C: Channels> CoatedDiffuseBxdf<C> {
         self.f_estimate(wo, wi, mode, false)
     }
 
-    /// [`CoatedDiffuseBxdf::f`]; with `consistent_mis`, both MIS weights use the density with
+    /// [`LayeredBxdf::f`]; with `consistent_mis`, both MIS weights use the density with
     /// which next-event estimation samples the inside direction from `wi`, which makes the
     /// estimate unbiased (used by the tests to validate the walk).
     fn f_estimate(&self, wo: Vec3, wi: Vec3, mode: TransportMode, consistent_mis: bool) -> C {
         // Density of the exit's connection strategy for a walk direction w leaving through it.
-        let exit_pdf = |exit: Interface<'_, C>, w: Vec3, wi: Vec3| {
+        let exit_pdf = |exit: Interface<'_, B>, w: Vec3, wi: Vec3| {
             if consistent_mis {
                 exit.pdf(wi, -w, !mode, ReflTransFlags::TRANSMISSION)
             } else {
@@ -311,7 +412,7 @@ impl<C: Channels> CoatedDiffuseBxdf<C> {
 
     /// Samples a direction by a random walk through the layers (pbrt-v4 §14.3). The
     /// returned pdf is that of the whole path, so `pdf_is_proportional` is set: use
-    /// f·|cos|/pdf as the weight and [`CoatedDiffuseBxdf::pdf`] for MIS.
+    /// f·|cos|/pdf as the weight and [`LayeredBxdf::pdf`] for MIS.
     ///
     /// pbrt-v4 only supports `ReflTransFlags::ALL` here; a coated diffuse surface only
     /// reflects, so nimbus treats `REFLECTION` like `ALL` and returns `None` without it.
@@ -416,7 +517,7 @@ impl<C: Channels> CoatedDiffuseBxdf<C> {
         None
     }
 
-    /// An approximate density of [`CoatedDiffuseBxdf::sample_f`] for MIS: the entrance
+    /// An approximate density of [`LayeredBxdf::sample_f`] for MIS: the entrance
     /// reflection plus a stochastic estimate of the TRT (or TT) term, mixed with a uniform
     /// density as 0.9·estimate + 0.1/(4π) (pbrt-v4 §14.3, `LayeredBxDF::PDF`).
     pub fn pdf(&self, wo: Vec3, wi: Vec3, mode: TransportMode, sample_flags: ReflTransFlags) -> f32 {
@@ -527,10 +628,10 @@ impl<C: Channels> CoatedDiffuseBxdf<C> {
         flags
     }
 
-    /// Roughens the coating (pbrt-v4's `Regularize` of both layers; the base has nothing to
-    /// roughen).
+    /// Roughens both layers (pbrt-v4's `Regularize`).
     pub fn regularize(&mut self) {
         self.top.regularize();
+        self.bottom.regularize();
     }
 }
 

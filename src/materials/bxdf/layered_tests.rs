@@ -1,4 +1,4 @@
-//! Tests of the layered (coated diffuse) BxDF. Its `f` and `pdf` are stochastic estimates
+//! Tests of the layered (coated diffuse and coated conductor) BxDFs. Its `f` and `pdf` are stochastic estimates
 //! and its `sample_f` returns path densities (`pdf_is_proportional`), so the exact identities
 //! of `testing::check_all` do not apply; instead these tests compare unbiased estimators of
 //! the same quantities with thresholds of five standard errors, estimated from the data.
@@ -7,7 +7,7 @@ use glam::{DVec3, Vec2, Vec3};
 
 use super::*;
 use crate::materials::bxdf::testing::{self, stratified_2d, test_directions};
-use crate::materials::bxdf::{Bxdf, TrowbridgeReitz};
+use crate::materials::bxdf::{Bxdf, ConductorBxdf, TrowbridgeReitz, fr_complex_channels};
 
 fn coated(
     alpha: f32,
@@ -40,7 +40,12 @@ fn mean_and_error(xs: &[DVec3]) -> (DVec3, DVec3) {
 /// Directional albedo from `sample_f` weights, with its standard error (stratified samples
 /// treated as independent, which overestimates the error). With `non_specular_only`, the
 /// specular reflection off a smooth coating is left out, as it is from `f`.
-fn albedo_by_sampling(b: &CoatedDiffuseBxdf, wo: Vec3, mode: TransportMode, non_specular_only: bool) -> (DVec3, DVec3) {
+fn albedo_by_sampling<B: LayerBase<C = Rgb>>(
+    b: &LayeredBxdf<B>,
+    wo: Vec3,
+    mode: TransportMode,
+    non_specular_only: bool,
+) -> (DVec3, DVec3) {
     let n = 200;
     let weights: Vec<DVec3> = stratified_2d(n)
         .enumerate()
@@ -63,7 +68,12 @@ fn albedo_by_sampling(b: &CoatedDiffuseBxdf, wo: Vec3, mode: TransportMode, non_
 /// Directional albedo ∫ f |cos θi| dωi from the stochastic `f` (with pbrt-v4's or with
 /// consistent MIS weights), by stratified uniform hemisphere sampling, with its standard
 /// error.
-fn albedo_by_evaluation(b: &CoatedDiffuseBxdf, wo: Vec3, mode: TransportMode, consistent_mis: bool) -> (DVec3, DVec3) {
+fn albedo_by_evaluation<B: LayerBase<C = Rgb>>(
+    b: &LayeredBxdf<B>,
+    wo: Vec3,
+    mode: TransportMode,
+    consistent_mis: bool,
+) -> (DVec3, DVec3) {
     let n = 100;
     let xs: Vec<DVec3> = stratified_2d(n)
         .map(|u| {
@@ -273,4 +283,80 @@ fn layered_pdf_is_a_positive_mixture() {
             assert!(integral > 0.1 && integral.is_finite(), "∫pdf = {integral}");
         }
     }
+}
+
+fn coated_conductor(
+    coat_alpha: f32,
+    coat_eta: f32,
+    metal_alpha: f32,
+    thickness: f32,
+    albedo: Rgb,
+    g: f32,
+) -> CoatedConductorBxdf {
+    // Copper's optical constants at the sRGB primaries (roughly), relative to the coating.
+    let metal = ConductorBxdf::new(
+        TrowbridgeReitz::new(metal_alpha, metal_alpha),
+        Rgb::new(0.27, 0.68, 1.22),
+        Rgb::new(3.61, 2.63, 2.29),
+    )
+    .relative_to(coat_eta);
+    CoatedConductorBxdf::new(
+        DielectricBxdf::new(coat_eta, TrowbridgeReitz::new(coat_alpha, coat_alpha)),
+        metal,
+        thickness,
+        albedo,
+        g,
+        64,
+        2,
+    )
+}
+
+#[test]
+fn index_matched_clear_coat_over_a_mirror_is_fresnel_times_beer_lambert() {
+    // An η = 1 smooth coating passes light straight through and a clear slab of thickness t
+    // attenuates it by e^(−t/cos θ) each way: every sample is the mirror direction with weight
+    // F_conductor(cos θ) · e^(−2t/cos θ), exactly.
+    let t = 0.2;
+    let b = coated_conductor(0.0, 1.0, 0.0, t, Rgb::ZERO, 0.0);
+    for wo in test_directions() {
+        let cos = wo.z.abs();
+        let expected =
+            fr_complex_channels(cos, Rgb::new(0.27, 0.68, 1.22), Rgb::new(3.61, 2.63, 2.29)) * (-2.0 * t / cos).exp();
+        for (k, u) in stratified_2d(8).enumerate() {
+            let uc = (k as f32 + 0.5) / 64.0;
+            let s = b.sample_f(wo, uc, u, TransportMode::Radiance, ReflTransFlags::ALL).expect("a sample");
+            assert!(s.is_specular() && (s.wi - Vec3::new(-wo.x, -wo.y, wo.z)).length() < 1e-5, "{wo}: {:?}", s.wi);
+            let w = s.f * s.wi.z.abs() / s.pdf;
+            assert!((w - expected).abs().max_element() < 1e-4 * expected.max_element(), "{wo}: {w} vs {expected}");
+        }
+    }
+}
+
+#[test]
+fn coated_conductor_conserves_energy_and_evaluation_agrees_with_sampling() {
+    for b in [
+        coated_conductor(0.0, 1.5, 0.3, 0.01, Rgb::ZERO, 0.0),
+        coated_conductor(0.3, 1.5, 0.2, 0.01, Rgb::ZERO, 0.0),
+        coated_conductor(0.0, 1.5, 0.4, 0.3, Rgb::new(0.9, 0.6, 0.3), 0.5),
+    ] {
+        for wo in [Vec3::new(0.3, 0.4, 0.85).normalize(), Vec3::new(-0.7, 0.5, -0.3).normalize()] {
+            for mode in [TransportMode::Radiance, TransportMode::Importance] {
+                let (all, err) = albedo_by_sampling(&b, wo, mode, false);
+                assert!((all - 5.0 * err).max_element() <= 1.0, "albedo {all} ± {err} > 1 for {b:?}, wo {wo}");
+                let (s, es) = albedo_by_sampling(&b, wo, mode, true);
+                let (e, ee) = albedo_by_evaluation(&b, wo, mode, true);
+                let sigma = (es * es + ee * ee).powf(0.5);
+                assert!(
+                    ((s - e).abs() - 5.0 * sigma).max_element() <= 1e-3,
+                    "sampled albedo {s} ± {es}, evaluated {e} ± {ee} ({b:?}, wo {wo}, {mode:?})"
+                );
+            }
+        }
+    }
+    let mut b = Bxdf::from(coated_conductor(0.0, 1.5, 0.0, 0.01, Rgb::ZERO, 0.0));
+    assert_eq!(b.flags(), BxdfFlags::SPECULAR_REFLECTION);
+    b.regularize();
+    let Bxdf::CoatedConductor(c) = &b else { unreachable!() };
+    assert_eq!(c.top().distribution().alpha_x(), 0.1);
+    assert_eq!(c.bottom().distribution().alpha_x(), 0.1);
 }

@@ -13,8 +13,10 @@
 //! - [`DielectricBxdf`]: smooth or rough reflection and transmission at a real index of
 //!   refraction.
 //! - [`ThinDielectricBxdf`]: a thin slab with inter-reflection, specular only.
-//! - [`CoatedDiffuseBxdf`]: pbrt-v4's `LayeredBxDF<DielectricBxDF, DiffuseBxDF, true>`, a
-//!   stochastic evaluation by random walks between a dielectric coating and a diffuse base.
+//! - [`DiffuseTransmissionBxdf`]: Lambertian reflection R/π and transmission T/π.
+//! - [`CoatedDiffuseBxdf`] and [`CoatedConductorBxdf`]: pbrt-v4's `LayeredBxDF` with a
+//!   dielectric coating over a diffuse or a conductor base, a stochastic evaluation by random
+//!   walks between the two.
 //!
 //! [`Bxdf`] is the closed set of these models. Nothing here allocates.
 //!
@@ -35,6 +37,7 @@
 mod conductor;
 mod dielectric;
 mod diffuse;
+mod diffuse_transmission;
 mod fresnel;
 mod layered;
 mod microfacet;
@@ -53,8 +56,9 @@ use crate::color::{Channels, Rgb};
 pub use conductor::ConductorBxdf;
 pub use dielectric::DielectricBxdf;
 pub use diffuse::DiffuseBxdf;
+pub use diffuse_transmission::DiffuseTransmissionBxdf;
 pub use fresnel::{fr_complex, fr_complex_channels, fr_dielectric};
-pub use layered::CoatedDiffuseBxdf;
+pub use layered::{CoatedConductorBxdf, CoatedDiffuseBxdf};
 pub use microfacet::TrowbridgeReitz;
 pub use thin_dielectric::ThinDielectricBxdf;
 
@@ -327,6 +331,10 @@ pub enum Bxdf<C = Rgb> {
     ThinDielectric(ThinDielectricBxdf),
     /// A dielectric coating over a diffuse base.
     CoatedDiffuse(CoatedDiffuseBxdf<C>),
+    /// A dielectric coating over a conductor.
+    CoatedConductor(CoatedConductorBxdf<C>),
+    /// Lambertian reflection and transmission.
+    DiffuseTransmission(DiffuseTransmissionBxdf<C>),
 }
 
 impl<C: Channels> Bxdf<C> {
@@ -342,6 +350,8 @@ impl<C: Channels> Bxdf<C> {
             Bxdf::Dielectric(b) => b.f(wo, wi, mode),
             Bxdf::ThinDielectric(b) => b.f(wo, wi, mode),
             Bxdf::CoatedDiffuse(b) => b.f(wo, wi, mode),
+            Bxdf::CoatedConductor(b) => b.f(wo, wi, mode),
+            Bxdf::DiffuseTransmission(b) => b.f(wo, wi, mode),
         }
     }
 
@@ -365,6 +375,8 @@ impl<C: Channels> Bxdf<C> {
             Bxdf::Dielectric(b) => b.sample_f(wo, uc, u, mode, sample_flags),
             Bxdf::ThinDielectric(b) => b.sample_f(wo, uc, u, mode, sample_flags),
             Bxdf::CoatedDiffuse(b) => b.sample_f(wo, uc, u, mode, sample_flags),
+            Bxdf::CoatedConductor(b) => b.sample_f(wo, uc, u, mode, sample_flags),
+            Bxdf::DiffuseTransmission(b) => b.sample_f(wo, uc, u, mode, sample_flags),
         }?;
         (!s.f.is_zero() && s.pdf != 0.0 && s.wi.z != 0.0).then_some(s)
     }
@@ -381,6 +393,8 @@ impl<C: Channels> Bxdf<C> {
             Bxdf::Dielectric(b) => b.pdf(wo, wi, mode, sample_flags),
             Bxdf::ThinDielectric(b) => b.pdf(wo, wi, mode, sample_flags),
             Bxdf::CoatedDiffuse(b) => b.pdf(wo, wi, mode, sample_flags),
+            Bxdf::CoatedConductor(b) => b.pdf(wo, wi, mode, sample_flags),
+            Bxdf::DiffuseTransmission(b) => b.pdf(wo, wi, mode, sample_flags),
         }
     }
 
@@ -393,6 +407,8 @@ impl<C: Channels> Bxdf<C> {
             Bxdf::Dielectric(b) => b.flags(),
             Bxdf::ThinDielectric(b) => b.flags(),
             Bxdf::CoatedDiffuse(b) => b.flags(),
+            Bxdf::CoatedConductor(b) => b.flags(),
+            Bxdf::DiffuseTransmission(b) => b.flags(),
         }
     }
 
@@ -401,10 +417,11 @@ impl<C: Channels> Bxdf<C> {
     #[inline]
     pub fn regularize(&mut self) {
         match self {
-            Bxdf::Diffuse(_) | Bxdf::ThinDielectric(_) => {}
+            Bxdf::Diffuse(_) | Bxdf::ThinDielectric(_) | Bxdf::DiffuseTransmission(_) => {}
             Bxdf::Conductor(b) => b.regularize(),
             Bxdf::Dielectric(b) => b.regularize(),
             Bxdf::CoatedDiffuse(b) => b.regularize(),
+            Bxdf::CoatedConductor(b) => b.regularize(),
         }
     }
 }
@@ -436,6 +453,18 @@ impl<C: Channels> From<ThinDielectricBxdf> for Bxdf<C> {
 impl<C: Channels> From<CoatedDiffuseBxdf<C>> for Bxdf<C> {
     fn from(b: CoatedDiffuseBxdf<C>) -> Bxdf<C> {
         Bxdf::CoatedDiffuse(b)
+    }
+}
+
+impl<C: Channels> From<CoatedConductorBxdf<C>> for Bxdf<C> {
+    fn from(b: CoatedConductorBxdf<C>) -> Bxdf<C> {
+        Bxdf::CoatedConductor(b)
+    }
+}
+
+impl<C: Channels> From<DiffuseTransmissionBxdf<C>> for Bxdf<C> {
+    fn from(b: DiffuseTransmissionBxdf<C>) -> Bxdf<C> {
+        Bxdf::DiffuseTransmission(b)
     }
 }
 

@@ -474,11 +474,27 @@ fn resolve_mixes(
     Ok(())
 }
 
+/// The homogeneous medium inside a `subsurface` material's boundary.
+struct SubsurfaceMedium {
+    sigma_a: SpectrumValue,
+    sigma_s: SpectrumValue,
+    g: f32,
+    loc: FileLoc,
+}
+
+/// A material as the scene uses it: what scatters at its surface, how it perturbs the
+/// shading geometry, and the medium behind it for `subsurface`.
+struct BuiltMaterial {
+    material: Material,
+    shading: ShadingPerturbation,
+    subsurface: Option<SubsurfaceMedium>,
+}
+
 fn material(
     e: &nimbus_parser::Entity,
     tb: &TextureBuilder,
     warnings: &mut Vec<Warning>,
-) -> Result<(Material, ShadingPerturbation), Error> {
+) -> Result<BuiltMaterial, Error> {
     let settings = MaterialSettings::from_entity(e, warnings)?;
     let cs = e.color_space;
     let loc = &e.loc;
@@ -491,6 +507,7 @@ fn material(
     } else {
         ShadingPerturbation::None
     };
+    let mut subsurface = None;
     let material = match &settings.kind {
         MaterialKind::Diffuse { reflectance } => Material::Diffuse { reflectance: tb.spectrum(reflectance, cs, loc)? },
         MaterialKind::Conductor { spec, roughness: r } => {
@@ -542,9 +559,19 @@ fn material(
                 n_samples: *n_samples,
             }
         }
+        MaterialKind::Subsurface { eta, roughness: r, sigma_a, sigma_s, scale, g } => {
+            let unbounded = |s: &SpectrumSpec| tb.spectra.unbounded(s, cs).map_err(|x| err(loc, x.to_string()));
+            subsurface = Some(SubsurfaceMedium {
+                sigma_a: unbounded(sigma_a)?.scaled(*scale),
+                sigma_s: unbounded(sigma_s)?.scaled(*scale),
+                g: *g,
+                loc: loc.clone(),
+            });
+            Material::Dielectric { eta: SpectrumValue::constant(*eta), roughness: roughness(r, tb, loc)? }
+        }
         MaterialKind::Unsupported(_) => Material::Diffuse { reflectance: Tex::Const(SpectrumValue::constant(0.5)) },
     };
-    Ok((material, shading))
+    Ok(BuiltMaterial { material, shading, subsurface })
 }
 
 /// Emission of an area light: pbrt-v4's photometric normalisation and `power`.
@@ -563,11 +590,14 @@ fn area_light_radiance(
     Ok(l.scaled(scale))
 }
 
+/// A shape's boundary index from its `MediumInterface` and its material.
+type InterfaceIds<'a> = dyn Fn(Option<&nimbus_parser::MediumInterface>, u32) -> Result<u32, Error> + 'a;
+
 struct ShapeBuilder<'a> {
     store: ShapeStore,
     spectra: SpectrumResolver<'a>,
     material_ids: &'a dyn Fn(&MaterialRef) -> u32,
-    interface_ids: &'a dyn Fn(&nimbus_parser::MediumInterface) -> Result<u32, Error>,
+    interface_ids: &'a InterfaceIds<'a>,
     lights: Vec<Light>,
     triangles: usize,
     mesh_bytes: usize,
@@ -585,13 +615,10 @@ impl ShapeBuilder<'_> {
     ) -> Result<(), Error> {
         let e = &shape.entity;
         let settings = ShapeSettings::from_entity(shape)?;
-        let interface = match &shape.medium_interface {
-            Some(mi) => (self.interface_ids)(mi)?,
-            None => NONE,
-        };
         let world = fixed_transform(&shape.world_from_object, &e.loc, "shape")?;
         let rev = shape.reverse_orientation;
         let material = (self.material_ids)(&shape.material);
+        let interface = (self.interface_ids)(shape.medium_interface.as_ref(), material)?;
         let first = prims.len();
         let mut push = |g: Geometry, store: &ShapeStore| {
             bounds.push(store.bounds(g));
@@ -1010,19 +1037,30 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions) -> Result<Scene
     // Materials: anonymous ones by index, then named ones.
     let mut materials = Vec::with_capacity(desc.materials.len() + desc.named_materials.len());
     let mut shading = Vec::with_capacity(materials.capacity());
-    for m in &desc.materials {
-        let (m, s) = material(m, &tb, &mut warnings)?;
-        materials.push(m);
-        shading.push(s);
-    }
+    let mut subsurface = Vec::with_capacity(materials.capacity());
     let mut named = HashMap::new();
-    for m in &desc.named_materials {
-        named.insert(m.name.clone(), materials.len() as u32);
-        let (m, s) = material(&m.entity, &tb, &mut warnings)?;
-        materials.push(m);
-        shading.push(s);
+    let entities =
+        desc.materials.iter().map(|m| (None, m)).chain(desc.named_materials.iter().map(|m| (Some(&m.name), &m.entity)));
+    for (name, e) in entities {
+        if let Some(name) = name {
+            named.insert(name.clone(), materials.len() as u32);
+        }
+        let built = material(e, &tb, &mut warnings)?;
+        materials.push(built.material);
+        shading.push(built.shading);
+        subsurface.push(built.subsurface);
     }
     resolve_mixes(desc, &mut materials, &named)?;
+    for m in &materials {
+        if let Material::Mix { materials: pair, .. } = m
+            && let Some(part) = pair.iter().find_map(|&i| subsurface[i as usize].as_ref())
+        {
+            return Err(err(
+                &part.loc,
+                "a subsurface material cannot be part of a mix in nimbus (its medium boundary belongs to the shape)",
+            ));
+        }
+    }
     let has_interfaces = materials.iter().any(Material::is_interface);
     let material_ids = |r: &MaterialRef| -> u32 {
         match r {
@@ -1040,7 +1078,14 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions) -> Result<Scene
         (None, Some(s)) => s.parse().map_err(|m: String| err(&desc.film.loc, m))?,
         (None, None) => SpectralMode::Auto,
     };
-    let chromatic = first_chromatic(desc, &materials, &tb.textures, &material_ids, &used, &spectra)?;
+    let mut chromatic = first_chromatic(desc, &materials, &tb.textures, &material_ids, &used, &spectra)?;
+    if chromatic.is_none() {
+        let shapes = desc.shapes.iter().chain(desc.instance_definitions.iter().flat_map(|d| d.shapes.iter()));
+        chromatic = shapes
+            .filter_map(|shape| subsurface[material_ids(&shape.material) as usize].as_ref())
+            .find(|m| !m.sigma_a.is_constant() || !m.sigma_s.is_constant())
+            .map(|m| format!("{}: subsurface material's sigma_a or sigma_s varies with wavelength", m.loc));
+    }
     let transport = TransportChoice::new(mode, chromatic.as_deref());
 
     // Media: only those the camera, lights or boundary surfaces use are built.
@@ -1053,10 +1098,31 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions) -> Result<Scene
             media.push(build_medium(m, &settings, &spectra, transport.transport)?);
         }
     }
+    // A subsurface material's medium, one per material (shapes sharing it share it).
+    let subsurface_media: Vec<u32> = subsurface
+        .iter()
+        .enumerate()
+        .map(|(i, m)| match m {
+            Some(m) => {
+                let name = format!("subsurface material {i}");
+                media.push(Medium::homogeneous(name, m.sigma_a, m.sigma_s, SpectrumValue::ZERO, m.g));
+                media.len() as u32 - 1
+            }
+            None => NONE,
+        })
+        .collect();
     let interfaces = std::cell::RefCell::new(Vec::<[u32; 2]>::new());
     let medium_id = |name: &Option<String>| name.as_deref().map_or(NONE, |n| media_ids.get(n).copied().unwrap_or(NONE));
-    let interface_ids = |mi: &nimbus_parser::MediumInterface| -> Result<u32, Error> {
-        let pair = [medium_id(&mi.inside), medium_id(&mi.outside)];
+    // A shape's boundary: its MediumInterface, with the inside replaced by the material's
+    // medium for subsurface materials.
+    let interface_ids = |mi: Option<&nimbus_parser::MediumInterface>, material: u32| -> Result<u32, Error> {
+        let sub = subsurface_media.get(material as usize).copied().unwrap_or(NONE);
+        let pair = match mi {
+            None if sub == NONE => return Ok(NONE),
+            None => [sub, NONE],
+            Some(mi) if sub == NONE => [medium_id(&mi.inside), medium_id(&mi.outside)],
+            Some(mi) => [sub, medium_id(&mi.outside)],
+        };
         let mut list = interfaces.borrow_mut();
         Ok(match list.iter().position(|p| *p == pair) {
             Some(i) => i as u32,

@@ -126,6 +126,22 @@ pub enum MaterialKind {
         /// Probability of the second (float texture).
         amount: FloatInput,
     },
+    /// `subsurface`: rendered as what its BSSRDF approximates, a dielectric boundary around a
+    /// homogeneous medium with the material's coefficients.
+    Subsurface {
+        /// Index of refraction of the boundary.
+        eta: f32,
+        /// Roughness of the boundary.
+        roughness: Roughness,
+        /// Absorption coefficient (before `scale`).
+        sigma_a: SpectrumSpec,
+        /// Scattering coefficient (before `scale`).
+        sigma_s: SpectrumSpec,
+        /// Multiplier on both (pbrt-v4's unit conversion: named coefficients are per mm).
+        scale: f32,
+        /// Henyey-Greenstein asymmetry of the medium.
+        g: f32,
+    },
     /// A material nimbus lacks, rendered as gray diffuse.
     Unsupported(String),
 }
@@ -177,6 +193,76 @@ fn named_eta(e: &Entity, name: &str, default: f32) -> Result<Eta, Error> {
     }
     let v = checked_float(p, name, default, |v| v > 0.0, "the index of refraction must be positive")?;
     Ok(Eta::Constant(v))
+}
+
+/// pbrt-v4's four mutually exclusive ways to give a subsurface material's coefficients: a
+/// named measured medium, `sigma_a` with `sigma_s`, `reflectance` (with `mfp`), or its
+/// defaults (whole milk's, per mm).
+fn subsurface(e: &Entity, warnings: &mut Vec<Warning>) -> Result<MaterialKind, Error> {
+    let p = &e.params;
+    let mut g = p.get_one_float("g", 0.0)?;
+    let (sigma_a, sigma_s) = if let Some(name) = p.get_opt_string("name")? {
+        let Some((_, ss, sa)) = super::media::MEDIUM_PRESETS.iter().find(|(n, _, _)| *n == name) else {
+            return Err(Error::new(
+                p.loc("name").unwrap_or(&e.loc),
+                format!("subsurface: named medium \"{name}\" not found"),
+            ));
+        };
+        if g != 0.0 {
+            warnings.push(Warning::new(
+                p.loc("g").unwrap_or(&e.loc),
+                "subsurface: non-zero \"g\" ignored with named scattering coefficients (they are reduced coefficients, for g = 0)",
+            ));
+        }
+        g = 0.0;
+        (SpectrumSpec::Rgb(*sa), SpectrumSpec::Rgb(*ss))
+    } else {
+        let constant = |name: &str| -> Result<Option<SpectrumSpec>, Error> {
+            if p.peek(name).is_some_and(|q| q.ty == nimbus_parser::ParamType::Texture) {
+                return Err(Error::new(
+                    p.loc(name).unwrap_or(&e.loc),
+                    format!("subsurface: a textured \"{name}\" is not supported by nimbus (its medium is homogeneous)"),
+                ));
+            }
+            spectrum(p, name)
+        };
+        match (constant("sigma_a")?, constant("sigma_s")?) {
+            (Some(a), Some(s)) => (a, s),
+            (Some(_), None) => {
+                return Err(Error::new(
+                    p.loc("sigma_a").unwrap_or(&e.loc),
+                    "subsurface: \"sigma_a\" given without \"sigma_s\"",
+                ));
+            }
+            (None, Some(_)) => {
+                return Err(Error::new(
+                    p.loc("sigma_s").unwrap_or(&e.loc),
+                    "subsurface: \"sigma_s\" given without \"sigma_a\"",
+                ));
+            }
+            (None, None) => {
+                if p.peek("reflectance").is_some() {
+                    return Err(Error::new(
+                        p.loc("reflectance").unwrap_or(&e.loc),
+                        "subsurface: coefficients from \"reflectance\" (pbrt-v4's diffusion-table inversion) are not supported by nimbus; give \"sigma_a\" and \"sigma_s\" or a \"name\"",
+                    ));
+                }
+                (SpectrumSpec::Rgb([0.0011, 0.0024, 0.014]), SpectrumSpec::Rgb([2.55, 3.21, 3.77]))
+            }
+        }
+    };
+    Ok(MaterialKind::Subsurface {
+        eta: checked_float(p, "eta", 1.33, |v| v > 0.0, "the index of refraction must be positive")?,
+        roughness: roughness(e)?,
+        sigma_a,
+        sigma_s,
+        scale: checked_float(p, "scale", 1.0, |v| v >= 0.0 && v.is_finite(), "must be finite and not negative")?,
+        g: if g > -1.0 && g < 1.0 {
+            g
+        } else {
+            return Err(Error::new(p.loc("g").unwrap_or(&e.loc), "subsurface: \"g\" must be in (-1, 1)"));
+        },
+    })
 }
 
 /// A conductor's optical constants from `{prefix}eta`/`{prefix}k` or `reflectance`, copper by
@@ -253,6 +339,7 @@ impl MaterialSettings {
                     "must be finite and not negative",
                 )?,
             },
+            "subsurface" => subsurface(e, warnings)?,
             "mix" => {
                 let names = p.get_strings("materials")?;
                 let [a, b] = <[String; 2]>::try_from(names.to_vec()).map_err(|_| {

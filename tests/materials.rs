@@ -304,3 +304,69 @@ Shape "sphere" "float radius" 0.8"#,
         assert!(e.to_string().contains("sss.pbrt:9") && e.to_string().contains(message), "{material}: {e}");
     }
 }
+
+/// pbrt-v4's stochastic alpha test: a black plane of alpha a in front of a uniform sky lets
+/// 1 − a of the camera rays through, and of the shadow rays towards a sun; alpha 0 and 1 are
+/// exact, and a texture decides per point.
+#[test]
+fn alpha_tested_shapes_let_rays_through_with_probability_one_minus_alpha() {
+    let quad = |z: f32| {
+        format!(
+            r#"Shape "trianglemesh" "integer indices" [0 1 2 0 2 3] "point3 P" [-10 -10 {z}  10 -10 {z}  10 10 {z}  -10 10 {z}] "point2 uv" [0 0 1 0 1 1 0 1]"#
+        )
+    };
+    let header = |spp: u32| {
+        format!(
+            r#"LookAt 0 0 5  0 0 0  0 1 0
+Camera "orthographic"
+Sampler "independent" "integer pixelsamples" {spp}
+Film "rgb" "integer xresolution" 16 "integer yresolution" 16
+Integrator "volpath" "integer maxdepth" 1
+WorldBegin
+"#
+        )
+    };
+    // Camera rays through a black plane in front of the sky.
+    for (alpha, exact) in [("0.3", false), ("0", true), ("1", true)] {
+        let text = format!(
+            "{}LightSource \"infinite\" \"rgb L\" [1 1 1]\nMaterial \"diffuse\" \"rgb reflectance\" [0 0 0]\n{} \"float alpha\" {alpha}",
+            header(64),
+            quad(1.0)
+        );
+        let img = render_scene(&load_scene(&text, &transport(false)));
+        let through = 1.0 - alpha.parse::<f64>().unwrap();
+        if exact {
+            assert!(
+                img.pixels.iter().all(|p| (p.x as f64 - through).abs() < 1e-6),
+                "alpha {alpha}: {:?}",
+                img.pixels[0]
+            );
+        } else {
+            assert_channels(&img, [through; 3], &format!("alpha {alpha}"));
+        }
+    }
+    // Shadow rays: a white Lambertian floor under a sun, behind an alpha 0.5 black plane that
+    // the camera also looks through: (1 − a)² of R·L·cos θ/π on average.
+    let text = format!(
+        "{}LightSource \"distant\" \"point3 from\" [0 3 4] \"point3 to\" [0 0 0] \"rgb L\" [1 1 1]\nAttributeBegin\nMaterial \"diffuse\" \"rgb reflectance\" [0 0 0]\n{} \"float alpha\" 0.5\nAttributeEnd\nMaterial \"diffuse\" \"rgb reflectance\" [1 1 1]\n{}",
+        header(256),
+        quad(1.0),
+        quad(0.0)
+    );
+    let img = render_scene(&load_scene(&text, &transport(false)));
+    let lit = 0.8 / std::f64::consts::PI;
+    assert_channels(&img, [0.25 * lit; 3], "alpha-tested occluder");
+    // A checkerboard alpha (u, v in 2×2 squares: alternately 0 and 1) shows the sky through
+    // exactly half of the plane.
+    let text = format!(
+        "{}Texture \"holes\" \"float\" \"checkerboard\" \"float uscale\" 2 \"float vscale\" 2 \"float tex1\" 1 \"float tex2\" 0\nLightSource \"infinite\" \"rgb L\" [1 1 1]\nMaterial \"diffuse\" \"rgb reflectance\" [0 0 0]\n{} \"texture alpha\" \"holes\"",
+        header(4),
+        quad(1.0)
+    );
+    let img = render_scene(&load_scene(&text, &transport(false)));
+    let mean = img.pixels.iter().map(|p| f64::from(p.x)).sum::<f64>() / img.pixels.len() as f64;
+    assert!((mean - 0.5).abs() < 0.05, "{mean}");
+    assert!(
+        img.pixels.iter().filter(|p| p.x > 0.99).count() > 64 && img.pixels.iter().filter(|p| p.x < 0.01).count() > 64
+    );
+}

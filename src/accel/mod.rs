@@ -14,6 +14,7 @@ use crate::geometry::{Bounds3, Ray};
 use crate::shapes::{
     Cylinder, Disk, Mesh, Sphere, SurfaceHit, transform_normal, transform_normal_unnormalized, triangle_hit,
 };
+use crate::textures::{Tex, TexContext, Textures};
 
 /// Marks an absent index (no area light, no medium interface, not instanced).
 pub const NONE: u32 = u32::MAX;
@@ -49,6 +50,8 @@ pub struct Primitive {
     pub area_light: u32,
     /// Medium interface index or [`NONE`] (not a boundary between media).
     pub interface: u32,
+    /// Index of the shape's alpha texture in [`Surfaces::alphas`], or [`NONE`] (opaque).
+    pub alpha: u32,
 }
 
 /// All shapes, referenced by index from primitives.
@@ -97,6 +100,26 @@ struct Candidate {
 #[inline]
 fn bvh_ray(ray: &Ray, t_max: f32) -> BvhRay {
     BvhRay::new(Vec3A::from(ray.o), Vec3A::from(ray.d) + Vec3A::ZERO, 0.0, t_max)
+}
+
+/// pbrt-v4's stochastic alpha test: a hit where alpha < 1 counts when a uniform number hashed
+/// from the ray is at most alpha (never when alpha ≤ 0). pbrt-v4 hashes the ray, then retraces
+/// from the skipped hit, so the surfaces behind get their own numbers; nimbus tests every
+/// candidate of one traversal, so it hashes the hit distance in as well.
+#[inline]
+fn alpha_passes(alpha: f32, ray: &Ray, t: f32) -> bool {
+    if alpha >= 1.0 {
+        return true;
+    }
+    if alpha <= 0.0 {
+        return false;
+    }
+    let mut bytes = [0u8; 28];
+    for (i, v) in [ray.o.x, ray.o.y, ray.o.z, ray.d.x, ray.d.y, ray.d.z, t].iter().enumerate() {
+        bytes[4 * i..4 * i + 4].copy_from_slice(&v.to_le_bytes());
+    }
+    let u = (crate::sampling::rng::murmur_hash64a(&bytes, 0) as u32) as f32 * (1.0 / 4_294_967_296.0);
+    u <= alpha
 }
 
 /// A deterministic fair coin per ray (for coplanar ties).
@@ -198,6 +221,9 @@ impl Accel {
             let Some((t, detail)) = found else {
                 return f32::INFINITY;
             };
+            if prim.alpha != NONE && !scene.alpha_passes(prim, instance, detail, ray, t) {
+                return f32::INFINITY;
+            }
             match *best {
                 Some(b) if tie(t, b.t) => {
                     let (new_pass, old_pass) = (scene.is_pass_through(prim), scene.is_pass_through(b.prim));
@@ -215,27 +241,41 @@ impl Accel {
         });
     }
 
-    fn any(&self, scene: &Surfaces, ray: &Ray, t_max: f32) -> bool {
+    fn any(&self, scene: &Surfaces, ray: &Ray, t_max: f32, instance: u32) -> bool {
         let bvh_ray = bvh_ray(ray, t_max);
         !self.bvh.ray_traverse_miss(bvh_ray, |r, id| {
             let prim = self.prims[id];
-            let hit = match prim.geometry {
-                Geometry::Triangle { mesh, tri } => {
-                    scene.shapes.meshes[mesh as usize].intersect(tri, ray, r.tmax).is_some()
+            // Opaque shapes only need a yes or no; alpha-tested ones the hit to test.
+            let found = match prim.geometry {
+                Geometry::Triangle { mesh, tri } => scene.shapes.meshes[mesh as usize]
+                    .intersect(tri, ray, r.tmax)
+                    .map(|(t, b1, b2)| (t, Detail::Barycentric(b1, b2))),
+                Geometry::Sphere(i) => {
+                    scene.shapes.spheres[i as usize].intersect(ray, r.tmax).map(|(t, p)| (t, Detail::ObjectPoint(p)))
                 }
-                Geometry::Sphere(i) => scene.shapes.spheres[i as usize].intersect(ray, r.tmax).is_some(),
-                Geometry::Disk(i) => scene.shapes.disks[i as usize].intersect(ray, r.tmax).is_some(),
-                Geometry::Cylinder(i) => scene.shapes.cylinders[i as usize].intersect(ray, r.tmax).is_some(),
+                Geometry::Disk(i) => {
+                    scene.shapes.disks[i as usize].intersect(ray, r.tmax).map(|(t, p)| (t, Detail::ObjectPoint(p)))
+                }
+                Geometry::Cylinder(i) => {
+                    scene.shapes.cylinders[i as usize].intersect(ray, r.tmax).map(|(t, p)| (t, Detail::ObjectPoint(p)))
+                }
                 Geometry::Instance(k) => {
                     let inst = &scene.instances[k as usize];
                     let local = Ray::new(
                         inst.instance_from_world.transform_point3(ray.o),
                         inst.instance_from_world.transform_vector3(ray.d),
                     );
-                    scene.blas[inst.accel as usize].any(scene, &local, r.tmax)
+                    return if scene.blas[inst.accel as usize].any(scene, &local, r.tmax, k) {
+                        0.0
+                    } else {
+                        f32::INFINITY
+                    };
                 }
             };
-            if hit { 0.0 } else { f32::INFINITY }
+            match found {
+                Some((t, detail)) if prim.alpha == NONE || scene.alpha_passes(prim, instance, detail, ray, t) => 0.0,
+                _ => f32::INFINITY,
+            }
         })
     }
 }
@@ -272,6 +312,10 @@ pub struct Surfaces {
     pub instances: Vec<Instance>,
     /// Per material index: true for surfaces rays pass through (`interface`).
     pub pass_through: Vec<bool>,
+    /// Alpha textures of alpha-tested shapes (float), indexed by [`Primitive::alpha`].
+    pub alphas: Vec<Tex>,
+    /// The scene's textures, for the alpha test.
+    pub textures: Textures,
 }
 
 impl Surfaces {
@@ -280,12 +324,24 @@ impl Surfaces {
         self.pass_through.get(prim.material as usize).copied().unwrap_or(false)
     }
 
+    /// The stochastic alpha test of a candidate hit on an alpha-tested primitive.
+    fn alpha_passes(&self, prim: Primitive, instance: u32, detail: Detail, ray: &Ray, t: f32) -> bool {
+        let s = self.surface(&Candidate { t, prim, instance, detail });
+        let alpha = self.textures.eval_float(self.alphas[prim.alpha as usize], &TexContext { p: s.p, uv: s.uv });
+        alpha_passes(alpha, ray, t)
+    }
+
     /// The closest surface the ray hits before `t_max`.
     pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
         let top = self.top.as_ref()?;
         let mut best = None;
         top.closest(self, ray, t_max, NONE, &mut best);
         let c = best?;
+        Some(Hit { surface: self.surface(&c), prim: c.prim })
+    }
+
+    /// World-space geometry at a candidate hit.
+    fn surface(&self, c: &Candidate) -> SurfaceHit {
         let local = match c.detail {
             Detail::Barycentric(b1, b2) => {
                 let Geometry::Triangle { mesh, tri } = c.prim.geometry else {
@@ -300,7 +356,7 @@ impl Surfaces {
                 _ => unreachable!("object points come from quadrics"),
             },
         };
-        let surface = if c.instance == NONE {
+        if c.instance == NONE {
             local
         } else {
             let inst = &self.instances[c.instance as usize];
@@ -316,13 +372,12 @@ impl Surfaces {
                 dndu: transform_normal_unnormalized(&inst.instance_from_world, local.dndu),
                 dndv: transform_normal_unnormalized(&inst.instance_from_world, local.dndv),
             }
-        };
-        Some(Hit { surface, prim: c.prim })
+        }
     }
 
     /// True when anything blocks the ray before `t_max`.
     pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
-        self.top.as_ref().is_some_and(|top| top.any(self, ray, t_max))
+        self.top.as_ref().is_some_and(|top| top.any(self, ray, t_max, NONE))
     }
 
     /// Bounds of all surfaces (empty without surfaces).
@@ -359,14 +414,16 @@ mod tests {
                 material: 0,
                 area_light: NONE,
                 interface: NONE,
+                alpha: NONE,
             },
             Primitive {
                 geometry: Geometry::Triangle { mesh: 0, tri: 1 },
                 material: 0,
                 area_light: NONE,
                 interface: NONE,
+                alpha: NONE,
             },
-            Primitive { geometry: Geometry::Sphere(0), material: 1, area_light: NONE, interface: NONE },
+            Primitive { geometry: Geometry::Sphere(0), material: 1, area_light: NONE, interface: NONE, alpha: NONE },
         ];
         let bounds: Vec<Bounds3> = prims.iter().map(|p| s.shapes.bounds(p.geometry)).collect();
         s.top = Accel::build(prims, &bounds);

@@ -595,6 +595,8 @@ type InterfaceIds<'a> = dyn Fn(Option<&nimbus_parser::MediumInterface>, u32) -> 
 
 struct ShapeBuilder<'a> {
     store: ShapeStore,
+    textures: &'a TextureBuilder<'a>,
+    alphas: Vec<Tex>,
     spectra: SpectrumResolver<'a>,
     material_ids: &'a dyn Fn(&MaterialRef) -> u32,
     interface_ids: &'a InterfaceIds<'a>,
@@ -619,10 +621,24 @@ impl ShapeBuilder<'_> {
         let rev = shape.reverse_orientation;
         let material = (self.material_ids)(&shape.material);
         let interface = (self.interface_ids)(shape.medium_interface.as_ref(), material)?;
+        // pbrt-v4 alpha-tests a shape whose "alpha" is a texture or a constant below 1.
+        let alpha = match &settings.alpha {
+            FloatInput::Value(a) if *a >= 1.0 => NONE,
+            a => {
+                if shape.area_light.is_some() {
+                    return Err(err(
+                        e.params.loc("alpha").unwrap_or(&e.loc),
+                        "alpha-tested area lights are not supported by nimbus",
+                    ));
+                }
+                self.alphas.push(self.textures.float(a, &e.loc)?);
+                self.alphas.len() as u32 - 1
+            }
+        };
         let first = prims.len();
         let mut push = |g: Geometry, store: &ShapeStore| {
             bounds.push(store.bounds(g));
-            prims.push(Primitive { geometry: g, material, area_light: NONE, interface });
+            prims.push(Primitive { geometry: g, material, area_light: NONE, interface, alpha });
         };
         match &settings.kind {
             ShapeKind::Sphere { radius, zmin, zmax, phimax } => {
@@ -639,24 +655,24 @@ impl ShapeBuilder<'_> {
             }
             ShapeKind::TriangleMesh(m) => {
                 let mesh = Mesh::new(&world, rev, m.positions, m.normals, m.uvs, m.indices.clone());
-                self.add_mesh(mesh, material, interface, prims, bounds);
+                self.add_mesh(mesh, [material, interface, alpha], prims, bounds);
             }
             ShapeKind::BilinearMesh(m) => {
                 let tris: Vec<u32> =
                     m.indices.chunks_exact(4).flat_map(|q| [q[0], q[1], q[3], q[0], q[3], q[2]]).collect();
                 let mesh = Mesh::new(&world, rev, m.positions, m.normals, m.uvs, tris);
-                self.add_mesh(mesh, material, interface, prims, bounds);
+                self.add_mesh(mesh, [material, interface, alpha], prims, bounds);
             }
             ShapeKind::LoopSubdiv { mesh: m, levels } => {
                 let sub = crate::geometry::loop_subdiv::loop_subdivide(m.positions, &m.indices, *levels)
                     .map_err(|m| err(&e.loc, format!("loopsubdiv: {m}")))?;
                 let mesh = Mesh::new(&world, rev, &sub.positions, &sub.normals, &[], sub.indices);
-                self.add_mesh(mesh, material, interface, prims, bounds);
+                self.add_mesh(mesh, [material, interface, alpha], prims, bounds);
             }
             ShapeKind::PlyMesh(path) => {
                 let ply = read_ply(path).map_err(|m| err(&e.loc, format!("plymesh: {m}")))?;
                 let mesh = Mesh::new(&world, rev, &ply.positions, &ply.normals, &ply.uvs, ply.indices);
-                self.add_mesh(mesh, material, interface, prims, bounds);
+                self.add_mesh(mesh, [material, interface, alpha], prims, bounds);
             }
             ShapeKind::ObjMesh(path) | ShapeKind::GltfMesh(path) => {
                 let meshes = if matches!(settings.kind, ShapeKind::ObjMesh(_)) {
@@ -667,7 +683,7 @@ impl ShapeBuilder<'_> {
                 .map_err(|m| err(&e.loc, m))?;
                 for m in meshes {
                     let mesh = Mesh::new(&world, rev, &m.positions, &m.normals, &m.uvs, m.indices);
-                    self.add_mesh(mesh, material, interface, prims, bounds);
+                    self.add_mesh(mesh, [material, interface, alpha], prims, bounds);
                 }
             }
         }
@@ -714,8 +730,7 @@ impl ShapeBuilder<'_> {
     fn add_mesh(
         &mut self,
         mesh: Mesh,
-        material: u32,
-        interface: u32,
+        [material, interface, alpha]: [u32; 3],
         prims: &mut Vec<Primitive>,
         bounds: &mut Vec<Bounds3>,
     ) {
@@ -730,6 +745,7 @@ impl ShapeBuilder<'_> {
                 material,
                 area_light: NONE,
                 interface,
+                alpha,
             });
         }
         self.store.meshes.push(mesh);
@@ -1138,6 +1154,8 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions) -> Result<Scene
     let tg = Instant::now();
     let mut sb = ShapeBuilder {
         store: ShapeStore::default(),
+        textures: &tb,
+        alphas: Vec::new(),
         spectra,
         material_ids: &material_ids,
         interface_ids: &interface_ids,
@@ -1178,6 +1196,7 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions) -> Result<Scene
             material: 0,
             area_light: NONE,
             interface: NONE,
+            alpha: NONE,
         });
     }
     let primitives = prims.len();
@@ -1191,6 +1210,8 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions) -> Result<Scene
         blas,
         instances,
         pass_through: materials.iter().map(Material::is_interface).collect(),
+        alphas: std::mem::take(&mut sb.alphas),
+        textures: tb.textures.clone(),
     };
     let interfaces = interfaces.into_inner();
     let has_chromatic_media = media.iter().any(|m| m.chromatic);

@@ -226,12 +226,6 @@ impl<'a> ShapeSettings<'a> {
             }
         };
         let alpha = float_input(p, "alpha")?.unwrap_or(FloatInput::Value(1.0));
-        if alpha != FloatInput::Value(1.0) {
-            return Err(Error::new(
-                p.loc("alpha").unwrap_or(&e.loc),
-                "alpha cut-outs (\"alpha\") are not supported by nimbus",
-            ));
-        }
         Ok(ShapeSettings { kind, alpha })
     }
 }

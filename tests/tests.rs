@@ -4,6 +4,7 @@ mod bench;
 mod check;
 mod common;
 mod compare;
+mod coverage;
 mod guided;
 mod materials;
 mod media;

@@ -83,8 +83,12 @@ fn malformed_scenes_fail_with_their_location() {
         ),
         ("WorldBegin\nTranslate 1 2\n", "bad.pbrt:3:1: error: premature end of file: expected a number for Translate"),
         (
+            "WorldBegin\nShape \"hyperboloid\"\n",
+            "bad.pbrt:2:1: error: shape \"hyperboloid\" is not supported by nimbus (it has sphere, disk, cylinder, trianglemesh, bilinearmesh, loopsubdiv, curve, plymesh, and the extensions objmesh and gltfmesh)",
+        ),
+        (
             "WorldBegin\nShape \"curve\"\n",
-            "bad.pbrt:2:1: error: shape \"curve\" is not supported by nimbus (it has sphere, disk, cylinder, trianglemesh, bilinearmesh, loopsubdiv, plymesh, and the extensions objmesh and gltfmesh)",
+            "bad.pbrt:2:1: error: curve: 0 control points; a degree-3 Bézier curve needs 4 + n·3",
         ),
     ];
     let path = dir.join("bad.pbrt");

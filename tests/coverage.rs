@@ -106,7 +106,7 @@ const ENTITIES: &[(&str, &str, Outcome)] = &[
     ("shape", "trianglemesh", Rendered),
     ("shape", "bilinearmesh", Rendered),
     ("shape", "loopsubdiv", Rendered),
-    ("shape", "curve", Refused),
+    ("shape", "curve", Rendered),
     ("camera", "perspective", Rendered),
     ("camera", "orthographic", Rendered),
     ("camera", "realistic", Refused),

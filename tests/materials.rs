@@ -1,5 +1,6 @@
-//! pbrt-v4's materials beyond the basic four, checked end to end against analytic answers:
-//! `mix`, `diffusetransmission`, `coatedconductor`.
+//! pbrt-v4's materials, shading and shapes beyond the basics, checked end to end against
+//! analytic answers: `mix`, `diffusetransmission`, `coatedconductor`, `subsurface`, bump and
+//! normal maps, alpha, `loopsubdiv`, `curve`.
 
 use crate::common::{assert_channels, load_scene, render_scene, transport};
 
@@ -369,4 +370,45 @@ WorldBegin
     assert!(
         img.pixels.iter().filter(|p| p.x > 0.99).count() > 64 && img.pixels.iter().filter(|p| p.x < 0.01).count() > 64
     );
+}
+
+/// `curve`: a black curve of width 0.5 across a white sky (orthographic view of [−1, 1]²)
+/// hides a quarter of the film, for every curve type and basis; ribbons need their normals.
+#[test]
+fn curves_hide_their_width_times_their_length() {
+    let scene = |shape: &str| {
+        format!(
+            r#"LookAt 0 0 5  0 0 0  0 1 0
+Camera "orthographic"
+Sampler "stratified" "integer xsamples" 4 "integer ysamples" 4 "bool jitter" false
+Film "rgb" "integer xresolution" 32 "integer yresolution" 32
+Integrator "volpath" "integer maxdepth" 1
+WorldBegin
+LightSource "infinite" "rgb L" [1 1 1]
+Material "diffuse" "rgb reflectance" [0 0 0]
+{shape}"#
+        )
+    };
+    for shape in [
+        r#"Shape "curve" "point3 P" [-2 0 0  -0.7 0.05 0  0.7 -0.05 0  2 0 0] "float width" 0.5"#,
+        r#"Shape "curve" "string type" "cylinder" "point3 P" [-2 0 0  -0.7 0.05 0  0.7 -0.05 0  2 0 0] "float width" 0.5"#,
+        r#"Shape "curve" "string type" "ribbon" "normal N" [0 0 1  0 0.2 1] "point3 P" [-2 0 0  -0.7 0.05 0  0.7 -0.05 0  2 0 0] "float width" 0.5"#,
+        r#"Shape "curve" "string basis" "bspline" "point3 P" [-4 0 0  -2 0 0  0 0 0  2 0 0  4 0 0] "float width" 0.5"#,
+        r#"Shape "curve" "integer degree" 2 "point3 P" [-2 0 0  -1 0 0  0 0 0  1 0 0  2 0 0] "float width0" 0.5 "float width1" 0.5"#,
+    ] {
+        let img = render_scene(&load_scene(&scene(shape), &transport(false)));
+        let sky = img.pixels.iter().map(|p| f64::from(p.x)).sum::<f64>() / img.pixels.len() as f64;
+        // Two pixel rows straddle the curve's edges (1/32 of the film each, at most).
+        assert!((sky - 0.75).abs() < 2.0 / 32.0, "{shape}: sky {sky}");
+        assert!(img.pixels[16 * 32 + 16].x < 1e-6 && img.pixels[0].x > 0.999, "{shape}");
+    }
+    for (shape, message) in [
+        (r#"Shape "curve" "string type" "ribbon" "point3 P" [0 0 0 1 0 0 2 0 0 3 0 0]"#, "needs 2 normals"),
+        (r#"Shape "curve" "point3 P" [0 0 0 1 0 0 2 0 0]"#, "3 control points"),
+        (r#"Shape "curve" "string basis" "nurbs" "point3 P" [0 0 0 1 0 0 2 0 0 3 0 0]"#, "unknown basis"),
+    ] {
+        let desc = nimbus::parser::load_str(&scene(shape), "curve.pbrt").unwrap();
+        let e = nimbus::scene::build_scene(&desc, &transport(false)).err().expect("refused");
+        assert!(e.to_string().contains("curve.pbrt:9") && e.to_string().contains(message), "{shape}: {e}");
+    }
 }

@@ -12,7 +12,8 @@ use obvhs::{Boundable, BvhBuildParams};
 
 use crate::geometry::{Bounds3, Ray};
 use crate::shapes::{
-    Cylinder, Disk, Mesh, Sphere, SurfaceHit, transform_normal, transform_normal_unnormalized, triangle_hit,
+    Curve, CurveCommon, Cylinder, Disk, Mesh, Sphere, SurfaceHit, transform_normal, transform_normal_unnormalized,
+    triangle_hit,
 };
 use crate::textures::{Tex, TexContext, Textures};
 
@@ -35,6 +36,8 @@ pub enum Geometry {
     Disk(u32),
     /// A cylinder.
     Cylinder(u32),
+    /// A piece of a curve.
+    Curve(u32),
     /// An object instance (only in the top-level BVH).
     Instance(u32),
 }
@@ -65,9 +68,19 @@ pub struct ShapeStore {
     pub disks: Vec<Disk>,
     /// Cylinders.
     pub cylinders: Vec<Cylinder>,
+    /// Curve pieces.
+    pub curves: Vec<Curve>,
+    /// What the pieces of each curve segment share.
+    pub curve_segments: Vec<CurveCommon>,
 }
 
 impl ShapeStore {
+    #[inline]
+    fn curve_hit(&self, i: u32, ray: &Ray, t_max: f32) -> Option<(f32, Detail)> {
+        let c = &self.curves[i as usize];
+        c.intersect(&self.curve_segments[c.common as usize], ray, t_max).map(|(t, s)| (t, Detail::Surface(s)))
+    }
+
     /// Bounds of a non-instance geometry.
     pub fn bounds(&self, g: Geometry) -> Bounds3 {
         match g {
@@ -75,6 +88,10 @@ impl ShapeStore {
             Geometry::Sphere(i) => self.spheres[i as usize].bounds(),
             Geometry::Disk(i) => self.disks[i as usize].bounds(),
             Geometry::Cylinder(i) => self.cylinders[i as usize].bounds(),
+            Geometry::Curve(i) => {
+                let c = &self.curves[i as usize];
+                c.bounds(&self.curve_segments[c.common as usize])
+            }
             Geometry::Instance(_) => Bounds3::EMPTY,
         }
     }
@@ -85,6 +102,8 @@ impl ShapeStore {
 enum Detail {
     Barycentric(f32, f32),
     ObjectPoint(Vec3),
+    /// Shapes whose intersection computes the details anyway (curves).
+    Surface(SurfaceHit),
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -195,6 +214,7 @@ impl Accel {
                 Geometry::Cylinder(i) => {
                     scene.shapes.cylinders[i as usize].intersect(ray, r.tmax).map(|(t, p)| (t, Detail::ObjectPoint(p)))
                 }
+                Geometry::Curve(i) => scene.shapes.curve_hit(i, ray, r.tmax),
                 Geometry::Instance(k) => {
                     let inst = &scene.instances[k as usize];
                     let local = Ray::new(
@@ -259,6 +279,7 @@ impl Accel {
                 Geometry::Cylinder(i) => {
                     scene.shapes.cylinders[i as usize].intersect(ray, r.tmax).map(|(t, p)| (t, Detail::ObjectPoint(p)))
                 }
+                Geometry::Curve(i) => scene.shapes.curve_hit(i, ray, r.tmax),
                 Geometry::Instance(k) => {
                     let inst = &scene.instances[k as usize];
                     let local = Ray::new(
@@ -355,6 +376,7 @@ impl Surfaces {
                 Geometry::Cylinder(i) => self.shapes.cylinders[i as usize].hit(c.t, p),
                 _ => unreachable!("object points come from quadrics"),
             },
+            Detail::Surface(s) => s,
         };
         if c.instance == NONE {
             local

@@ -235,7 +235,7 @@ impl Light {
                     Geometry::Sphere(i) => shapes.spheres[i as usize].sample(ctx.p, u)?,
                     Geometry::Disk(i) => shapes.disks[i as usize].sample_area(u)?,
                     Geometry::Cylinder(i) => shapes.cylinders[i as usize].sample_area(u)?,
-                    Geometry::Instance(_) => return None,
+                    Geometry::Curve(_) | Geometry::Instance(_) => return None,
                 };
                 let to = s.p - ctx.p;
                 let d2 = to.length_squared();

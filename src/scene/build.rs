@@ -37,7 +37,7 @@ use crate::math::Frame;
 use crate::media::dense::DenseGrid;
 use crate::media::grid::VdbFile;
 use crate::media::{Density, Emission, Field, Medium};
-use crate::shapes::{Cylinder, Disk, Mesh, Sphere, uniform_scale};
+use crate::shapes::{Curve, CurveCommon, Cylinder, Disk, Mesh, Sphere, uniform_scale};
 use crate::spectra::RgbRole;
 use crate::spectra::{BlackbodyRgbTable, PixelSensor, SpectrumValue};
 use crate::textures::{Tex, TexContext, TexMapping, TexNode, Textures, Wrap};
@@ -663,6 +663,22 @@ impl ShapeBuilder<'_> {
                 let mesh = Mesh::new(&world, rev, m.positions, m.normals, m.uvs, tris);
                 self.add_mesh(mesh, [material, interface, alpha], prims, bounds);
             }
+            ShapeKind::Curve { segments, widths, normals, kind, split_depth } => {
+                if shape.area_light.is_some() {
+                    return Err(err(&e.loc, "curves cannot be area lights (pbrt-v4 cannot sample them either)"));
+                }
+                let pieces = 1u32 << split_depth;
+                for (k, (cp, w)) in segments.iter().zip(widths).enumerate() {
+                    let n = normals.get(k).map(|n| n.map(Vec3::from));
+                    let common = self.store.curve_segments.len() as u32;
+                    self.store.curve_segments.push(CurveCommon::new(cp.map(Vec3::from), *w, *kind, n, world, rev));
+                    for i in 0..pieces {
+                        let (u0, u1) = (i as f32 / pieces as f32, (i + 1) as f32 / pieces as f32);
+                        self.store.curves.push(Curve::new(common, u0, u1));
+                        push(Geometry::Curve(self.store.curves.len() as u32 - 1), &self.store);
+                    }
+                }
+            }
             ShapeKind::LoopSubdiv { mesh: m, levels } => {
                 let sub = crate::geometry::loop_subdiv::loop_subdivide(m.positions, &m.indices, *levels)
                     .map_err(|m| err(&e.loc, format!("loopsubdiv: {m}")))?;
@@ -708,7 +724,7 @@ impl ShapeBuilder<'_> {
                     Geometry::Cylinder(i) => self.store.cylinders[i as usize]
                         .world_area()
                         .ok_or_else(|| err(&e.loc, "an emitting cylinder must not be scaled non-uniformly"))?,
-                    Geometry::Instance(_) => continue,
+                    Geometry::Curve(_) | Geometry::Instance(_) => continue,
                 };
                 let l = area_light_radiance(&settings, al_entity, area, &self.spectra)?;
                 prim.area_light = self.lights.len() as u32;

@@ -7,6 +7,8 @@ use nimbus_parser::loc_shown as shown;
 use nimbus_parser::{Error, FileLoc, ShapeEntity};
 
 use super::values::{FloatInput, checked_float, checked_int, float_input};
+use crate::shapes::{CurveType, cubic_bspline_to_bezier, elevate_quadratic, quadratic_bspline_to_bezier};
+use glam::Vec3;
 
 /// A triangle or bilinear-patch mesh given inline.
 #[derive(Clone, Debug, PartialEq)]
@@ -61,6 +63,20 @@ pub enum ShapeKind<'a> {
     TriangleMesh(InlineMesh<'a>),
     /// `bilinearmesh` (split into two triangles per patch)
     BilinearMesh(InlineMesh<'a>),
+    /// `curve`: cubic Bézier segments (degree-2 and B-spline input converted), each with its
+    /// widths at its ends and, for ribbons, its end normals.
+    Curve {
+        /// Bézier control points per segment (object space).
+        segments: Vec<[[f32; 3]; 4]>,
+        /// Widths at each segment's ends.
+        widths: Vec<[f32; 2]>,
+        /// End normals per segment (ribbons only).
+        normals: Vec<[[f32; 3]; 2]>,
+        /// `flat`, `cylinder` or `ribbon`.
+        kind: CurveType,
+        /// Each segment is split into 2^splitdepth primitives.
+        split_depth: u32,
+    },
     /// `loopsubdiv`: a control mesh refined at load.
     LoopSubdiv {
         /// The control mesh (`P`, `indices`).
@@ -162,8 +178,108 @@ fn inline_mesh<'a>(shape: &'a ShapeEntity, per_face: usize) -> Result<InlineMesh
     Ok(InlineMesh { positions, indices, normals, uvs })
 }
 
+/// pbrt-v4's `Curve::Create`: degree 2 or 3, Bézier or uniform B-spline control points, every
+/// segment converted to a cubic Bézier curve, widths interpolated along the whole curve.
+fn curve<'a>(shape: &ShapeEntity) -> Result<ShapeKind<'a>, Error> {
+    let e = &shape.entity;
+    let p = &e.params;
+    let at = |name: &str| p.loc(name).unwrap_or(&e.loc);
+    let width = p.get_one_float("width", 1.0)?;
+    let width0 = p.get_one_float("width0", width)?;
+    let width1 = p.get_one_float("width1", width)?;
+    if !(width0 >= 0.0 && width1 >= 0.0 && width0.is_finite() && width1.is_finite()) {
+        return Err(Error::new(at("width"), "curve: widths must be finite and not negative"));
+    }
+    let degree = p.get_one_int("degree", 3)?;
+    if degree != 2 && degree != 3 {
+        return Err(Error::new(at("degree"), format!("curve: degree {degree} (pbrt-v4 has 2 and 3)")));
+    }
+    let degree = degree as usize;
+    let basis = p.get_one_string("basis", "bezier")?;
+    let cp: Vec<Vec3> = p.get_point3s("P")?.iter().map(|q| Vec3::from(*q)).collect();
+    let n_segments = match basis {
+        "bezier" => {
+            if cp.len() < degree + 1 || !(cp.len() - 1 - degree).is_multiple_of(degree) {
+                return Err(Error::new(
+                    at("P"),
+                    format!(
+                        "curve: {} control points; a degree-{degree} Bézier curve needs {} + n·{degree}",
+                        cp.len(),
+                        degree + 1
+                    ),
+                ));
+            }
+            (cp.len() - 1) / degree
+        }
+        "bspline" => {
+            if cp.len() < degree + 1 {
+                return Err(Error::new(
+                    at("P"),
+                    format!(
+                        "curve: {} control points; a degree-{degree} B-spline needs at least {}",
+                        cp.len(),
+                        degree + 1
+                    ),
+                ));
+            }
+            cp.len() - degree
+        }
+        other => {
+            return Err(Error::new(at("basis"), format!("curve: unknown basis \"{other}\" (bezier or bspline)")));
+        }
+    };
+    let kind = match p.get_one_string("type", "flat")? {
+        "flat" => CurveType::Flat,
+        "ribbon" => CurveType::Ribbon,
+        "cylinder" => CurveType::Cylinder,
+        other => {
+            return Err(Error::new(at("type"), format!("curve: unknown type \"{other}\" (flat, ribbon or cylinder)")));
+        }
+    };
+    let n = p.get_normals("N")?;
+    let normals: Vec<[[f32; 3]; 2]> = match kind {
+        CurveType::Ribbon if n.len() == n_segments + 1 => (0..n_segments).map(|s| [n[s], n[s + 1]]).collect(),
+        CurveType::Ribbon => {
+            return Err(Error::new(
+                at("N"),
+                format!(
+                    "curve: a ribbon with {n_segments} segments needs {} normals \"N\", not {}",
+                    n_segments + 1,
+                    n.len()
+                ),
+            ));
+        }
+        // pbrt-v4 ignores normals on other types (with a warning).
+        _ => Vec::new(),
+    };
+    let split_depth = p.get_one_int("splitdepth", 3)?;
+    if !(0..=12).contains(&split_depth) {
+        return Err(Error::new(at("splitdepth"), "curve: \"splitdepth\" must be between 0 and 12"));
+    }
+    let mut segments = Vec::with_capacity(n_segments);
+    let mut widths = Vec::with_capacity(n_segments);
+    for seg in 0..n_segments {
+        let bezier = if basis == "bezier" {
+            let o = seg * degree;
+            if degree == 2 {
+                elevate_quadratic([cp[o], cp[o + 1], cp[o + 2]])
+            } else {
+                [cp[o], cp[o + 1], cp[o + 2], cp[o + 3]]
+            }
+        } else if degree == 2 {
+            elevate_quadratic(quadratic_bspline_to_bezier([cp[seg], cp[seg + 1], cp[seg + 2]]))
+        } else {
+            cubic_bspline_to_bezier([cp[seg], cp[seg + 1], cp[seg + 2], cp[seg + 3]])
+        };
+        segments.push(bezier.map(|q| q.to_array()));
+        let f = |k: usize| k as f32 / n_segments as f32;
+        widths.push([(1.0 - f(seg)) * width0 + f(seg) * width1, (1.0 - f(seg + 1)) * width0 + f(seg + 1) * width1]);
+    }
+    Ok(ShapeKind::Curve { segments, widths, normals, kind, split_depth: split_depth as u32 })
+}
+
 impl<'a> ShapeSettings<'a> {
-    /// Reads a shape entity. Shapes nimbus lacks (curve, ...) are reported by name.
+    /// Reads a shape entity. Shapes nimbus lacks are reported by name.
     pub fn from_entity(shape: &'a ShapeEntity) -> Result<ShapeSettings<'a>, Error> {
         let e = &shape.entity;
         let p = &e.params;
@@ -198,6 +314,7 @@ impl<'a> ShapeSettings<'a> {
             },
             "trianglemesh" => ShapeKind::TriangleMesh(inline_mesh(shape, 3)?),
             "bilinearmesh" => ShapeKind::BilinearMesh(inline_mesh(shape, 4)?),
+            "curve" => curve(shape)?,
             "loopsubdiv" => ShapeKind::LoopSubdiv {
                 mesh: inline_mesh(shape, 3)?,
                 // pbrt-v4's default; each level quadruples the triangles, so 12 (16 M per
@@ -220,7 +337,7 @@ impl<'a> ShapeSettings<'a> {
                 return Err(Error::new(
                     &e.loc,
                     format!(
-                        "shape \"{other}\" is not supported by nimbus (it has sphere, disk, cylinder, trianglemesh, bilinearmesh, loopsubdiv, plymesh, and the extensions objmesh and gltfmesh)"
+                        "shape \"{other}\" is not supported by nimbus (it has sphere, disk, cylinder, trianglemesh, bilinearmesh, loopsubdiv, curve, plymesh, and the extensions objmesh and gltfmesh)"
                     ),
                 ));
             }

@@ -1,11 +1,15 @@
 //! Shapes with pbrt-v4's geometry and orientation conventions: intersection, surface
 //! details at a hit, and area sampling for shapes that emit.
 
+mod curve;
 mod cylinder;
 mod disk;
 mod mesh;
 mod sphere;
 
+pub use curve::{
+    Curve, CurveCommon, CurveType, cubic_bspline_to_bezier, elevate_quadratic, quadratic_bspline_to_bezier,
+};
 pub use cylinder::Cylinder;
 pub use disk::Disk;
 pub use mesh::{Mesh, triangle_hit, triangle_sample};

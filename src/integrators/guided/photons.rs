@@ -157,7 +157,7 @@ impl Emitter {
                     Geometry::Sphere(i) => shapes.spheres[i as usize].sample_area(u)?,
                     Geometry::Disk(i) => shapes.disks[i as usize].sample_area(u)?,
                     Geometry::Cylinder(i) => shapes.cylinders[i as usize].sample_area(u)?,
-                    Geometry::Instance(_) => return None,
+                    Geometry::Curve(_) | Geometry::Instance(_) => return None,
                 };
                 // Natively cosine-weighted about the normal (either side for two-sided
                 // emitters); the power is L·|cos| over the densities.

@@ -129,7 +129,7 @@ const ENTITIES: &[(&str, &str, Outcome)] = &[
     ("material", "interface", Rendered),
     ("material", "subsurface", Rendered),
     ("material", "measured", Replaced),
-    ("material", "hair", Replaced),
+    ("material", "hair", Rendered),
     ("texture", "constant", Rendered),
     ("texture", "scale", Rendered),
     ("texture", "mix", Rendered),

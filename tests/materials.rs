@@ -412,3 +412,31 @@ Material "diffuse" "rgb reflectance" [0 0 0]
         assert!(e.to_string().contains("curve.pbrt:9") && e.to_string().contains(message), "{shape}: {e}");
     }
 }
+
+/// pbrt-v4's hair BSDF in a white furnace: a non-absorbing hair fibre under a uniform sky
+/// reflects exactly the sky (its BSDF conserves energy), so the whole image averages 1 within
+/// its noise; with melanin it is darker and browner (blue absorbed most).
+#[test]
+fn hair_is_white_in_a_white_furnace_and_brown_with_melanin() {
+    let scene = |material: &str| {
+        format!(
+            r#"LookAt 0 0 5  0 0 0  0 1 0
+Camera "orthographic" "float screenwindow" [-1 1 -0.3 0.3]
+Sampler "independent" "integer pixelsamples" 64
+Film "rgb" "integer xresolution" 32 "integer yresolution" 10
+Integrator "volpath" "integer maxdepth" 1
+WorldBegin
+LightSource "infinite" "rgb L" [1 1 1]
+Material "hair" {material}
+Shape "curve" "string type" "cylinder" "point3 P" [-2 0 0  -0.7 0 0  0.7 0 0  2 0 0] "float width" 0.4"#
+        )
+    };
+    let white = render_scene(&load_scene(
+        &scene(r#""rgb sigma_a" [0 0 0] "float beta_m" 0.4 "float beta_n" 0.4"#),
+        &transport(false),
+    ));
+    assert_channels(&white, [1.0; 3], "white hair in a white furnace");
+    let brown = render_scene(&load_scene(&scene(r#""float eumelanin" 1.3"#), &transport(false)));
+    let centre = brown.pixels[5 * 32 + 16];
+    assert!(centre.x < 0.9 && centre.z < centre.x, "{centre:?}");
+}

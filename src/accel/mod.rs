@@ -393,6 +393,7 @@ impl Surfaces {
                 dpdv: w.transform_vector3(local.dpdv),
                 dndu: transform_normal_unnormalized(&inst.instance_from_world, local.dndu),
                 dndv: transform_normal_unnormalized(&inst.instance_from_world, local.dndv),
+                p_error: local.p_error * w.matrix3.determinant().abs().cbrt(),
             }
         }
     }

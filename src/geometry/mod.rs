@@ -9,7 +9,7 @@ pub mod ply;
 mod ray;
 
 pub use bounds::Bounds3;
-pub use ray::{Ray, offset_origin, position_error, spawn_ray, spawn_ray_to};
+pub use ray::{Ray, offset_origin, offset_origin_by, position_error, spawn_ray, spawn_ray_to};
 
 /// Triangle mesh data as read from a file, in the file's (object) space.
 #[derive(Clone, Debug, Default, PartialEq)]

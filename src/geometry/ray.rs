@@ -37,7 +37,14 @@ pub fn position_error(p: Vec3) -> f32 {
 /// OffsetRayOrigin, with a uniform error bound instead of per-shape bounds).
 #[inline]
 pub fn offset_origin(p: Vec3, n: Vec3, w: Vec3) -> Vec3 {
-    let d = position_error(p) * 4.0;
+    offset_origin_by(p, n, w, 0.0)
+}
+
+/// [`offset_origin`] for a point known only within `p_error` in each coordinate (pbrt-v4
+/// offsets by dot(|n|, pError)).
+#[inline]
+pub fn offset_origin_by(p: Vec3, n: Vec3, w: Vec3, p_error: f32) -> Vec3 {
+    let d = (position_error(p) * 4.0).max(p_error * n.abs().element_sum());
     if n.dot(w) < 0.0 { p - n * d } else { p + n * d }
 }
 

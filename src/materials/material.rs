@@ -5,7 +5,7 @@ use glam::Vec3;
 
 use super::bxdf::{
     Bxdf, CoatedConductorBxdf, CoatedDiffuseBxdf, ConductorBxdf, DielectricBxdf, DiffuseBxdf, DiffuseTransmissionBxdf,
-    ThinDielectricBxdf, TrowbridgeReitz,
+    HairBxdf, ThinDielectricBxdf, TrowbridgeReitz,
 };
 use crate::color::Channels;
 use crate::sampling::rng::murmur_hash64a;
@@ -76,6 +76,22 @@ impl ConductorInput {
             ConductorInput::Reflectance(r) => chromatic(r).then_some("reflectance"),
         }
     }
+}
+
+/// Where a hair's absorption comes from.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum HairAbsorption {
+    /// σa (spectrum texture, unbounded).
+    SigmaA(Tex),
+    /// A reflectance inverted to σa (spectrum texture, albedo).
+    Reflectance(Tex),
+    /// Eumelanin and pheomelanin concentrations (float textures).
+    Melanin {
+        /// Eumelanin.
+        eumelanin: Tex,
+        /// Pheomelanin.
+        pheomelanin: Tex,
+    },
 }
 
 /// A material ready to produce BxDFs.
@@ -154,6 +170,19 @@ pub enum Material {
         transmittance: Tex,
         /// Factor on both.
         scale: f32,
+    },
+    /// Hair fibres (pbrt-v4's hair BSDF).
+    Hair {
+        /// The fibre's absorption.
+        absorption: HairAbsorption,
+        /// Index of refraction (float texture).
+        eta: Tex,
+        /// Longitudinal roughness (float texture).
+        beta_m: Tex,
+        /// Azimuthal roughness (float texture).
+        beta_n: Tex,
+        /// Scale tilt in degrees (float texture).
+        alpha: Tex,
     },
     /// One of two materials per hit, chosen by [`resolve`].
     Mix {
@@ -235,6 +264,9 @@ impl Material {
             Material::Mix { materials: pair, .. } => {
                 pair.iter().find_map(|&i| materials[i as usize].chromatic_input(materials, textures))
             }
+            Material::Hair { absorption: HairAbsorption::SigmaA(t), .. } => chromatic(t).then_some("sigma_a"),
+            Material::Hair { absorption: HairAbsorption::Reflectance(t), .. } => chromatic(t).then_some("reflectance"),
+            Material::Hair { absorption: HairAbsorption::Melanin { .. }, .. } => Some("eumelanin/pheomelanin"),
             Material::Dielectric { eta, .. } | Material::ThinDielectric { eta } => {
                 (!eta.is_constant()).then_some("eta (dispersion)")
             }
@@ -291,6 +323,33 @@ impl Material {
             Material::DiffuseTransmission { reflectance, transmittance, scale } => {
                 let scaled = |t: Tex| (textures.eval::<C>(t, ctx, lambda, RgbRole::Albedo) * *scale).clamp(0.0, 1.0);
                 Bxdf::DiffuseTransmission(DiffuseTransmissionBxdf::new(scaled(*reflectance), scaled(*transmittance)))
+            }
+            Material::Hair { absorption, eta, beta_m, beta_n, alpha } => {
+                let beta_m = textures.eval_float(*beta_m, ctx).max(1e-2);
+                let beta_n = textures.eval_float(*beta_n, ctx).max(1e-2);
+                let sigma_a = match absorption {
+                    HairAbsorption::SigmaA(t) => {
+                        textures.eval::<C>(*t, ctx, lambda, RgbRole::Unbounded).map(|x| x.max(0.0))
+                    }
+                    HairAbsorption::Reflectance(t) => HairBxdf::sigma_a_from_reflectance(albedo(*t, lambda), beta_n),
+                    HairAbsorption::Melanin { eumelanin, pheomelanin } => {
+                        let rgb = HairBxdf::<C>::sigma_a_from_concentration(
+                            textures.eval_float(*eumelanin, ctx).max(0.0),
+                            textures.eval_float(*pheomelanin, ctx).max(0.0),
+                        );
+                        C::from_rgb(rgb, RgbRole::Unbounded, nimbus_parser::ColorSpace::Srgb, lambda)
+                    }
+                };
+                // Across the fibre: v = 0 at one edge, 1 at the other (the curve's v).
+                let h = -1.0 + 2.0 * ctx.uv.y;
+                Bxdf::Hair(HairBxdf::new(
+                    h,
+                    textures.eval_float(*eta, ctx),
+                    sigma_a,
+                    beta_m,
+                    beta_n,
+                    textures.eval_float(*alpha, ctx),
+                ))
             }
             Material::Mix { .. } => unreachable!("mix materials are resolved before their BxDF is asked for"),
             Material::Dielectric { eta, roughness } => {

@@ -5,5 +5,5 @@ pub mod bxdf;
 mod material;
 mod shading;
 
-pub use material::{ConductorInput, Material, RoughnessTex, resolve};
+pub use material::{ConductorInput, HairAbsorption, Material, RoughnessTex, resolve};
 pub use shading::ShadingPerturbation;

@@ -104,6 +104,7 @@ mod tests {
             dpdv: Vec3::Y,
             dndu: Vec3::ZERO,
             dndv: Vec3::ZERO,
+            p_error: 0.0,
         }
     }
 

@@ -16,7 +16,7 @@ use super::camera::CameraSettings;
 use super::film::FilmSettings;
 use super::filter::FilterSettings;
 use super::lights::{AreaLightSettings, LightKind as LightSpec, LightSettings};
-use super::materials::{ConductorSpec, Eta, MaterialKind, MaterialSettings, Roughness};
+use super::materials::{ConductorSpec, Eta, HairAbsorptionSpec, MaterialKind, MaterialSettings, Roughness};
 use super::media::{MediumKind as MediumSpec, MediumSettings};
 use super::sampler::SamplerSettings;
 use super::shapes::{ShapeKind, ShapeSettings};
@@ -32,7 +32,7 @@ use crate::geometry::Bounds3;
 use crate::geometry::ply::read_ply;
 use crate::integrators::IntegratorSettings;
 use crate::lights::{EnvironmentMap, Light, LightKind, LightSampler, SceneSphere};
-use crate::materials::{ConductorInput, Material, RoughnessTex, ShadingPerturbation, resolve};
+use crate::materials::{ConductorInput, HairAbsorption, Material, RoughnessTex, ShadingPerturbation, resolve};
 use crate::math::Frame;
 use crate::media::dense::DenseGrid;
 use crate::media::grid::VdbFile;
@@ -569,6 +569,20 @@ fn material(
             });
             Material::Dielectric { eta: SpectrumValue::constant(*eta), roughness: roughness(r, tb, loc)? }
         }
+        MaterialKind::Hair { absorption, eta, beta_m, beta_n, alpha } => Material::Hair {
+            absorption: match absorption {
+                HairAbsorptionSpec::SigmaA(s) => HairAbsorption::SigmaA(tb.spectrum_as(s, cs, loc, true)?),
+                HairAbsorptionSpec::Reflectance(r) => HairAbsorption::Reflectance(tb.spectrum(r, cs, loc)?),
+                HairAbsorptionSpec::Melanin { eumelanin, pheomelanin } => HairAbsorption::Melanin {
+                    eumelanin: tb.float(eumelanin, loc)?,
+                    pheomelanin: tb.float(pheomelanin, loc)?,
+                },
+            },
+            eta: tb.float(eta, loc)?,
+            beta_m: tb.float(beta_m, loc)?,
+            beta_n: tb.float(beta_n, loc)?,
+            alpha: tb.float(alpha, loc)?,
+        },
         MaterialKind::Unsupported(_) => Material::Diffuse { reflectance: Tex::Const(SpectrumValue::constant(0.5)) },
     };
     Ok(BuiltMaterial { material, shading, subsurface })

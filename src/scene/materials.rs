@@ -41,6 +41,22 @@ pub enum Eta {
     Spectrum(SpectrumSpec),
 }
 
+/// How a `hair` material gives its absorption (pbrt-v4's three ways, in priority order).
+#[derive(Clone, Debug, PartialEq)]
+pub enum HairAbsorptionSpec {
+    /// `sigma_a` directly.
+    SigmaA(SpectrumInput),
+    /// `reflectance` (or `color`), inverted to σa.
+    Reflectance(SpectrumInput),
+    /// Melanin concentrations (default: eumelanin 1.3, brown hair).
+    Melanin {
+        /// `eumelanin`.
+        eumelanin: FloatInput,
+        /// `pheomelanin`.
+        pheomelanin: FloatInput,
+    },
+}
+
 /// What a material is.
 #[derive(Clone, Debug, PartialEq)]
 pub enum MaterialKind {
@@ -141,6 +157,19 @@ pub enum MaterialKind {
         scale: f32,
         /// Henyey-Greenstein asymmetry of the medium.
         g: f32,
+    },
+    /// `hair`: pbrt-v4's hair BSDF.
+    Hair {
+        /// What absorbs inside the fibre.
+        absorption: HairAbsorptionSpec,
+        /// Index of refraction.
+        eta: FloatInput,
+        /// Longitudinal roughness.
+        beta_m: FloatInput,
+        /// Azimuthal roughness.
+        beta_n: FloatInput,
+        /// Cuticle scale tilt (degrees).
+        alpha: FloatInput,
     },
     /// A material nimbus lacks, rendered as gray diffuse.
     Unsupported(String),
@@ -265,6 +294,60 @@ fn subsurface(e: &Entity, warnings: &mut Vec<Warning>) -> Result<MaterialKind, E
     })
 }
 
+/// pbrt-v4's `HairMaterial::Create`.
+fn hair(e: &Entity, warnings: &mut Vec<Warning>) -> Result<MaterialKind, Error> {
+    let p = &e.params;
+    let sigma_a = spectrum_input(p, "sigma_a")?;
+    let reflectance = match spectrum_input(p, "reflectance")? {
+        Some(r) => Some(r),
+        None => spectrum_input(p, "color")?,
+    };
+    let eumelanin = float_input(p, "eumelanin")?;
+    let pheomelanin = float_input(p, "pheomelanin")?;
+    let mut ignore = |name: &str, because: &str| {
+        warnings.push(Warning::new(
+            p.loc(name).unwrap_or(&e.loc),
+            format!("hair: \"{name}\" ignored since \"{because}\" was given"),
+        ))
+    };
+    let absorption = if let Some(s) = sigma_a {
+        for (name, given) in [
+            ("reflectance", reflectance.is_some()),
+            ("eumelanin", eumelanin.is_some()),
+            ("pheomelanin", pheomelanin.is_some()),
+        ] {
+            if given {
+                ignore(name, "sigma_a");
+            }
+        }
+        HairAbsorptionSpec::SigmaA(s)
+    } else if let Some(r) = reflectance {
+        for (name, given) in [("eumelanin", eumelanin.is_some()), ("pheomelanin", pheomelanin.is_some())] {
+            if given {
+                ignore(name, "reflectance");
+            }
+        }
+        HairAbsorptionSpec::Reflectance(r)
+    } else if eumelanin.is_some() || pheomelanin.is_some() {
+        HairAbsorptionSpec::Melanin {
+            eumelanin: eumelanin.unwrap_or(FloatInput::Value(0.0)),
+            pheomelanin: pheomelanin.unwrap_or(FloatInput::Value(0.0)),
+        }
+    } else {
+        HairAbsorptionSpec::Melanin { eumelanin: FloatInput::Value(1.3), pheomelanin: FloatInput::Value(0.0) }
+    };
+    let f = |name: &str, default: f32| -> Result<FloatInput, Error> {
+        Ok(float_input(p, name)?.unwrap_or(FloatInput::Value(default)))
+    };
+    Ok(MaterialKind::Hair {
+        absorption,
+        eta: f("eta", 1.55)?,
+        beta_m: f("beta_m", 0.3)?,
+        beta_n: f("beta_n", 0.3)?,
+        alpha: f("alpha", 2.0)?,
+    })
+}
+
 /// A conductor's optical constants from `{prefix}eta`/`{prefix}k` or `reflectance`, copper by
 /// default (pbrt-v4's conductor and coatedconductor materials).
 fn conductor_spec(e: &Entity, prefix: &str) -> Result<ConductorSpec, Error> {
@@ -340,6 +423,7 @@ impl MaterialSettings {
                 )?,
             },
             "subsurface" => subsurface(e, warnings)?,
+            "hair" => hair(e, warnings)?,
             "mix" => {
                 let names = p.get_strings("materials")?;
                 let [a, b] = <[String; 2]>::try_from(names.to_vec()).map_err(|_| {

@@ -166,6 +166,8 @@ impl Curve {
             dpdv: c.world_from_object.transform_vector3(dpdv),
             dndu: Vec3::ZERO,
             dndv: Vec3::ZERO,
+            // pbrt-v4 bounds a curve hit's error by twice the width in object space.
+            p_error: 2.0 * f.hit_width * c.world_from_object.matrix3.determinant().abs().cbrt(),
         };
         Some((f.t, hit))
     }

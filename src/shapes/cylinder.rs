@@ -119,6 +119,7 @@ impl Cylinder {
             dpdv: self.world_from_object.transform_vector3(dpdv),
             dndu: transform_normal_unnormalized(&self.object_from_world, dndu),
             dndv: transform_normal_unnormalized(&self.object_from_world, dndv),
+            p_error: 0.0,
         }
     }
 

@@ -104,6 +104,7 @@ impl Disk {
             dpdv: self.world_from_object.transform_vector3(dpdv),
             dndu: Vec3::ZERO,
             dndv: Vec3::ZERO,
+            p_error: 0.0,
         }
     }
 

@@ -156,7 +156,7 @@ pub fn triangle_hit(mesh: &Mesh, i: u32, t: f32, b1: f32, b2: f32) -> SurfaceHit
         (Vec3::ZERO, Vec3::ZERO)
     };
     if mesh.normals.is_empty() {
-        return SurfaceHit { t, p, n, ns, uv, dpdu, dpdv, dndu: Vec3::ZERO, dndv: Vec3::ZERO };
+        return SurfaceHit { t, p, n, ns, uv, dpdu, dpdv, dndu: Vec3::ZERO, dndv: Vec3::ZERO, p_error: 0.0 };
     }
     // pbrt-v4's shading geometry with per-vertex normals: ∂p/∂u made perpendicular to ns,
     // ∂p/∂v = ns × ∂p/∂u, and ∂n/∂u, ∂n/∂v from the normals' differences over uv.
@@ -169,7 +169,7 @@ pub fn triangle_hit(mesh: &Mesh, i: u32, t: f32, b1: f32, b2: f32) -> SurfaceHit
     } else {
         (Vec3::ZERO, Vec3::ZERO)
     };
-    SurfaceHit { t, p, n, ns, uv, dpdu: ss, dpdv: ts, dndu, dndv }
+    SurfaceHit { t, p, n, ns, uv, dpdu: ss, dpdv: ts, dndu, dndv, p_error: 0.0 }
 }
 
 /// Uniform area sample on triangle `i`.

@@ -40,6 +40,23 @@ pub struct SurfaceHit {
     pub dndu: Vec3,
     /// ∂n/∂v of the shading normal.
     pub dndv: Vec3,
+    /// A bound on the hit point's distance from the surface beyond the usual rounding
+    /// (pbrt-v4's per-shape `pError`; curves: twice their width), for offsetting rays.
+    pub p_error: f32,
+}
+
+impl SurfaceHit {
+    /// A ray leaving the hit in direction `d`, offset off the surface.
+    #[inline]
+    pub fn spawn_ray(&self, d: Vec3) -> crate::geometry::Ray {
+        crate::geometry::Ray::new(self.offset_origin(d), d)
+    }
+
+    /// The hit point moved off the surface towards the side `w` points to.
+    #[inline]
+    pub fn offset_origin(&self, w: Vec3) -> Vec3 {
+        crate::geometry::offset_origin_by(self.p, self.n, w, self.p_error)
+    }
 }
 
 /// A point sampled on a shape's surface.

@@ -151,6 +151,7 @@ impl Sphere {
             dpdv: self.world_from_object.transform_vector3(dpdv_obj),
             dndu: transform_normal_unnormalized(&self.object_from_world, dndu),
             dndv: transform_normal_unnormalized(&self.object_from_world, dndv),
+            p_error: 0.0,
         }
     }
 

@@ -14,7 +14,7 @@ use super::media::{ShadowEstimate, ratio_tracking, sample_t_maj};
 use super::observer::{EmissionEvent, NeeEvent, NoObserver, PathObserver, VertexEvent};
 use crate::accel::{Hit, NONE};
 use crate::color::Channels;
-use crate::geometry::{Ray, offset_origin, spawn_ray};
+use crate::geometry::{Ray, offset_origin_by};
 use crate::lights::{LightContext, LightSample};
 use crate::materials::bxdf::{Bxdf, ReflTransFlags, TransportMode};
 use crate::math::Frame;
@@ -348,7 +348,7 @@ pub fn trace_path<C: Channels, O: PathObserver<C>>(
         let Some(mut bxdf) = material.bxdf::<C>(&scene.textures, &tex_ctx, lambda) else {
             // An interface: cross it without counting a bounce.
             medium = medium_after(scene, &hit, ray.d, medium);
-            ray = spawn_ray(s.p, s.n, ray.d);
+            ray = s.spawn_ray(ray.d);
             continue;
         };
         if depth == config.max_depth {
@@ -427,7 +427,7 @@ pub fn trace_path<C: Channels, O: PathObserver<C>>(
         }
         prev_p = s.p;
         medium = medium_after(scene, &hit, wi, medium);
-        ray = spawn_ray(s.p, s.n, wi);
+        ray = s.spawn_ray(wi);
         if rr(&mut st, eta_scale, depth, sampler) {
             break;
         }
@@ -540,8 +540,8 @@ fn sample_direct<C: Channels, O: PathObserver<C>>(
     };
     // A shadow ray leaving a surface starts in the medium on the side it leaves towards.
     let (n, medium) = match hit {
-        Some(h) => (h.surface.n, medium_after(scene, h, ls.wi, medium)),
-        None => (Vec3::ZERO, medium),
+        Some(h) => ((h.surface.n, h.surface.p_error), medium_after(scene, h, ls.wi, medium)),
+        None => ((Vec3::ZERO, 0.0), medium),
     };
     let ShadowEstimate { t_ray, r_u, r_l } = transmittance(scene, p, n, medium, &ls, st.hero, lambda, stats)?;
     let pdf_light = pmf * ls.pdf;
@@ -569,7 +569,7 @@ fn sample_direct<C: Channels, O: PathObserver<C>>(
 fn transmittance<C: Channels>(
     scene: &Scene,
     p: Vec3,
-    n: Vec3,
+    (n, p_error): (Vec3, f32),
     mut medium: u32,
     ls: &LightSample<C>,
     hero: usize,
@@ -577,7 +577,7 @@ fn transmittance<C: Channels>(
     stats: &mut RayStats,
 ) -> Option<ShadowEstimate<C>> {
     let mut est = ShadowEstimate::default();
-    let origin = if n == Vec3::ZERO { p } else { offset_origin(p, n, ls.wi) };
+    let origin = if n == Vec3::ZERO { p } else { offset_origin_by(p, n, ls.wi, p_error) };
     let mut ray = Ray::new(origin, ls.wi);
     // Distance left to the light point; the light's own surface is not an occluder.
     let mut remaining = if ls.infinite { f32::INFINITY } else { (ls.p - origin).length() * (1.0 - 1e-4) };
@@ -604,7 +604,7 @@ fn transmittance<C: Channels>(
         let Some(h) = hit else { return Some(est) };
         medium = medium_after(scene, &h, ray.d, medium);
         let travelled = h.surface.t;
-        ray = spawn_ray(h.surface.p, h.surface.n, ray.d);
+        ray = h.surface.spawn_ray(ray.d);
         remaining -= travelled;
         if remaining <= 0.0 {
             return Some(est);

@@ -207,7 +207,7 @@ fn medium_containing(scene: &Scene, mut ray: Ray) -> u32 {
             let [inside, outside] = scene.interfaces[hit.prim.interface as usize];
             return if ray.d.dot(hit.surface.n) > 0.0 { inside } else { outside };
         }
-        ray = spawn_ray(hit.surface.p, hit.surface.n, ray.d);
+        ray = hit.surface.spawn_ray(ray.d);
     }
     NONE
 }
@@ -289,7 +289,7 @@ pub fn trace<C: Channels>(
         let tex_ctx = TexContext { p: s.p, uv: s.uv };
         let Some(bxdf) = material.bxdf::<C>(&scene.textures, &tex_ctx, lambda) else {
             medium = medium_after(scene, &hit, ray.d, medium);
-            ray = spawn_ray(s.p, s.n, ray.d);
+            ray = s.spawn_ray(ray.d);
             continue;
         };
         if depth >= max_depth {
@@ -323,6 +323,6 @@ pub fn trace<C: Channels>(
         refracted |= bs.is_transmission();
         let wi = frame.to_world(bs.wi);
         medium = medium_after(scene, &hit, wi, medium);
-        ray = spawn_ray(s.p, s.n, wi);
+        ray = s.spawn_ray(wi);
     }
 }

@@ -9,7 +9,7 @@ use glam::{IVec3, Vec2, Vec3};
 use super::volume::{Event, MAX_LIGHTS, sample_event};
 use crate::color::Channels;
 use crate::color::Rgb;
-use crate::geometry::{Ray, spawn_ray};
+use crate::geometry::Ray;
 use crate::integrators::RayIntegrator;
 use crate::integrators::common::RayStats;
 use crate::integrators::common::media::sample_t_maj;
@@ -250,7 +250,7 @@ impl RayIntegrator for RadianceGraphIntegrator {
                 }
                 Some(h) => {
                     inside = ray.d.dot(h.surface.n) < 0.0;
-                    ray = spawn_ray(h.surface.p, h.surface.n, ray.d);
+                    ray = h.surface.spawn_ray(ray.d);
                 }
             }
         }

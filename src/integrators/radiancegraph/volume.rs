@@ -166,7 +166,7 @@ impl<'a> Volume<'a> {
             return None;
         }
         let t_in = hit.surface.t;
-        let inner = crate::geometry::spawn_ray(hit.surface.p, hit.surface.n, ray.d);
+        let inner = hit.surface.spawn_ray(ray.d);
         let exit = self.exit(&inner)?;
         Some((t_in, (inner.o - ray.o).dot(ray.d) + exit))
     }

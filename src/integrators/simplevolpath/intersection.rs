@@ -27,7 +27,7 @@ use glam::{Vec2, Vec3};
 
 use crate::accel::{Hit, NONE};
 use crate::color::{Channels, Rgb};
-use crate::geometry::{Ray, spawn_ray};
+use crate::geometry::Ray;
 use crate::integrators::common::media::sample_t_maj;
 use crate::integrators::common::medium_after;
 use crate::media::{Medium, MediumPoint};
@@ -135,7 +135,7 @@ pub fn intersect<C: Channels>(
         }
         // A medium boundary and nothing else: cross it.
         medium = medium_after(scene, &h, ray.d, medium);
-        let next = spawn_ray(h.surface.p, h.surface.n, ray.d);
+        let next = h.surface.spawn_ray(ray.d);
         t_max -= (next.o - ray.o).dot(ray.d);
         if t_max <= 0.0 {
             return Intersection { event: Event::Escape, ray, medium, beta, r_u };

@@ -25,7 +25,7 @@ use super::intersection::{Event, Intersection, Seed, intersect};
 use super::mixture::{Mixture, Scatterer};
 use crate::accel::{Hit, NONE};
 use crate::color::Channels;
-use crate::geometry::{Ray, offset_origin, spawn_ray};
+use crate::geometry::Ray;
 use crate::integrators::common::{RayStats, medium_after, shading_frame};
 use crate::lights::LightContext;
 use crate::media::phase::HenyeyGreenstein;
@@ -141,7 +141,7 @@ impl DeltaLights {
             return C::ZERO;
         }
         let (origin, mut medium) = match hit {
-            Some(h) => (offset_origin(h.surface.p, h.surface.n, ls.wi), medium_after(scene, h, ls.wi, medium)),
+            Some(h) => (h.surface.offset_origin(ls.wi), medium_after(scene, h, ls.wi, medium)),
             None => (x, medium),
         };
         let mut ray = Ray::new(origin, ls.wi);
@@ -157,7 +157,7 @@ impl DeltaLights {
                 // An emissive interface is still only a boundary for the connection.
                 Event::Surface(h) if scene.materials[h.prim.material as usize].is_interface() => {
                     medium = medium_after(scene, &h, ray.d, i.medium);
-                    let next = spawn_ray(h.surface.p, h.surface.n, ray.d);
+                    let next = h.surface.spawn_ray(ray.d);
                     t_max -= (next.o - ray.o).dot(ray.d);
                     if t_max <= 0.0 {
                         break;
@@ -214,7 +214,7 @@ pub fn trace<C: Channels>(
                     // An emissive `interface`: its light is counted; the ray goes on.
                     let medium = medium_after(scene, &hit, isect.ray.d, isect.medium);
                     let seed = Seed::draw(scene, sampler);
-                    let ray = spawn_ray(s.p, s.n, isect.ray.d);
+                    let ray = s.spawn_ray(isect.ray.d);
                     isect = intersect(scene, ray, medium, f32::INFINITY, seed, hero, lambda, &mut stats.bounce);
                     path.carry(&isect);
                     continue;
@@ -261,7 +261,7 @@ pub fn trace<C: Channels>(
             break;
         }
         let (ray, medium) = match &hit {
-            Some(h) => (spawn_ray(h.surface.p, h.surface.n, s.wi), medium_after(scene, h, s.wi, isect.medium)),
+            Some(h) => (h.surface.spawn_ray(s.wi), medium_after(scene, h, s.wi, isect.medium)),
             None => (Ray::new(x, s.wi), isect.medium),
         };
         let seed = Seed::draw(scene, sampler);

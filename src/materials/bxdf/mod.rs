@@ -14,6 +14,7 @@
 //!   refraction.
 //! - [`ThinDielectricBxdf`]: a thin slab with inter-reflection, specular only.
 //! - [`DiffuseTransmissionBxdf`]: Lambertian reflection R/π and transmission T/π.
+//! - [`HairBxdf`]: pbrt-v4's hair scattering model (a rough dielectric cylinder).
 //! - [`CoatedDiffuseBxdf`] and [`CoatedConductorBxdf`]: pbrt-v4's `LayeredBxDF` with a
 //!   dielectric coating over a diffuse or a conductor base, a stochastic evaluation by random
 //!   walks between the two.
@@ -39,6 +40,7 @@ mod dielectric;
 mod diffuse;
 mod diffuse_transmission;
 mod fresnel;
+mod hair;
 mod layered;
 mod microfacet;
 mod thin_dielectric;
@@ -58,6 +60,7 @@ pub use dielectric::DielectricBxdf;
 pub use diffuse::DiffuseBxdf;
 pub use diffuse_transmission::DiffuseTransmissionBxdf;
 pub use fresnel::{fr_complex, fr_complex_channels, fr_dielectric};
+pub use hair::HairBxdf;
 pub use layered::{CoatedConductorBxdf, CoatedDiffuseBxdf};
 pub use microfacet::TrowbridgeReitz;
 pub use thin_dielectric::ThinDielectricBxdf;
@@ -335,6 +338,8 @@ pub enum Bxdf<C = Rgb> {
     CoatedConductor(CoatedConductorBxdf<C>),
     /// Lambertian reflection and transmission.
     DiffuseTransmission(DiffuseTransmissionBxdf<C>),
+    /// Hair fibres.
+    Hair(HairBxdf<C>),
 }
 
 impl<C: Channels> Bxdf<C> {
@@ -352,6 +357,7 @@ impl<C: Channels> Bxdf<C> {
             Bxdf::CoatedDiffuse(b) => b.f(wo, wi, mode),
             Bxdf::CoatedConductor(b) => b.f(wo, wi, mode),
             Bxdf::DiffuseTransmission(b) => b.f(wo, wi, mode),
+            Bxdf::Hair(b) => b.f(wo, wi, mode),
         }
     }
 
@@ -377,6 +383,7 @@ impl<C: Channels> Bxdf<C> {
             Bxdf::CoatedDiffuse(b) => b.sample_f(wo, uc, u, mode, sample_flags),
             Bxdf::CoatedConductor(b) => b.sample_f(wo, uc, u, mode, sample_flags),
             Bxdf::DiffuseTransmission(b) => b.sample_f(wo, uc, u, mode, sample_flags),
+            Bxdf::Hair(b) => b.sample_f(wo, uc, u, mode, sample_flags),
         }?;
         (!s.f.is_zero() && s.pdf != 0.0 && s.wi.z != 0.0).then_some(s)
     }
@@ -395,6 +402,7 @@ impl<C: Channels> Bxdf<C> {
             Bxdf::CoatedDiffuse(b) => b.pdf(wo, wi, mode, sample_flags),
             Bxdf::CoatedConductor(b) => b.pdf(wo, wi, mode, sample_flags),
             Bxdf::DiffuseTransmission(b) => b.pdf(wo, wi, mode, sample_flags),
+            Bxdf::Hair(b) => b.pdf(wo, wi, mode, sample_flags),
         }
     }
 
@@ -409,6 +417,7 @@ impl<C: Channels> Bxdf<C> {
             Bxdf::CoatedDiffuse(b) => b.flags(),
             Bxdf::CoatedConductor(b) => b.flags(),
             Bxdf::DiffuseTransmission(b) => b.flags(),
+            Bxdf::Hair(b) => b.flags(),
         }
     }
 
@@ -417,7 +426,7 @@ impl<C: Channels> Bxdf<C> {
     #[inline]
     pub fn regularize(&mut self) {
         match self {
-            Bxdf::Diffuse(_) | Bxdf::ThinDielectric(_) | Bxdf::DiffuseTransmission(_) => {}
+            Bxdf::Diffuse(_) | Bxdf::ThinDielectric(_) | Bxdf::DiffuseTransmission(_) | Bxdf::Hair(_) => {}
             Bxdf::Conductor(b) => b.regularize(),
             Bxdf::Dielectric(b) => b.regularize(),
             Bxdf::CoatedDiffuse(b) => b.regularize(),

@@ -58,9 +58,15 @@ fn scene(kind: &str, name: &str) -> (String, &'static str) {
                 "directionmix" => r#""vector3 dir" [0 1 0]"#,
                 _ => "",
             };
-            format!(
-                "{header}{world}Texture \"t\" \"float\" \"{name}\" {params}\nMaterial \"coateddiffuse\" \"texture roughness\" \"t\"\n{sphere}\n"
-            )
+            if name == "marble" {
+                format!(
+                    "{header}{world}Texture \"t\" \"spectrum\" \"{name}\" {params}\nMaterial \"diffuse\" \"texture reflectance\" \"t\"\n{sphere}\n"
+                )
+            } else {
+                format!(
+                    "{header}{world}Texture \"t\" \"float\" \"{name}\" {params}\nMaterial \"coateddiffuse\" \"texture roughness\" \"t\"\n{sphere}\n"
+                )
+            }
         }
         "medium" => {
             let params = match name {
@@ -135,12 +141,12 @@ const ENTITIES: &[(&str, &str, Outcome)] = &[
     ("texture", "mix", Rendered),
     ("texture", "checkerboard", Rendered),
     ("texture", "bilerp", Rendered),
-    ("texture", "directionmix", Replaced),
-    ("texture", "dots", Replaced),
-    ("texture", "fbm", Replaced),
-    ("texture", "wrinkled", Replaced),
-    ("texture", "windy", Replaced),
-    ("texture", "marble", Replaced),
+    ("texture", "directionmix", Rendered),
+    ("texture", "dots", Rendered),
+    ("texture", "fbm", Rendered),
+    ("texture", "wrinkled", Rendered),
+    ("texture", "windy", Rendered),
+    ("texture", "marble", Rendered),
     ("texture", "ptex", Replaced),
     ("medium", "homogeneous", Rendered),
     ("medium", "uniformgrid", Rendered),

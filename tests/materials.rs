@@ -440,3 +440,61 @@ Shape "curve" "string type" "cylinder" "point3 P" [-2 0 0  -0.7 0 0  0.7 0 0  2 
     let centre = brown.pixels[5 * 32 + 16];
     assert!(centre.x < 0.9 && centre.z < centre.x, "{centre:?}");
 }
+
+/// pbrt-v4's procedural textures: `directionmix` blends by |n · dir| (exact on a plane),
+/// `dots` shows only its two values, and the noise textures (`fbm`, `wrinkled`, `windy`,
+/// `marble`) vary over the surface, finite, within their ranges.
+#[test]
+fn procedural_textures_evaluate_as_pbrt_v4_defines_them() {
+    let plane = |textures: &str, material: &str| {
+        let text = format!(
+            r#"LookAt 0 0 5  0 0 0  0 1 0
+Camera "orthographic"
+Sampler "independent" "integer pixelsamples" 1
+Film "rgb" "integer xresolution" 32 "integer yresolution" 32
+Integrator "volpath" "integer maxdepth" 1
+WorldBegin
+LightSource "distant" "point3 from" [0 0 1] "point3 to" [0 0 0] "rgb L" [3.14159265 3.14159265 3.14159265]
+{textures}
+Material {material}
+Shape "trianglemesh" "integer indices" [0 1 2 0 2 3] "point3 P" [-10 -10 0  10 -10 0  10 10 0  -10 10 0] "point2 uv" [0 0 20 0 20 20 0 20]"#
+        );
+        // Lit head-on by π: each pixel is the reflectance.
+        render_scene(&load_scene(&text, &transport(false))).pixels
+    };
+    for (dir, r) in [("0 0 1", 0.2f32), ("1 0 0", 0.8), ("0 0.6 0.8", 0.8 * 0.2 + 0.2 * 0.8)] {
+        let px = plane(
+            &format!(
+                r#"Texture "t" "spectrum" "directionmix" "rgb tex1" [0.2 0.2 0.2] "rgb tex2" [0.8 0.8 0.8] "vector3 dir" [{dir}]"#
+            ),
+            r#""diffuse" "texture reflectance" "t""#,
+        );
+        assert!(px.iter().all(|p| (p.x - r).abs() < 1e-4), "dir {dir}: {:?} vs {r}", px[0]);
+    }
+    let px = plane(
+        r#"Texture "t" "spectrum" "dots" "rgb inside" [0.9 0.9 0.9] "rgb outside" [0.1 0.1 0.1]"#,
+        r#""diffuse" "texture reflectance" "t""#,
+    );
+    assert!(px.iter().all(|p| (p.x - 0.9).abs() < 1e-4 || (p.x - 0.1).abs() < 1e-4));
+    assert!(px.iter().any(|p| p.x > 0.5) && px.iter().any(|p| p.x < 0.5), "dots and background");
+    for texture in [
+        r#"Texture "t" "float" "wrinkled" "float roughness" 0.5"#,
+        r#"Texture "t" "float" "windy""#,
+        r#"Texture "s" "float" "fbm" Texture "t" "float" "scale" "texture tex" "s" "float scale" 0.5"#,
+    ] {
+        let px = plane(
+            &format!(
+                "{texture}\nTexture \"u\" \"spectrum\" \"mix\" \"rgb tex1\" [0 0 0] \"rgb tex2\" [1 1 1] \"texture amount\" \"t\""
+            ),
+            r#""diffuse" "texture reflectance" "u""#,
+        );
+        let (min, max) = px.iter().fold((f32::MAX, f32::MIN), |(a, b), p| (a.min(p.x), b.max(p.x)));
+        assert!(px.iter().all(|p| p.is_finite()) && max > min + 0.01, "{texture}: {min}..{max}");
+    }
+    let px = plane(r#"Texture "t" "spectrum" "marble" "float scale" 4"#, r#""diffuse" "texture reflectance" "t""#);
+    assert!(px.iter().all(|p| p.min_element() >= 0.0 && p.max_element() <= 1.0));
+    assert!(px.iter().any(|p| p.z > p.x + 0.01), "marble's veins are bluish");
+    let desc = nimbus::parser::load_str("WorldBegin\nTexture \"t\" \"spectrum\" \"fbm\"\n", "fbm.pbrt").unwrap();
+    let e = nimbus::scene::build_scene(&desc, &transport(false)).err().expect("refused");
+    assert!(e.to_string().contains("fbm.pbrt:2") && e.to_string().contains("float texture"), "{e}");
+}

@@ -348,7 +348,8 @@ impl Surfaces {
     /// The stochastic alpha test of a candidate hit on an alpha-tested primitive.
     fn alpha_passes(&self, prim: Primitive, instance: u32, detail: Detail, ray: &Ray, t: f32) -> bool {
         let s = self.surface(&Candidate { t, prim, instance, detail });
-        let alpha = self.textures.eval_float(self.alphas[prim.alpha as usize], &TexContext { p: s.p, uv: s.uv });
+        let alpha =
+            self.textures.eval_float(self.alphas[prim.alpha as usize], &TexContext { p: s.p, uv: s.uv, n: s.n });
         alpha_passes(alpha, ray, t)
     }
 

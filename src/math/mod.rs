@@ -2,6 +2,7 @@
 
 pub mod cell_map;
 mod frame;
+pub mod noise;
 
 pub use frame::Frame;
 

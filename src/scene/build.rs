@@ -142,7 +142,8 @@ impl Scene {
     #[inline]
     pub fn surface_material(&self, hit: &mut crate::accel::Hit, wo: Vec3) -> &Material {
         let s = &mut hit.surface;
-        let id = resolve(&self.materials, hit.prim.material, &self.textures, &TexContext { p: s.p, uv: s.uv }, wo);
+        let id =
+            resolve(&self.materials, hit.prim.material, &self.textures, &TexContext { p: s.p, uv: s.uv, n: s.n }, wo);
         let shading = &self.shading[id as usize];
         if !shading.is_none() {
             shading.apply(&self.textures, s);
@@ -322,6 +323,31 @@ impl TextureBuilder<'_> {
                     self.input(&v[3], cs, &e.loc)?,
                 ],
                 mapping: mapping(m),
+            },
+            TextureKind::Fbm { octaves, roughness } => {
+                TexNode::Fbm { texture_from_world, octaves: *octaves, omega: *roughness }
+            }
+            TextureKind::Wrinkled { octaves, roughness } => {
+                TexNode::Wrinkled { texture_from_world, octaves: *octaves, omega: *roughness }
+            }
+            TextureKind::Windy => TexNode::Windy { texture_from_world },
+            TextureKind::Marble { octaves, roughness, scale, variation } => TexNode::Marble {
+                texture_from_world,
+                octaves: *octaves,
+                omega: *roughness,
+                scale: *scale,
+                variation: *variation,
+            },
+            TextureKind::Dots { inside, outside, mapping: m } => TexNode::Dots {
+                inside: self.input(inside, cs, &e.loc)?,
+                outside: self.input(outside, cs, &e.loc)?,
+                mapping: mapping(m),
+            },
+            TextureKind::DirectionMix { tex1, tex2, dir } => TexNode::DirectionMix {
+                a: self.input(tex1, cs, &e.loc)?,
+                b: self.input(tex2, cs, &e.loc)?,
+                // A texture-space direction, taken to world space (pbrt-v4's renderFromTexture).
+                dir: texture_from_world.inverse().transform_vector3(Vec3::from(*dir)).normalize_or_zero(),
             },
             TextureKind::ImageMap { filename, scale, invert, wrap, encoding, mapping: m } => {
                 let image = load_texture_image(filename, encoding).map_err(|m| err(&e.loc, m))?;

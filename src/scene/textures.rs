@@ -85,6 +85,51 @@ pub enum TextureKind {
         /// Mapping.
         mapping: Mapping,
     },
+    /// `fbm` (float)
+    Fbm {
+        /// `octaves`.
+        octaves: u32,
+        /// `roughness`.
+        roughness: f32,
+    },
+    /// `wrinkled` (float)
+    Wrinkled {
+        /// `octaves`.
+        octaves: u32,
+        /// `roughness`.
+        roughness: f32,
+    },
+    /// `windy` (float)
+    Windy,
+    /// `marble` (spectrum)
+    Marble {
+        /// `octaves`.
+        octaves: u32,
+        /// `roughness`.
+        roughness: f32,
+        /// `scale`.
+        scale: f32,
+        /// `variation`.
+        variation: f32,
+    },
+    /// `dots`
+    Dots {
+        /// `inside`.
+        inside: TexInput,
+        /// `outside`.
+        outside: TexInput,
+        /// Mapping.
+        mapping: Mapping,
+    },
+    /// `directionmix`
+    DirectionMix {
+        /// `tex1` (along `dir`).
+        tex1: TexInput,
+        /// `tex2`.
+        tex2: TexInput,
+        /// `dir` (texture space).
+        dir: [f32; 3],
+    },
     /// `imagemap`
     ImageMap {
         /// The image.
@@ -147,6 +192,15 @@ fn input(t: &TextureEntity, name: &str, default: f32) -> Result<TexInput, Error>
     })
 }
 
+fn checked_octaves(t: &TextureEntity) -> Result<u32, Error> {
+    let p = &t.entity.params;
+    let o = p.get_one_int("octaves", 8)?;
+    if !(0..=32).contains(&o) {
+        return Err(Error::new(p.loc("octaves").unwrap_or(&t.entity.loc), "\"octaves\" must be between 0 and 32"));
+    }
+    Ok(o as u32)
+}
+
 impl TextureSettings {
     /// Reads a texture entity.
     pub fn from_entity(t: &TextureEntity, warnings: &mut Vec<Warning>) -> Result<TextureSettings, Error> {
@@ -180,6 +234,46 @@ impl TextureSettings {
             "bilerp" => TextureKind::Bilerp {
                 v: [input(t, "v00", 0.0)?, input(t, "v01", 1.0)?, input(t, "v10", 0.0)?, input(t, "v11", 1.0)?],
                 mapping: mapping(t)?,
+            },
+            "fbm" | "wrinkled" | "windy" if t.value == TextureValue::Spectrum => {
+                return Err(Error::new(
+                    &e.loc,
+                    format!("texture \"{}\" is a float texture (pbrt-v4 has no spectrum {})", e.name, e.name),
+                ));
+            }
+            "fbm" | "wrinkled" => {
+                let octaves = checked_octaves(t)?;
+                let roughness = p.get_one_float("roughness", 0.5)?;
+                if e.name == "fbm" {
+                    TextureKind::Fbm { octaves, roughness }
+                } else {
+                    TextureKind::Wrinkled { octaves, roughness }
+                }
+            }
+            "windy" => TextureKind::Windy,
+            "marble" => {
+                if t.value == TextureValue::Float {
+                    return Err(Error::new(
+                        &e.loc,
+                        "texture \"marble\" is a spectrum texture (pbrt-v4 has no float marble)",
+                    ));
+                }
+                TextureKind::Marble {
+                    octaves: checked_octaves(t)?,
+                    roughness: p.get_one_float("roughness", 0.5)?,
+                    scale: p.get_one_float("scale", 1.0)?,
+                    variation: p.get_one_float("variation", 0.2)?,
+                }
+            }
+            "dots" => TextureKind::Dots {
+                inside: input(t, "inside", 1.0)?,
+                outside: input(t, "outside", 0.0)?,
+                mapping: mapping(t)?,
+            },
+            "directionmix" => TextureKind::DirectionMix {
+                tex1: input(t, "tex1", 0.0)?,
+                tex2: input(t, "tex2", 1.0)?,
+                dir: p.get_one_vector3("dir", [0.0, 1.0, 0.0])?,
             },
             "imagemap" => {
                 let Some(name) = p.get_opt_string("filename")? else {

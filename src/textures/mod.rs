@@ -14,6 +14,7 @@ use nimbus_parser::ColorSpace;
 
 use crate::color::{Channels, Rgb};
 use crate::imageio::Image;
+use crate::math::noise;
 use crate::spectra::{RgbRole, SpectrumValue};
 
 /// A texture input: a constant (the common case, no indirection) or a texture node.
@@ -32,6 +33,8 @@ pub struct TexContext {
     pub p: Vec3,
     /// Surface (u, v).
     pub uv: Vec2,
+    /// Geometric normal (for `directionmix`; zero where there is none).
+    pub n: Vec3,
 }
 
 /// How points map to (s, t).
@@ -139,6 +142,60 @@ pub enum TexNode {
         /// Mapping.
         mapping: TexMapping,
     },
+    /// pbrt-v4's `fbm` (float): fractional Brownian motion of the texture-space point.
+    Fbm {
+        /// Texture from world.
+        texture_from_world: Affine3A,
+        /// Octaves.
+        octaves: u32,
+        /// Amplitude ratio between octaves (`roughness`).
+        omega: f32,
+    },
+    /// pbrt-v4's `wrinkled` (float): turbulence of the texture-space point.
+    Wrinkled {
+        /// Texture from world.
+        texture_from_world: Affine3A,
+        /// Octaves.
+        octaves: u32,
+        /// Amplitude ratio between octaves (`roughness`).
+        omega: f32,
+    },
+    /// pbrt-v4's `windy` (float): wave height times wind strength.
+    Windy {
+        /// Texture from world.
+        texture_from_world: Affine3A,
+    },
+    /// pbrt-v4's `marble` (spectrum): a colour spline over a noise-perturbed sine.
+    Marble {
+        /// Texture from world.
+        texture_from_world: Affine3A,
+        /// Octaves.
+        octaves: u32,
+        /// Amplitude ratio between octaves (`roughness`).
+        omega: f32,
+        /// Frequency.
+        scale: f32,
+        /// Strength of the perturbation.
+        variation: f32,
+    },
+    /// pbrt-v4's `dots`: `inside` in randomly placed discs of a unit grid over (s, t).
+    Dots {
+        /// Inside the discs.
+        inside: Tex,
+        /// Elsewhere.
+        outside: Tex,
+        /// Mapping.
+        mapping: TexMapping,
+    },
+    /// pbrt-v4's `directionmix`: lerp by |n · dir| between `b` (0) and `a` (1).
+    DirectionMix {
+        /// Where the normal is along `dir`.
+        a: Tex,
+        /// Where it is perpendicular.
+        b: Tex,
+        /// Unit direction (world space).
+        dir: Vec3,
+    },
     /// A bilinearly filtered image.
     Image {
         /// Pixels (linear).
@@ -201,6 +258,11 @@ impl Textures {
                 }
                 TexNode::Checkerboard { a, b, .. } => self.is_chromatic(*a) || self.is_chromatic(*b),
                 TexNode::Bilerp { v, .. } => v.iter().any(|t| self.is_chromatic(*t)),
+                TexNode::Fbm { .. } | TexNode::Wrinkled { .. } | TexNode::Windy { .. } => false,
+                TexNode::Marble { .. } => true,
+                TexNode::Dots { inside: a, outside: b, .. } | TexNode::DirectionMix { a, b, .. } => {
+                    self.is_chromatic(*a) || self.is_chromatic(*b)
+                }
                 TexNode::Image { gray, .. } => !gray,
             },
         }
@@ -234,6 +296,35 @@ impl Textures {
                     + self.eval::<C>(v[2], ctx, lambda, role) * (s * (1.0 - t))
                     + self.eval::<C>(v[3], ctx, lambda, role) * (s * t)
             }
+            TexNode::Fbm { texture_from_world, octaves, omega } => {
+                let p = texture_from_world.transform_point3(ctx.p);
+                C::splat(noise::fbm(p, Vec3::ZERO, Vec3::ZERO, *omega, *octaves))
+            }
+            TexNode::Wrinkled { texture_from_world, octaves, omega } => {
+                let p = texture_from_world.transform_point3(ctx.p);
+                C::splat(noise::turbulence(p, Vec3::ZERO, Vec3::ZERO, *omega, *octaves))
+            }
+            TexNode::Windy { texture_from_world } => {
+                let p = texture_from_world.transform_point3(ctx.p);
+                let wind = noise::fbm(0.1 * p, Vec3::ZERO, Vec3::ZERO, 0.5, 3);
+                let wave = noise::fbm(p, Vec3::ZERO, Vec3::ZERO, 0.5, 6);
+                C::splat(wind.abs() * wave)
+            }
+            TexNode::Marble { texture_from_world, octaves, omega, scale, variation } => {
+                let p = *scale * texture_from_world.transform_point3(ctx.p);
+                let marble = p.y + variation * noise::fbm(p, Vec3::ZERO, Vec3::ZERO, *omega, *octaves);
+                C::from_rgb(marble_color(0.5 + 0.5 * marble.sin()), role, ColorSpace::Srgb, lambda)
+            }
+            TexNode::Dots { inside, outside, mapping } => {
+                let st = mapping.map(ctx);
+                if in_dot(st) { self.eval(*inside, ctx, lambda, role) } else { self.eval(*outside, ctx, lambda, role) }
+            }
+            TexNode::DirectionMix { a, b, dir } => {
+                let amount = ctx.n.dot(*dir).abs();
+                let va = if amount != 0.0 { self.eval(*a, ctx, lambda, role) } else { C::ZERO };
+                let vb = if amount != 1.0 { self.eval(*b, ctx, lambda, role) } else { C::ZERO };
+                va * amount + vb * (1.0 - amount)
+            }
             TexNode::Image { image, mapping, scale, invert, wrap, space, .. } => {
                 let mut st = mapping.map(ctx);
                 // pbrt-v4 flips t so that images are not upside down.
@@ -244,6 +335,43 @@ impl Textures {
             }
         }
     }
+}
+
+/// pbrt-v4's marble colours: a cubic Bézier spline through nine sRGB colours, scaled by 1.5.
+fn marble_color(t: f32) -> Rgb {
+    const COLORS: [[f32; 3]; 9] = [
+        [0.58, 0.58, 0.6],
+        [0.58, 0.58, 0.6],
+        [0.58, 0.58, 0.6],
+        [0.5, 0.5, 0.5],
+        [0.6, 0.59, 0.58],
+        [0.58, 0.58, 0.6],
+        [0.58, 0.58, 0.6],
+        [0.2, 0.2, 0.33],
+        [0.58, 0.58, 0.6],
+    ];
+    let n_seg = COLORS.len() - 3;
+    let first = ((t * n_seg as f32).floor().max(0.0) as usize).min(n_seg - 1);
+    let t = t * n_seg as f32 - first as f32;
+    let c = |i: usize| Rgb::from(COLORS[first + i]);
+    let lerp = |t: f32, a: Rgb, b: Rgb| (1.0 - t) * a + t * b;
+    let (s0, s1, s2) = (lerp(t, c(0), c(1)), lerp(t, c(1), c(2)), lerp(t, c(2), c(3)));
+    let (s0, s1) = (lerp(t, s0, s1), lerp(t, s1, s2));
+    (1.5 * lerp(t, s0, s1)).clamp(Rgb::ZERO, Rgb::ONE)
+}
+
+/// pbrt-v4's `dots`: whether (s, t) lies in the disc of radius 0.35 that noise places (or
+/// leaves out) in its unit cell.
+fn in_dot(st: Vec2) -> bool {
+    let noise2 = |x: f32, y: f32| noise::noise(Vec3::new(x, y, 0.5));
+    let (s_cell, t_cell) = ((st.x + 0.5).floor(), (st.y + 0.5).floor());
+    if noise2(s_cell + 0.5, t_cell + 0.5) <= 0.0 {
+        return false;
+    }
+    let (radius, max_shift) = (0.35f32, 0.5 - 0.35);
+    let s_center = s_cell + max_shift * noise2(s_cell + 1.5, t_cell + 2.8);
+    let t_center = t_cell + max_shift * noise2(s_cell + 4.5, t_cell + 9.8);
+    (st - Vec2::new(s_center, t_center)).length_squared() < radius * radius
 }
 
 fn texel(image: &Image, x: i64, y: i64, wrap: Wrap) -> Rgb {
@@ -291,7 +419,7 @@ mod tests {
             b: Tex::Const(SpectrumValue::constant(0.5)),
             amount: Tex::Const(SpectrumValue::constant(0.5)),
         });
-        let at = |u: f32, v: f32| TexContext { p: Vec3::ZERO, uv: Vec2::new(u, v) };
+        let at = |u: f32, v: f32| TexContext { p: Vec3::ZERO, uv: Vec2::new(u, v), n: Vec3::Z };
         assert_eq!(t.eval_rgb(Tex::Node(0), &at(0.25, 0.25)), Rgb::ONE);
         assert_eq!(t.eval_rgb(Tex::Node(0), &at(0.75, 0.25)), Rgb::ZERO);
         assert_eq!(t.eval_rgb(Tex::Node(1), &at(0.25, 0.25)), Rgb::splat(0.75));
@@ -311,7 +439,7 @@ mod tests {
             space: ColorSpace::Srgb,
             gray: true,
         });
-        let v = t.eval_rgb(Tex::Node(0), &TexContext { p: Vec3::ZERO, uv: Vec2::new(0.5, 0.5) });
+        let v = t.eval_rgb(Tex::Node(0), &TexContext { p: Vec3::ZERO, uv: Vec2::new(0.5, 0.5), n: Vec3::Z });
         assert!((v.x - 0.5).abs() < 1e-6);
     }
 }

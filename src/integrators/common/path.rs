@@ -344,7 +344,7 @@ pub fn trace_path<C: Channels, O: PathObserver<C>>(
 
         let material = scene.surface_material(&mut hit, wo);
         let s = &hit.surface;
-        let tex_ctx = TexContext { p: s.p, uv: s.uv };
+        let tex_ctx = TexContext { p: s.p, uv: s.uv, n: s.n };
         let Some(mut bxdf) = material.bxdf::<C>(&scene.textures, &tex_ctx, lambda) else {
             // An interface: cross it without counting a bounce.
             medium = medium_after(scene, &hit, ray.d, medium);

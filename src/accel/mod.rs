@@ -12,8 +12,8 @@ use obvhs::{Boundable, BvhBuildParams};
 
 use crate::geometry::{Bounds3, Ray};
 use crate::shapes::{
-    Curve, CurveCommon, Cylinder, Disk, Mesh, Sphere, SurfaceHit, transform_normal, transform_normal_unnormalized,
-    triangle_hit,
+    Curve, CurveCommon, Cylinder, Disk, Mesh, Sphere, SurfaceDerivatives, SurfaceHit, transform_normal,
+    triangle_derivatives, triangle_hit,
 };
 use crate::textures::{Tex, TexContext, Textures};
 
@@ -75,10 +75,31 @@ pub struct ShapeStore {
 }
 
 impl ShapeStore {
-    #[inline]
+    // Kept out of line: curves are rare and their intersection is long, and inlining it would
+    // keep the triangle test out of the traversal loop.
+    #[inline(never)]
     fn curve_hit(&self, i: u32, ray: &Ray, t_max: f32) -> Option<(f32, Detail)> {
         let c = &self.curves[i as usize];
-        c.intersect(&self.curve_segments[c.common as usize], ray, t_max).map(|(t, s)| (t, Detail::Surface(s)))
+        c.intersect(&self.curve_segments[c.common as usize], ray, t_max).map(|(t, _)| (t, Detail::Curve))
+    }
+
+    /// Where a non-instance primitive is hit, for the alpha test.
+    #[inline(never)]
+    fn detail(&self, g: Geometry, ray: &Ray, t_max: f32) -> Option<(f32, Detail)> {
+        match g {
+            Geometry::Triangle { mesh, tri } => self.meshes[mesh as usize]
+                .intersect(tri, ray, t_max)
+                .map(|(t, b1, b2)| (t, Detail::Barycentric(b1, b2))),
+            Geometry::Sphere(i) => {
+                self.spheres[i as usize].intersect(ray, t_max).map(|(t, p)| (t, Detail::ObjectPoint(p)))
+            }
+            Geometry::Disk(i) => self.disks[i as usize].intersect(ray, t_max).map(|(t, p)| (t, Detail::ObjectPoint(p))),
+            Geometry::Cylinder(i) => {
+                self.cylinders[i as usize].intersect(ray, t_max).map(|(t, p)| (t, Detail::ObjectPoint(p)))
+            }
+            Geometry::Curve(i) => self.curve_hit(i, ray, t_max),
+            Geometry::Instance(_) => None,
+        }
     }
 
     /// Bounds of a non-instance geometry.
@@ -102,8 +123,9 @@ impl ShapeStore {
 enum Detail {
     Barycentric(f32, f32),
     ObjectPoint(Vec3),
-    /// Shapes whose intersection computes the details anyway (curves).
-    Surface(SurfaceHit),
+    /// A curve piece: its details are recomputed for the closest hit only, which keeps
+    /// candidates small for every other shape's traversal.
+    Curve,
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -265,38 +287,31 @@ impl Accel {
         let bvh_ray = bvh_ray(ray, t_max);
         !self.bvh.ray_traverse_miss(bvh_ray, |r, id| {
             let prim = self.prims[id];
-            // Opaque shapes only need a yes or no; alpha-tested ones the hit to test.
-            let found = match prim.geometry {
-                Geometry::Triangle { mesh, tri } => scene.shapes.meshes[mesh as usize]
-                    .intersect(tri, ray, r.tmax)
-                    .map(|(t, b1, b2)| (t, Detail::Barycentric(b1, b2))),
-                Geometry::Sphere(i) => {
-                    scene.shapes.spheres[i as usize].intersect(ray, r.tmax).map(|(t, p)| (t, Detail::ObjectPoint(p)))
+            if prim.alpha != NONE {
+                // Alpha-tested shapes need the hit to test.
+                return match scene.shapes.detail(prim.geometry, ray, r.tmax) {
+                    Some((t, detail)) if scene.alpha_passes(prim, instance, detail, ray, t) => 0.0,
+                    _ => f32::INFINITY,
+                };
+            }
+            let hit = match prim.geometry {
+                Geometry::Triangle { mesh, tri } => {
+                    scene.shapes.meshes[mesh as usize].intersect(tri, ray, r.tmax).is_some()
                 }
-                Geometry::Disk(i) => {
-                    scene.shapes.disks[i as usize].intersect(ray, r.tmax).map(|(t, p)| (t, Detail::ObjectPoint(p)))
-                }
-                Geometry::Cylinder(i) => {
-                    scene.shapes.cylinders[i as usize].intersect(ray, r.tmax).map(|(t, p)| (t, Detail::ObjectPoint(p)))
-                }
-                Geometry::Curve(i) => scene.shapes.curve_hit(i, ray, r.tmax),
+                Geometry::Sphere(i) => scene.shapes.spheres[i as usize].intersect(ray, r.tmax).is_some(),
+                Geometry::Disk(i) => scene.shapes.disks[i as usize].intersect(ray, r.tmax).is_some(),
+                Geometry::Cylinder(i) => scene.shapes.cylinders[i as usize].intersect(ray, r.tmax).is_some(),
+                Geometry::Curve(i) => scene.shapes.curve_hit(i, ray, r.tmax).is_some(),
                 Geometry::Instance(k) => {
                     let inst = &scene.instances[k as usize];
                     let local = Ray::new(
                         inst.instance_from_world.transform_point3(ray.o),
                         inst.instance_from_world.transform_vector3(ray.d),
                     );
-                    return if scene.blas[inst.accel as usize].any(scene, &local, r.tmax, k) {
-                        0.0
-                    } else {
-                        f32::INFINITY
-                    };
+                    scene.blas[inst.accel as usize].any(scene, &local, r.tmax, k)
                 }
             };
-            match found {
-                Some((t, detail)) if prim.alpha == NONE || scene.alpha_passes(prim, instance, detail, ray, t) => 0.0,
-                _ => f32::INFINITY,
-            }
+            if hit { 0.0 } else { f32::INFINITY }
         })
     }
 }
@@ -318,6 +333,8 @@ pub struct Hit {
     pub surface: SurfaceHit,
     /// The primitive hit.
     pub prim: Primitive,
+    /// The instance it belongs to, or [`NONE`].
+    pub instance: u32,
 }
 
 /// Every surface in the scene and the BVHs over them. A scene without surfaces has no BVH.
@@ -345,9 +362,11 @@ impl Surfaces {
         self.pass_through.get(prim.material as usize).copied().unwrap_or(false)
     }
 
-    /// The stochastic alpha test of a candidate hit on an alpha-tested primitive.
+    /// The stochastic alpha test of a candidate hit on an alpha-tested primitive (out of
+    /// line for the same reason as curves).
+    #[inline(never)]
     fn alpha_passes(&self, prim: Primitive, instance: u32, detail: Detail, ray: &Ray, t: f32) -> bool {
-        let s = self.surface(&Candidate { t, prim, instance, detail });
+        let s = self.surface(&Candidate { t, prim, instance, detail }, ray, instance != NONE);
         let alpha =
             self.textures.eval_float(self.alphas[prim.alpha as usize], &TexContext { p: s.p, uv: s.uv, n: s.n });
         alpha_passes(alpha, ray, t)
@@ -359,11 +378,52 @@ impl Surfaces {
         let mut best = None;
         top.closest(self, ray, t_max, NONE, &mut best);
         let c = best?;
-        Some(Hit { surface: self.surface(&c), prim: c.prim })
+        Some(Hit { surface: self.surface(&c, ray, false), prim: c.prim, instance: c.instance })
     }
 
-    /// World-space geometry at a candidate hit.
-    fn surface(&self, c: &Candidate) -> SurfaceHit {
+    /// The shading derivatives at a hit, for bump and normal mapping (computed on demand so
+    /// that the hits every ray finds stay small and cheap).
+    pub fn derivatives(&self, hit: &Hit) -> SurfaceDerivatives {
+        let s = &hit.surface;
+        // Shapes compute in their own space: an instance's hit is taken back there and the
+        // result forth.
+        let (local, inst) = if hit.instance == NONE {
+            (*s, None)
+        } else {
+            let inst = &self.instances[hit.instance as usize];
+            let f = &inst.instance_from_world;
+            let local = SurfaceHit {
+                p: f.transform_point3(s.p),
+                n: transform_normal(&inst.world_from_instance, s.n),
+                ns: transform_normal(&inst.world_from_instance, s.ns),
+                dpdu: f.transform_vector3(s.dpdu),
+                ..*s
+            };
+            (local, Some(inst))
+        };
+        let d = match hit.prim.geometry {
+            Geometry::Triangle { mesh, tri } => triangle_derivatives(&self.shapes.meshes[mesh as usize], tri, &local),
+            Geometry::Sphere(i) => self.shapes.spheres[i as usize].derivatives(&local),
+            Geometry::Disk(i) => self.shapes.disks[i as usize].derivatives(&local),
+            Geometry::Cylinder(i) => self.shapes.cylinders[i as usize].derivatives(&local),
+            // Across a curve, ∂p/∂v spans its width (p_error is twice it); it does not bend.
+            Geometry::Curve(_) | Geometry::Instance(_) => SurfaceDerivatives {
+                dpdu: local.dpdu,
+                dpdv: local.ns.cross(local.dpdu).normalize_or_zero() * 0.5 * local.p_error,
+                dndu: Vec3::ZERO,
+                dndv: Vec3::ZERO,
+            },
+        };
+        match inst {
+            None => d,
+            Some(inst) => d.transformed(&inst.world_from_instance, &inst.instance_from_world),
+        }
+    }
+
+    /// World-space geometry at a candidate hit found along `ray` (in the candidate's
+    /// instance space when `ray_is_local`, else in world space).
+    #[inline]
+    fn surface(&self, c: &Candidate, ray: &Ray, ray_is_local: bool) -> SurfaceHit {
         let local = match c.detail {
             Detail::Barycentric(b1, b2) => {
                 let Geometry::Triangle { mesh, tri } = c.prim.geometry else {
@@ -377,7 +437,24 @@ impl Surfaces {
                 Geometry::Cylinder(i) => self.shapes.cylinders[i as usize].hit(c.t, p),
                 _ => unreachable!("object points come from quadrics"),
             },
-            Detail::Surface(s) => s,
+            Detail::Curve => {
+                let Geometry::Curve(i) = c.prim.geometry else { unreachable!("only curves leave their details") };
+                let local_ray = if c.instance == NONE || ray_is_local {
+                    *ray
+                } else {
+                    let inst = &self.instances[c.instance as usize];
+                    Ray::new(
+                        inst.instance_from_world.transform_point3(ray.o),
+                        inst.instance_from_world.transform_vector3(ray.d),
+                    )
+                };
+                let curve = &self.shapes.curves[i as usize];
+                // The same computation as the traversal's, so the same (closest) hit.
+                match curve.intersect(&self.shapes.curve_segments[curve.common as usize], &local_ray, f32::INFINITY) {
+                    Some((_, s)) => s,
+                    None => unreachable!("a curve hit found once is found again"),
+                }
+            }
         };
         if c.instance == NONE {
             local
@@ -391,9 +468,6 @@ impl Surfaces {
                 ns: transform_normal(&inst.instance_from_world, local.ns),
                 uv: local.uv,
                 dpdu: w.transform_vector3(local.dpdu),
-                dpdv: w.transform_vector3(local.dpdv),
-                dndu: transform_normal_unnormalized(&inst.instance_from_world, local.dndu),
-                dndv: transform_normal_unnormalized(&inst.instance_from_world, local.dndv),
                 p_error: local.p_error * w.matrix3.determinant().abs().cbrt(),
             }
         }

@@ -146,7 +146,8 @@ impl Scene {
             resolve(&self.materials, hit.prim.material, &self.textures, &TexContext { p: s.p, uv: s.uv, n: s.n }, wo);
         let shading = &self.shading[id as usize];
         if !shading.is_none() {
-            shading.apply(&self.textures, s);
+            let d = self.surfaces.derivatives(hit);
+            shading.apply(&self.textures, &mut hit.surface, &d);
         }
         &self.materials[id as usize]
     }

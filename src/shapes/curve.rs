@@ -163,9 +163,6 @@ impl Curve {
             ns: n,
             uv: Vec2::new(f.u, f.v),
             dpdu: c.world_from_object.transform_vector3(dpdu),
-            dpdv: c.world_from_object.transform_vector3(dpdv),
-            dndu: Vec3::ZERO,
-            dndv: Vec3::ZERO,
             // pbrt-v4 bounds a curve hit's error by twice the width in object space.
             p_error: 2.0 * f.hit_width * c.world_from_object.matrix3.determinant().abs().cbrt(),
         };

@@ -5,8 +5,8 @@ use std::f32::consts::PI;
 use glam::{Affine3A, Vec2, Vec3};
 
 use super::{
-    ShapeSample, SurfaceHit, swaps_handedness, transform_normal, transform_normal_unnormalized, uniform_scale,
-    weingarten,
+    ShapeSample, SurfaceDerivatives, SurfaceHit, swaps_handedness, transform_normal, transform_normal_unnormalized,
+    uniform_scale, weingarten,
 };
 use crate::geometry::{Bounds3, Ray};
 
@@ -105,10 +105,6 @@ impl Cylinder {
         if self.flip_normal {
             n = -n;
         }
-        // pbrt-v4's Cylinder::InteractionFromIntersection: only ∂²p/∂u² is non-zero.
-        let dpdv = Vec3::new(0.0, 0.0, self.z_max - self.z_min);
-        let d2pduu = -self.phi_max * self.phi_max * Vec3::new(p_obj.x, p_obj.y, 0.0);
-        let (dndu, dndv) = weingarten(dpdu, dpdv, d2pduu, Vec3::ZERO, Vec3::ZERO);
         SurfaceHit {
             t,
             p: self.world_from_object.transform_point3(p_obj),
@@ -116,10 +112,23 @@ impl Cylinder {
             ns: n,
             uv,
             dpdu: self.world_from_object.transform_vector3(dpdu),
+            p_error: 0.0,
+        }
+    }
+
+    /// ∂p/∂v and the normal's derivatives at a hit (pbrt-v4's
+    /// `Cylinder::InteractionFromIntersection`: only ∂²p/∂u² is non-zero).
+    pub fn derivatives(&self, hit: &SurfaceHit) -> SurfaceDerivatives {
+        let p_obj = self.object_from_world.transform_point3(hit.p);
+        let dpdu = Vec3::new(-self.phi_max * p_obj.y, self.phi_max * p_obj.x, 0.0);
+        let dpdv = Vec3::new(0.0, 0.0, self.z_max - self.z_min);
+        let d2pduu = -self.phi_max * self.phi_max * Vec3::new(p_obj.x, p_obj.y, 0.0);
+        let (dndu, dndv) = weingarten(dpdu, dpdv, d2pduu, Vec3::ZERO, Vec3::ZERO);
+        SurfaceDerivatives {
+            dpdu: hit.dpdu,
             dpdv: self.world_from_object.transform_vector3(dpdv),
             dndu: transform_normal_unnormalized(&self.object_from_world, dndu),
             dndv: transform_normal_unnormalized(&self.object_from_world, dndv),
-            p_error: 0.0,
         }
     }
 

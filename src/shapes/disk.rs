@@ -4,7 +4,7 @@ use std::f32::consts::PI;
 
 use glam::{Affine3A, Vec2, Vec3};
 
-use super::{ShapeSample, SurfaceHit, swaps_handedness, transform_normal, uniform_scale};
+use super::{ShapeSample, SurfaceDerivatives, SurfaceHit, swaps_handedness, transform_normal, uniform_scale};
 use crate::geometry::{Bounds3, Ray};
 
 /// A disk (or annulus, or sector) facing +z.
@@ -88,23 +88,23 @@ impl Disk {
             n = -n;
         }
         let dpdu = self.world_from_object.transform_vector3(dpdu);
-        // pbrt-v4's Disk: ∂p/∂v points inwards; a plane does not bend (∂n = 0).
+        SurfaceHit { t, p: self.world_from_object.transform_point3(p_obj), n, ns: n, uv, dpdu, p_error: 0.0 }
+    }
+
+    /// ∂p/∂v at a hit (pbrt-v4's Disk: it points inwards; a plane does not bend, ∂n = 0).
+    pub fn derivatives(&self, hit: &SurfaceHit) -> SurfaceDerivatives {
+        let p_obj = self.object_from_world.transform_point3(hit.p);
+        let r = (p_obj.x * p_obj.x + p_obj.y * p_obj.y).sqrt();
         let dpdv = if r > 0.0 {
             Vec3::new(p_obj.x, p_obj.y, 0.0) * ((self.inner_radius - self.radius) / r)
         } else {
             Vec3::ZERO
         };
-        SurfaceHit {
-            t,
-            p: self.world_from_object.transform_point3(p_obj),
-            n,
-            ns: n,
-            uv,
-            dpdu,
+        SurfaceDerivatives {
+            dpdu: hit.dpdu,
             dpdv: self.world_from_object.transform_vector3(dpdv),
             dndu: Vec3::ZERO,
             dndv: Vec3::ZERO,
-            p_error: 0.0,
         }
     }
 

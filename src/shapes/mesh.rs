@@ -2,7 +2,7 @@
 
 use glam::{Affine3A, Vec2, Vec3};
 
-use super::{ShapeSample, SurfaceHit, swaps_handedness};
+use super::{ShapeSample, SurfaceDerivatives, SurfaceHit, swaps_handedness};
 use crate::geometry::{Bounds3, Ray};
 use crate::sampling::warp;
 
@@ -150,17 +150,30 @@ pub fn triangle_hit(mesh: &Mesh, i: u32, t: f32, b1: f32, b2: f32) -> SurfaceHit
     let dp02 = p0 - p2;
     let dp12 = p1 - p2;
     let det = duv02.x * duv12.y - duv02.y * duv12.x;
-    let (dpdu, dpdv) = if det.abs() > 1e-9 {
-        ((duv12.y * dp02 - duv02.y * dp12) / det, (duv02.x * dp12 - duv12.x * dp02) / det)
-    } else {
-        (Vec3::ZERO, Vec3::ZERO)
+    let dpdu = if det.abs() > 1e-9 { (duv12.y * dp02 - duv02.y * dp12) / det } else { Vec3::ZERO };
+    SurfaceHit { t, p, n, ns, uv, dpdu, p_error: 0.0 }
+}
+
+/// The shading derivatives of a hit on triangle `i` (pbrt-v4's
+/// `Triangle::InteractionFromIntersection`): with per-vertex normals, ∂p/∂u made
+/// perpendicular to ns, ∂p/∂v = ns × ∂p/∂u, and ∂n/∂u, ∂n/∂v from the normals' differences
+/// over uv; without, the geometric ∂p/∂v and no bending.
+pub fn triangle_derivatives(mesh: &Mesh, i: u32, hit: &SurfaceHit) -> SurfaceDerivatives {
+    let k = 3 * i as usize;
+    let idx = [mesh.indices[k] as usize, mesh.indices[k + 1] as usize, mesh.indices[k + 2] as usize];
+    let [p0, p1, p2] = [mesh.positions[idx[0]], mesh.positions[idx[1]], mesh.positions[idx[2]]];
+    let uv_of = |j: usize| {
+        if mesh.uvs.is_empty() { [Vec2::ZERO, Vec2::X, Vec2::ONE][j] } else { mesh.uvs[idx[j]] }
     };
+    let (duv02, duv12) = (uv_of(0) - uv_of(2), uv_of(1) - uv_of(2));
+    let (dp02, dp12) = (p0 - p2, p1 - p2);
+    let det = duv02.x * duv12.y - duv02.y * duv12.x;
+    let dpdv = if det.abs() > 1e-9 { (duv02.x * dp12 - duv12.x * dp02) / det } else { Vec3::ZERO };
     if mesh.normals.is_empty() {
-        return SurfaceHit { t, p, n, ns, uv, dpdu, dpdv, dndu: Vec3::ZERO, dndv: Vec3::ZERO, p_error: 0.0 };
+        return SurfaceDerivatives { dpdu: hit.dpdu, dpdv, dndu: Vec3::ZERO, dndv: Vec3::ZERO };
     }
-    // pbrt-v4's shading geometry with per-vertex normals: ∂p/∂u made perpendicular to ns,
-    // ∂p/∂v = ns × ∂p/∂u, and ∂n/∂u, ∂n/∂v from the normals' differences over uv.
-    let ts = ns.cross(dpdu);
+    let ns = hit.ns;
+    let ts = ns.cross(hit.dpdu);
     let (ss, ts) = if ts.length_squared() > 0.0 { (ts.cross(ns), ts) } else { (Vec3::ZERO, Vec3::ZERO) };
     let (dndu, dndv) = if det.abs() > 1e-9 {
         let dn1 = mesh.normals[idx[0]] - mesh.normals[idx[2]];
@@ -169,7 +182,7 @@ pub fn triangle_hit(mesh: &Mesh, i: u32, t: f32, b1: f32, b2: f32) -> SurfaceHit
     } else {
         (Vec3::ZERO, Vec3::ZERO)
     };
-    SurfaceHit { t, p, n, ns, uv, dpdu: ss, dpdv: ts, dndu, dndv, p_error: 0.0 }
+    SurfaceDerivatives { dpdu: ss, dpdv: ts, dndu, dndv }
 }
 
 /// Uniform area sample on triangle `i`.

@@ -12,7 +12,7 @@ pub use curve::{
 };
 pub use cylinder::Cylinder;
 pub use disk::Disk;
-pub use mesh::{Mesh, triangle_hit, triangle_sample};
+pub use mesh::{Mesh, triangle_derivatives, triangle_hit, triangle_sample};
 pub use sphere::Sphere;
 
 use glam::{Affine3A, Vec2, Vec3};
@@ -34,15 +34,35 @@ pub struct SurfaceHit {
     pub uv: Vec2,
     /// ∂p/∂u: the shading frame's first tangent.
     pub dpdu: Vec3,
-    /// ∂p/∂v (shading: for meshes with normals, ns × ∂p/∂u as pbrt-v4 sets it).
+    /// A bound on the hit point's distance from the surface beyond the usual rounding
+    /// (pbrt-v4's per-shape `pError`; curves: twice their width), for offsetting rays.
+    pub p_error: f32,
+}
+
+/// The shading geometry's derivatives at a hit, which only bump and normal mapping need:
+/// computed on demand ([`crate::accel::Surfaces::derivatives`]) so that hits stay cheap.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SurfaceDerivatives {
+    /// Shading ∂p/∂u (for meshes with normals made perpendicular to ns, as pbrt-v4 does).
+    pub dpdu: Vec3,
+    /// Shading ∂p/∂v (for meshes with normals ns × ∂p/∂u).
     pub dpdv: Vec3,
     /// ∂n/∂u of the shading normal (bump mapping's curvature term).
     pub dndu: Vec3,
     /// ∂n/∂v of the shading normal.
     pub dndv: Vec3,
-    /// A bound on the hit point's distance from the surface beyond the usual rounding
-    /// (pbrt-v4's per-shape `pError`; curves: twice their width), for offsetting rays.
-    pub p_error: f32,
+}
+
+impl SurfaceDerivatives {
+    /// The derivatives in world space, for a hit on an instance.
+    pub fn transformed(&self, world_from_instance: &Affine3A, instance_from_world: &Affine3A) -> SurfaceDerivatives {
+        SurfaceDerivatives {
+            dpdu: world_from_instance.transform_vector3(self.dpdu),
+            dpdv: world_from_instance.transform_vector3(self.dpdv),
+            dndu: transform_normal_unnormalized(instance_from_world, self.dndu),
+            dndv: transform_normal_unnormalized(instance_from_world, self.dndv),
+        }
+    }
 }
 
 impl SurfaceHit {

@@ -5,8 +5,8 @@ use std::f32::consts::PI;
 use glam::{Affine3A, DVec3, Vec2, Vec3};
 
 use super::{
-    ShapeSample, SurfaceHit, swaps_handedness, transform_normal, transform_normal_unnormalized, uniform_scale,
-    weingarten,
+    ShapeSample, SurfaceDerivatives, SurfaceHit, swaps_handedness, transform_normal, transform_normal_unnormalized,
+    uniform_scale, weingarten,
 };
 use crate::geometry::{Bounds3, Ray};
 use crate::math::Frame;
@@ -126,7 +126,20 @@ impl Sphere {
         let theta = cos_theta.acos();
         let uv = Vec2::new(phi / self.phi_max, (theta - self.theta_z_min) / (self.theta_z_max - self.theta_z_min));
         let dpdu_obj = Vec3::new(-self.phi_max * p_obj.y, self.phi_max * p_obj.x, 0.0);
-        // pbrt-v4's Sphere::InteractionFromIntersection: ∂p/∂v and the second derivatives.
+        let mut n = transform_normal(&self.object_from_world, p_obj);
+        if self.flip_normal {
+            n = -n;
+        }
+        let p = self.world_from_object.transform_point3(p_obj);
+        SurfaceHit { t, p, n, ns: n, uv, dpdu: self.world_from_object.transform_vector3(dpdu_obj), p_error: 0.0 }
+    }
+
+    /// ∂p/∂v and the normal's derivatives at a hit (pbrt-v4's
+    /// `Sphere::InteractionFromIntersection`: the Weingarten equations).
+    pub fn derivatives(&self, hit: &SurfaceHit) -> SurfaceDerivatives {
+        let p_obj = self.object_from_world.transform_point3(hit.p);
+        let cos_theta = (p_obj.z / self.radius).clamp(-1.0, 1.0);
+        let dpdu_obj = Vec3::new(-self.phi_max * p_obj.y, self.phi_max * p_obj.x, 0.0);
         let z_radius = (p_obj.x * p_obj.x + p_obj.y * p_obj.y).sqrt();
         let (cos_phi, sin_phi) = if z_radius > 0.0 { (p_obj.x / z_radius, p_obj.y / z_radius) } else { (1.0, 0.0) };
         let sin_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
@@ -136,22 +149,11 @@ impl Sphere {
         let d2pduv = dtheta * p_obj.z * self.phi_max * Vec3::new(-sin_phi, cos_phi, 0.0);
         let d2pdvv = -dtheta * dtheta * p_obj;
         let (dndu, dndv) = weingarten(dpdu_obj, dpdv_obj, d2pduu, d2pduv, d2pdvv);
-        let mut n = transform_normal(&self.object_from_world, p_obj);
-        if self.flip_normal {
-            n = -n;
-        }
-        let p = self.world_from_object.transform_point3(p_obj);
-        SurfaceHit {
-            t,
-            p,
-            n,
-            ns: n,
-            uv,
-            dpdu: self.world_from_object.transform_vector3(dpdu_obj),
+        SurfaceDerivatives {
+            dpdu: hit.dpdu,
             dpdv: self.world_from_object.transform_vector3(dpdv_obj),
             dndu: transform_normal_unnormalized(&self.object_from_world, dndu),
             dndv: transform_normal_unnormalized(&self.object_from_world, dndv),
-            p_error: 0.0,
         }
     }
 

@@ -4,8 +4,8 @@
 use glam::Vec3;
 
 use super::bxdf::{
-    Bxdf, CoatedConductorBxdf, CoatedDiffuseBxdf, ConductorBxdf, DielectricBxdf, DiffuseBxdf, DiffuseTransmissionBxdf,
-    HairBxdf, ThinDielectricBxdf, TrowbridgeReitz,
+    Bxdf, CoatedConductorBase, CoatedConductorBxdf, CoatedDiffuseBxdf, ConductorBxdf, DielectricBxdf, DiffuseBxdf,
+    DiffuseTransmissionBxdf, HairBxdf, ThinDielectricBxdf, TrowbridgeReitz,
 };
 use crate::color::Channels;
 use crate::sampling::rng::murmur_hash64a;
@@ -307,9 +307,11 @@ impl Material {
                 let eta = C::eta(interface_eta, lambda);
                 let eta = if eta == 0.0 { 1.0 } else { eta };
                 let top = DielectricBxdf::new(eta, interface_roughness.distribution(textures, ctx));
-                let bottom = conductor
-                    .bxdf::<C>(conductor_roughness.distribution(textures, ctx), textures, ctx, lambda)
-                    .relative_to(eta);
+                let bottom = CoatedConductorBase::new(
+                    &conductor
+                        .bxdf::<C>(conductor_roughness.distribution(textures, ctx), textures, ctx, lambda)
+                        .relative_to(eta),
+                );
                 Bxdf::CoatedConductor(CoatedConductorBxdf::new(
                     top,
                     bottom,

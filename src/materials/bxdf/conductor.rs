@@ -50,6 +50,11 @@ impl<C: Channels> ConductorBxdf<C> {
         self
     }
 
+    /// The distribution, η and k (without the Fresnel scale).
+    pub fn constants(&self) -> (TrowbridgeReitz, C, C) {
+        (self.distrib, self.eta, self.k)
+    }
+
     /// The microfacet distribution.
     pub fn distribution(&self) -> &TrowbridgeReitz {
         &self.distrib

@@ -17,19 +17,21 @@ use crate::color::{Channels, Rgb};
 /// Scattering orders modelled explicitly; the rest are lumped into one term.
 const P_MAX: usize = 3;
 
-/// The hair BSDF at one hit.
+/// The hair BSDF at one hit. Kept compact (every path vertex builds a [`super::Bxdf`], whose
+/// size is its largest model's): the per-order variances and the tilt's multiple angles are
+/// derived when used.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct HairBxdf<C = Rgb> {
     h: f32,
-    gamma_o: f32,
     eta: f32,
     sigma_a: C,
-    /// Longitudinal variances per order.
-    v: [f32; P_MAX + 1],
+    /// Longitudinal variance of order 0 (order 1 has a quarter, the others four times).
+    v0: f32,
     /// Azimuthal logistic scale.
     s: f32,
-    sin_2k_alpha: [f32; 3],
-    cos_2k_alpha: [f32; 3],
+    /// sin α and cos α of the cuticle tilt.
+    sin_alpha: f32,
+    cos_alpha: f32,
 }
 
 fn safe_sqrt(x: f32) -> f32 {
@@ -116,18 +118,36 @@ impl<C: Channels> HairBxdf<C> {
         let h = h.clamp(-1.0, 1.0);
         let (beta_m, beta_n) = (beta_m.clamp(0.0, 1.0), beta_n.clamp(0.0, 1.0));
         let v0 = (0.726 * beta_m + 0.812 * beta_m * beta_m + 3.7 * beta_m.powi(20)).powi(2);
-        let v = [v0, 0.25 * v0, 4.0 * v0, 4.0 * v0];
         const SQRT_PI_OVER_8: f32 = 0.626_657_07;
         let s = SQRT_PI_OVER_8 * (0.265 * beta_n + 1.194 * beta_n * beta_n + 5.372 * beta_n.powi(22));
-        let mut sin_2k_alpha = [0.0; 3];
-        let mut cos_2k_alpha = [0.0; 3];
-        sin_2k_alpha[0] = alpha.to_radians().sin();
-        cos_2k_alpha[0] = safe_sqrt(1.0 - sin_2k_alpha[0] * sin_2k_alpha[0]);
-        for i in 1..3 {
-            sin_2k_alpha[i] = 2.0 * cos_2k_alpha[i - 1] * sin_2k_alpha[i - 1];
-            cos_2k_alpha[i] = cos_2k_alpha[i - 1].powi(2) - sin_2k_alpha[i - 1].powi(2);
+        let sin_alpha = alpha.to_radians().sin();
+        HairBxdf { h, eta, sigma_a, v0, s, sin_alpha, cos_alpha: safe_sqrt(1.0 - sin_alpha * sin_alpha) }
+    }
+
+    /// The longitudinal variance of order p (pbrt-v4's v[p]).
+    #[inline]
+    fn v(&self, p: usize) -> f32 {
+        match p {
+            0 => self.v0,
+            1 => 0.25 * self.v0,
+            _ => 4.0 * self.v0,
         }
-        HairBxdf { h, gamma_o: safe_asin(h), eta, sigma_a, v, s, sin_2k_alpha, cos_2k_alpha }
+    }
+
+    /// sin and cos of 2^k·α for k = 0, 1, 2 (pbrt-v4's sin2kAlpha, cos2kAlpha).
+    #[inline]
+    fn alpha_k(&self) -> ([f32; 3], [f32; 3]) {
+        let (mut s, mut c) = ([self.sin_alpha, 0.0, 0.0], [self.cos_alpha, 0.0, 0.0]);
+        for i in 1..3 {
+            s[i] = 2.0 * c[i - 1] * s[i - 1];
+            c[i] = c[i - 1] * c[i - 1] - s[i - 1] * s[i - 1];
+        }
+        (s, c)
+    }
+
+    #[inline]
+    fn gamma_o(&self) -> f32 {
+        safe_asin(self.h)
     }
 
     /// pbrt-v4's `SigmaAFromReflectance`: the absorption that gives roughly the diffuse
@@ -148,19 +168,11 @@ impl<C: Channels> HairBxdf<C> {
     /// sin θ′ₒ, |cos θ′ₒ| for order p: θₒ tilted by the cuticle scales.
     #[inline]
     fn tilted(&self, p: usize, sin_o: f32, cos_o: f32) -> (f32, f32) {
+        let (sa, ca) = self.alpha_k();
         let (s, c) = match p {
-            0 => (
-                sin_o * self.cos_2k_alpha[1] - cos_o * self.sin_2k_alpha[1],
-                cos_o * self.cos_2k_alpha[1] + sin_o * self.sin_2k_alpha[1],
-            ),
-            1 => (
-                sin_o * self.cos_2k_alpha[0] + cos_o * self.sin_2k_alpha[0],
-                cos_o * self.cos_2k_alpha[0] - sin_o * self.sin_2k_alpha[0],
-            ),
-            2 => (
-                sin_o * self.cos_2k_alpha[2] + cos_o * self.sin_2k_alpha[2],
-                cos_o * self.cos_2k_alpha[2] - sin_o * self.sin_2k_alpha[2],
-            ),
+            0 => (sin_o * ca[1] - cos_o * sa[1], cos_o * ca[1] + sin_o * sa[1]),
+            1 => (sin_o * ca[0] + cos_o * sa[0], cos_o * ca[0] - sin_o * sa[0]),
+            2 => (sin_o * ca[2] + cos_o * sa[2], cos_o * ca[2] - sin_o * sa[2]),
             _ => (sin_o, cos_o),
         };
         (s, c.abs())
@@ -209,9 +221,9 @@ impl<C: Channels> HairBxdf<C> {
         let mut sum = C::ZERO;
         for (p, a) in ap.iter().enumerate().take(P_MAX) {
             let (s, c) = self.tilted(p, sin_o, cos_o);
-            sum += *a * (mp(cos_i, c, sin_i, s, self.v[p]) * np(dphi, p, self.s, self.gamma_o, gamma_t));
+            sum += *a * (mp(cos_i, c, sin_i, s, self.v(p)) * np(dphi, p, self.s, self.gamma_o(), gamma_t));
         }
-        sum += ap[P_MAX] * (mp(cos_i, cos_o, sin_i, sin_o, self.v[P_MAX]) / (2.0 * PI));
+        sum += ap[P_MAX] * (mp(cos_i, cos_o, sin_i, sin_o, self.v(P_MAX)) / (2.0 * PI));
         if wi.z.abs() > 0.0 {
             sum *= 1.0 / wi.z.abs();
         }
@@ -245,7 +257,7 @@ impl<C: Channels> HairBxdf<C> {
         }
         let (sin_po, cos_po) = self.tilted(p, sin_o, cos_o);
         // θi from M_p.
-        let vp = self.v[p];
+        let vp = self.v(p);
         let cos_theta = 1.0 + vp * (u.x.max(1e-5) + (1.0 - u.x) * (-2.0 / vp).exp()).ln();
         let sin_theta = safe_sqrt(1.0 - cos_theta * cos_theta);
         let cos_phi = (2.0 * PI * u.y).cos();
@@ -253,7 +265,7 @@ impl<C: Channels> HairBxdf<C> {
         let cos_i = safe_sqrt(1.0 - sin_i * sin_i);
         // Δφ from N_p.
         let dphi = if p < P_MAX {
-            phi(p, self.gamma_o, gamma_t) + sample_trimmed_logistic(uc, self.s, -PI, PI)
+            phi(p, self.gamma_o(), gamma_t) + sample_trimmed_logistic(uc, self.s, -PI, PI)
         } else {
             2.0 * PI * uc
         };
@@ -277,9 +289,9 @@ impl<C: Channels> HairBxdf<C> {
         let mut pdf = 0.0;
         for (p, a) in ap_pdf.iter().enumerate().take(P_MAX) {
             let (s, c) = self.tilted(p, sin_o, cos_o);
-            pdf += mp(cos_i, c, sin_i, s, self.v[p]) * a * np(dphi, p, self.s, self.gamma_o, gamma_t);
+            pdf += mp(cos_i, c, sin_i, s, self.v(p)) * a * np(dphi, p, self.s, self.gamma_o(), gamma_t);
         }
-        pdf + mp(cos_i, cos_o, sin_i, sin_o, self.v[P_MAX]) * ap_pdf[P_MAX] / (2.0 * PI)
+        pdf + mp(cos_i, cos_o, sin_i, sin_o, self.v(P_MAX)) * ap_pdf[P_MAX] / (2.0 * PI)
     }
 
     /// Density of [`HairBxdf::sample_f`].

@@ -119,7 +119,67 @@ pub type CoatedDiffuseBxdf<C = Rgb> = LayeredBxdf<DiffuseBxdf<C>, C>;
 
 /// A dielectric coating over a conductor (pbrt-v4's `CoatedConductorBxDF`); the conductor's
 /// η and k are relative to the coating (the material divides them by its η).
-pub type CoatedConductorBxdf<C = Rgb> = LayeredBxdf<ConductorBxdf<C>, C>;
+pub type CoatedConductorBxdf<C = Rgb> = LayeredBxdf<CoatedConductorBase<C>, C>;
+
+/// The conductor under a coating: η, k and roughness only. (A [`ConductorBxdf`]'s Fresnel
+/// scale corrects an RGB fit of spectral constants at an air interface; under a coating of
+/// another η that fit does not hold, and dropping it keeps every [`super::Bxdf`] smaller.)
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CoatedConductorBase<C = Rgb> {
+    distrib: super::TrowbridgeReitz,
+    eta: C,
+    k: C,
+}
+
+impl<C: Channels> CoatedConductorBase<C> {
+    /// The conductor `c` without its Fresnel scale.
+    pub fn new(c: &ConductorBxdf<C>) -> CoatedConductorBase<C> {
+        let (distrib, eta, k) = c.constants();
+        CoatedConductorBase { distrib, eta, k }
+    }
+
+    /// The microfacet distribution.
+    pub fn distribution(&self) -> &super::TrowbridgeReitz {
+        &self.distrib
+    }
+
+    #[inline]
+    fn bxdf(&self) -> ConductorBxdf<C> {
+        ConductorBxdf::new(self.distrib, self.eta, self.k)
+    }
+}
+
+impl<C: Channels> LayerBase for CoatedConductorBase<C> {
+    type C = C;
+
+    #[inline]
+    fn f(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> C {
+        self.bxdf().f(wo, wi, mode)
+    }
+    #[inline]
+    fn sample_f(
+        &self,
+        wo: Vec3,
+        uc: f32,
+        u: Vec2,
+        mode: TransportMode,
+        flags: ReflTransFlags,
+    ) -> Option<BsdfSample<C>> {
+        self.bxdf().sample_f(wo, uc, u, mode, flags)
+    }
+    #[inline]
+    fn pdf(&self, wo: Vec3, wi: Vec3, mode: TransportMode, flags: ReflTransFlags) -> f32 {
+        self.bxdf().pdf(wo, wi, mode, flags)
+    }
+    #[inline]
+    fn flags(&self) -> BxdfFlags {
+        self.bxdf().flags()
+    }
+    #[inline]
+    fn regularize(&mut self) {
+        self.distrib.regularize();
+    }
+}
 
 /// A dielectric coating over the base `B`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -129,8 +189,8 @@ pub struct LayeredBxdf<B, C = Rgb> {
     thickness: f32,
     albedo: C,
     g: f32,
-    max_depth: u32,
-    n_samples: u32,
+    max_depth: u16,
+    n_samples: u16,
 }
 
 /// One of the two interfaces of the layered BxDF (pbrt-v4's `TopOrBottomBxDF`).
@@ -231,7 +291,15 @@ impl<C: Channels, B: LayerBase<C = C>> LayeredBxdf<B, C> {
         max_depth: u32,
         n_samples: u32,
     ) -> LayeredBxdf<B, C> {
-        LayeredBxdf { top, bottom, thickness: thickness.max(f32::MIN_POSITIVE), albedo, g, max_depth, n_samples }
+        LayeredBxdf {
+            top,
+            bottom,
+            thickness: thickness.max(f32::MIN_POSITIVE),
+            albedo,
+            g,
+            max_depth: max_depth.min(u16::MAX as u32) as u16,
+            n_samples: n_samples.min(u16::MAX as u32) as u16,
+        }
     }
 
     /// The coating.

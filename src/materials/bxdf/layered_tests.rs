@@ -7,7 +7,7 @@ use glam::{DVec3, Vec2, Vec3};
 
 use super::*;
 use crate::materials::bxdf::testing::{self, stratified_2d, test_directions};
-use crate::materials::bxdf::{Bxdf, ConductorBxdf, TrowbridgeReitz, fr_complex_channels};
+use crate::materials::bxdf::{Bxdf, CoatedConductorBase, ConductorBxdf, TrowbridgeReitz, fr_complex_channels};
 
 fn coated(
     alpha: f32,
@@ -302,7 +302,7 @@ fn coated_conductor(
     .relative_to(coat_eta);
     CoatedConductorBxdf::new(
         DielectricBxdf::new(coat_eta, TrowbridgeReitz::new(coat_alpha, coat_alpha)),
-        metal,
+        CoatedConductorBase::new(&metal),
         thickness,
         albedo,
         g,

@@ -61,7 +61,7 @@ pub use diffuse::DiffuseBxdf;
 pub use diffuse_transmission::DiffuseTransmissionBxdf;
 pub use fresnel::{fr_complex, fr_complex_channels, fr_dielectric};
 pub use hair::HairBxdf;
-pub use layered::{CoatedConductorBxdf, CoatedDiffuseBxdf};
+pub use layered::{CoatedConductorBase, CoatedConductorBxdf, CoatedDiffuseBxdf};
 pub use microfacet::TrowbridgeReitz;
 pub use thin_dielectric::ThinDielectricBxdf;
 

@@ -210,6 +210,11 @@ pub trait RayIntegrator: Sync {
         sampler: &mut Sampler,
         stats: &mut RayStats,
     ) -> C;
+
+    /// Lines for `--stats` about the method's own work (see [`Integrator::report`]).
+    fn report(&self) -> Vec<String> {
+        Vec::new()
+    }
 }
 
 impl<T: RayIntegrator> Integrator for T {
@@ -230,5 +235,9 @@ impl<T: RayIntegrator> Integrator for T {
         stats: &mut RayStats,
     ) -> SampledSpectrum {
         self.li::<SampledSpectrum>(scene, ray, lambda, sampler, stats)
+    }
+
+    fn report(&self) -> Vec<String> {
+        RayIntegrator::report(self)
     }
 }

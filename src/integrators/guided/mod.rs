@@ -18,15 +18,14 @@ pub use train::Guide;
 
 use glam::{Vec2, Vec3};
 
-use super::Integrator;
+use super::RayIntegrator;
 use super::common::{GuidedSample, PathConfig, PathObserver, RayStats, trace_path};
-use crate::color::{Channels, Rgb};
+use crate::color::Channels;
 use crate::geometry::Ray;
 use crate::media::phase::HenyeyGreenstein;
 use crate::samplers::Sampler;
 use crate::sampling::rng::{Pcg32, hash_sample};
 use crate::scene::Scene;
-use crate::spectra::{SampledSpectrum, SampledWavelengths};
 use sampling::Strategy;
 
 /// The guided path tracer.
@@ -120,7 +119,11 @@ impl<C: Channels> PathObserver<C> for GuidingObserver<'_> {
     }
 }
 
-impl Guided {
+impl RayIntegrator for Guided {
+    fn name(&self) -> &'static str {
+        "guided"
+    }
+
     fn li<C: Channels>(
         &self,
         scene: &Scene,
@@ -136,27 +139,6 @@ impl Guided {
             strategy: &self.strategy,
         };
         trace_path(scene, ray, scene.camera_medium, lambda, sampler, &self.config, &mut observer, stats)
-    }
-}
-
-impl Integrator for Guided {
-    fn name(&self) -> &'static str {
-        "guided"
-    }
-
-    fn li_rgb(&self, scene: &Scene, ray: Ray, lambda: &mut (), sampler: &mut Sampler, stats: &mut RayStats) -> Rgb {
-        self.li::<Rgb>(scene, ray, lambda, sampler, stats)
-    }
-
-    fn li_spectral(
-        &self,
-        scene: &Scene,
-        ray: Ray,
-        lambda: &mut SampledWavelengths,
-        sampler: &mut Sampler,
-        stats: &mut RayStats,
-    ) -> SampledSpectrum {
-        self.li::<SampledSpectrum>(scene, ray, lambda, sampler, stats)
     }
 
     fn report(&self) -> Vec<String> {

@@ -82,38 +82,6 @@ impl<C: Channels> LayerBase for DiffuseBxdf<C> {
     fn regularize(&mut self) {}
 }
 
-impl<C: Channels> LayerBase for ConductorBxdf<C> {
-    type C = C;
-
-    #[inline]
-    fn f(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> C {
-        ConductorBxdf::f(self, wo, wi, mode)
-    }
-    #[inline]
-    fn sample_f(
-        &self,
-        wo: Vec3,
-        uc: f32,
-        u: Vec2,
-        mode: TransportMode,
-        flags: ReflTransFlags,
-    ) -> Option<BsdfSample<C>> {
-        ConductorBxdf::sample_f(self, wo, uc, u, mode, flags)
-    }
-    #[inline]
-    fn pdf(&self, wo: Vec3, wi: Vec3, mode: TransportMode, flags: ReflTransFlags) -> f32 {
-        ConductorBxdf::pdf(self, wo, wi, mode, flags)
-    }
-    #[inline]
-    fn flags(&self) -> BxdfFlags {
-        ConductorBxdf::flags(self)
-    }
-    #[inline]
-    fn regularize(&mut self) {
-        ConductorBxdf::regularize(self)
-    }
-}
-
 /// A dielectric coating over a diffuse base (pbrt-v4's `CoatedDiffuseBxDF`).
 pub type CoatedDiffuseBxdf<C = Rgb> = LayeredBxdf<DiffuseBxdf<C>, C>;
 

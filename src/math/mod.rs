@@ -1,6 +1,7 @@
 //! Small geometric helpers on top of glam.
 
 pub mod cell_map;
+pub mod fnv;
 mod frame;
 pub mod noise;
 

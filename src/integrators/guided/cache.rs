@@ -4,6 +4,7 @@
 //! lights and its extent) and one of the training parameters, then the trees. A file from
 //! another scene, other training settings or another nimbus version is refused by name.
 
+use crate::math::fnv::Fnv;
 use std::path::Path;
 
 use glam::{Affine3A, Vec3};
@@ -19,23 +20,6 @@ use crate::scene::Scene;
 
 const MAGIC: &[u8; 8] = b"NIMBUSGD";
 const VERSION: u32 = 2;
-
-/// FNV-1a, 64-bit: stable across Rust versions.
-struct Fnv(u64);
-
-impl Fnv {
-    fn new() -> Fnv {
-        Fnv(0xcbf2_9ce4_8422_2325)
-    }
-    fn bytes(&mut self, b: &[u8]) {
-        for &x in b {
-            self.0 = (self.0 ^ u64::from(x)).wrapping_mul(0x100_0000_01b3);
-        }
-    }
-    fn f32(&mut self, v: f32) {
-        self.bytes(&v.to_le_bytes());
-    }
-}
 
 /// Probes a grid medium at 16³ points of its box (σa and σs), so equal media hash equally
 /// whatever file they were read from, and changed ones differently.
@@ -73,7 +57,7 @@ pub fn scene_hash(scene: &Scene) -> u64 {
     }
     h.f32(scene.sphere.radius);
     scene.sphere.center.to_array().iter().for_each(|&v| h.f32(v));
-    h.0
+    h.finish()
 }
 
 /// A hash of the parameters training depends on.
@@ -90,7 +74,7 @@ fn settings_hash(s: &GuidedSettings) -> u64 {
         s.refracted_share,
     );
     h.bytes(format!("{key:?}").as_bytes());
-    h.0
+    h.finish()
 }
 
 /// Writes the trees of `guide`, trained for `scene` with `settings`.

@@ -6,6 +6,7 @@
 //! render search ranges (f32 per node) and per light the transported radiance (f32 per
 //! node). 20 bytes per node for one light; the thesis's text file holds the same in ≈ 60.
 
+use crate::math::fnv::Fnv;
 use std::io::{Read, Write};
 use std::path::Path;
 
@@ -40,23 +41,6 @@ pub struct GraphFile {
     pub radiance: Vec<Vec<f32>>,
 }
 
-/// FNV-1a, 64-bit: a stable hash (std's hashers may change between Rust versions).
-struct Fnv(u64);
-
-impl Fnv {
-    fn new() -> Fnv {
-        Fnv(0xcbf2_9ce4_8422_2325)
-    }
-    fn bytes(&mut self, b: &[u8]) {
-        for &x in b {
-            self.0 = (self.0 ^ u64::from(x)).wrapping_mul(0x100_0000_01b3);
-        }
-    }
-    fn f32(&mut self, v: f32) {
-        self.bytes(&v.to_le_bytes());
-    }
-}
-
 /// A hash of what the graph depends on in the scene: the medium, probed at 16³ points of its
 /// bounds (σa and σs, so equal media hash equally whatever file they come from), the
 /// bounds, and each light's kind, direction and radiance.
@@ -81,14 +65,14 @@ pub fn scene_hash(volume: &Volume) -> u64 {
     for light in &volume.lights {
         h.bytes(format!("{light:?}").as_bytes());
     }
-    h.0
+    h.finish()
 }
 
 /// A hash of a configuration.
 pub fn config_hash(config: &GraphConfig) -> u64 {
     let mut h = Fnv::new();
     h.bytes(format!("{config:?}").as_bytes());
-    h.0
+    h.finish()
 }
 
 impl GraphFile {

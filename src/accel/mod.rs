@@ -438,7 +438,7 @@ impl Surfaces {
                 _ => unreachable!("object points come from quadrics"),
             },
             Detail::Curve => {
-                let Geometry::Curve(i) = c.prim.geometry else { unreachable!("only curves leave their details") };
+                let Geometry::Curve(i) = c.prim.geometry else { unreachable!("only curves leave Detail::Curve") };
                 let local_ray = if c.instance == NONE || ray_is_local {
                     *ray
                 } else {
@@ -449,10 +449,19 @@ impl Surfaces {
                     )
                 };
                 let curve = &self.shapes.curves[i as usize];
-                // The same computation as the traversal's, so the same (closest) hit.
+                // The same computation as the traversal's, so the same (closest) hit; should
+                // rounding ever lose it, the ray's own frame stands in rather than a panic.
                 match curve.intersect(&self.shapes.curve_segments[curve.common as usize], &local_ray, f32::INFINITY) {
                     Some((_, s)) => s,
-                    None => unreachable!("a curve hit found once is found again"),
+                    None => SurfaceHit {
+                        t: c.t,
+                        p: local_ray.o + local_ray.d * c.t,
+                        n: -local_ray.d,
+                        ns: -local_ray.d,
+                        uv: glam::Vec2::ZERO,
+                        dpdu: local_ray.d.any_orthonormal_vector(),
+                        p_error: 0.0,
+                    },
                 }
             }
         };

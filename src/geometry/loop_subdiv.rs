@@ -195,6 +195,13 @@ pub fn loop_subdivide(positions: &[[f32; 3]], indices: &[u32], levels: u32) -> R
     if indices.is_empty() {
         return Err("no triangles".into());
     }
+    // Each level quadruples the triangles: refuse what would not fit in memory.
+    let triangles = (indices.len() / 3) as u128 * 4u128.pow(levels);
+    if triangles > 1 << 26 {
+        return Err(format!(
+            "{levels} levels would make {triangles} triangles (nimbus refines to at most 2^26); use fewer \"levels\""
+        ));
+    }
     // Compact to the vertices faces use.
     let mut remap = vec![NONE; positions.len()];
     let mut verts = Vec::new();
@@ -466,5 +473,6 @@ mod tests {
         let e = loop_subdivide(&p, &[0, 1, 2, 0, 1, 3], 1).unwrap_err();
         assert!(e.contains("opposite directions"), "{e}");
         assert!(loop_subdivide(&p, &[0, 0, 1], 1).unwrap_err().contains("repeats"));
+        assert!(loop_subdivide(&p, &[0, 1, 2], 14).unwrap_err().contains("levels"));
     }
 }

@@ -290,6 +290,9 @@ impl<C: Channels, B: LayerBase<C = C>> LayeredBxdf<B, C> {
     /// do not sum to one and a rough coating's estimate is biased high (by 3–11% of the
     /// albedo for α = 0.1–0.6 in the tests).
     /// nimbus keeps pbrt-v4's weights for image parity.
+    // Out of line: the random walks are long, and inlined into `Bxdf`'s dispatch (once per
+    // base) they would crowd the path loop's hot code.
+    #[inline(never)]
     pub fn f(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> C {
         self.f_estimate(wo, wi, mode, false)
     }
@@ -452,6 +455,9 @@ impl<C: Channels, B: LayerBase<C = C>> LayeredBxdf<B, C> {
     ///
     /// pbrt-v4 only supports `ReflTransFlags::ALL` here; a coated diffuse surface only
     /// reflects, so nimbus treats `REFLECTION` like `ALL` and returns `None` without it.
+    // Out of line: the random walks are long, and inlined into `Bxdf`'s dispatch (once per
+    // base) they would crowd the path loop's hot code.
+    #[inline(never)]
     pub fn sample_f(
         &self,
         wo: Vec3,
@@ -556,6 +562,9 @@ impl<C: Channels, B: LayerBase<C = C>> LayeredBxdf<B, C> {
     /// An approximate density of [`LayeredBxdf::sample_f`] for MIS: the entrance
     /// reflection plus a stochastic estimate of the TRT (or TT) term, mixed with a uniform
     /// density as 0.9·estimate + 0.1/(4π) (pbrt-v4 §14.3, `LayeredBxDF::PDF`).
+    // Out of line: the random walks are long, and inlined into `Bxdf`'s dispatch (once per
+    // base) they would crowd the path loop's hot code.
+    #[inline(never)]
     pub fn pdf(&self, wo: Vec3, wi: Vec3, mode: TransportMode, sample_flags: ReflTransFlags) -> f32 {
         if !sample_flags.reflection() {
             return 0.0;

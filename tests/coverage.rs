@@ -156,7 +156,7 @@ const ENTITIES: &[(&str, &str, Outcome)] = &[
     ("sampler", "stratified", Rendered),
     ("sampler", "sobol", Rendered),
     ("sampler", "zsobol", Rendered),
-    ("sampler", "halton", Replaced),
+    ("sampler", "halton", Rendered),
     ("sampler", "paddedsobol", Replaced),
     ("sampler", "pmj02bn", Replaced),
     ("film", "rgb", Rendered),

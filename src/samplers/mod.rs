@@ -4,12 +4,14 @@
 //! hands out consecutive dimensions with [`Sampler::get_1d`], [`Sampler::get_2d`] and
 //! [`Sampler::get_pixel_2d`]. Every value is a pure function of (pixel, sample index,
 //! dimension, seed) and the sampler's settings, so images do not depend on how threads share
-//! the work; each thread clones its own sampler (a few words, no tables).
+//! the work; each thread clones its own sampler (a few words; Halton's digit permutations
+//! are shared behind an `Arc`).
 //!
 //! The camera ray consumes dimensions as pbrt-v4's `GetCameraSample` does: film position
 //! (2D), time (1D), lens (2D); see [`get_camera_sample`].
 
 mod camera_sample;
+mod halton;
 mod hash;
 mod independent;
 mod sobol;
@@ -21,6 +23,7 @@ use glam::{UVec2, Vec2};
 use crate::scene::sampler::{SamplerKind, SamplerSettings};
 
 pub use camera_sample::{CameraSample, get_camera_sample};
+pub use halton::{HaltonRandomization, HaltonSampler};
 pub use independent::IndependentSampler;
 pub use sobol::SobolSampler;
 pub use stratified::StratifiedSampler;
@@ -37,6 +40,8 @@ pub enum Sampler {
     Sobol(SobolSampler),
     /// pbrt-v4's Morton-ordered Sobol' sampler (its default).
     ZSobol(ZSobolSampler),
+    /// The Halton sequence over the image.
+    Halton(HaltonSampler),
 }
 
 impl Sampler {
@@ -52,6 +57,7 @@ impl Sampler {
             SamplerKind::ZSobol => {
                 Sampler::ZSobol(ZSobolSampler::new(spp, full_resolution, settings.randomization, seed))
             }
+            SamplerKind::Halton(r) => Sampler::Halton(HaltonSampler::new(spp, full_resolution, r, seed)),
         }
     }
 
@@ -63,6 +69,7 @@ impl Sampler {
             Sampler::Stratified(s) => s.samples_per_pixel(),
             Sampler::Sobol(s) => s.samples_per_pixel(),
             Sampler::ZSobol(s) => s.samples_per_pixel(),
+            Sampler::Halton(s) => s.samples_per_pixel(),
         }
     }
 
@@ -74,6 +81,7 @@ impl Sampler {
             Sampler::Stratified(s) => s.start_pixel_sample(pixel, sample_index, dimension),
             Sampler::Sobol(s) => s.start_pixel_sample(pixel, sample_index, dimension),
             Sampler::ZSobol(s) => s.start_pixel_sample(pixel, sample_index, dimension),
+            Sampler::Halton(s) => s.start_pixel_sample(pixel, sample_index, dimension),
         }
     }
 
@@ -85,6 +93,7 @@ impl Sampler {
             Sampler::Stratified(s) => s.get_1d(),
             Sampler::Sobol(s) => s.get_1d(),
             Sampler::ZSobol(s) => s.get_1d(),
+            Sampler::Halton(s) => s.get_1d(),
         }
     }
 
@@ -96,15 +105,18 @@ impl Sampler {
             Sampler::Stratified(s) => s.get_2d(),
             Sampler::Sobol(s) => s.get_2d(),
             Sampler::ZSobol(s) => s.get_2d(),
+            Sampler::Halton(s) => s.get_2d(),
         }
     }
 
-    /// The film-position sample within the pixel: the next two dimensions. pbrt-v4's
-    /// samplers other than its global Sobol' and Halton ones define it as `Get2D`, and so
-    /// do all of nimbus's.
+    /// The film-position sample within the pixel: the next two dimensions, except for Halton,
+    /// whose first two dimensions are scaled over the image (as in pbrt-v4).
     #[inline]
     pub fn get_pixel_2d(&mut self) -> Vec2 {
-        self.get_2d()
+        match self {
+            Sampler::Halton(s) => s.get_pixel_2d(),
+            _ => self.get_2d(),
+        }
     }
 }
 

@@ -22,6 +22,8 @@ pub enum SamplerKind {
     Sobol,
     /// `zsobol`: Sobol' points in Morton order across pixels (pbrt-v4's default).
     ZSobol,
+    /// `halton`: the Halton sequence over the image.
+    Halton(crate::samplers::HaltonRandomization),
 }
 
 /// How the Sobol' samplers randomize their points (pbrt-v4's `randomization` parameter).
@@ -47,7 +49,7 @@ pub struct SamplerSettings {
 }
 
 impl SamplerSettings {
-    /// Reads a sampler entity. pbrt-v4 samplers nimbus lacks (halton, paddedsobol, pmj02bn)
+    /// Reads a sampler entity. pbrt-v4 samplers nimbus lacks (paddedsobol, pmj02bn)
     /// are replaced by zsobol with a warning: the image converges to the same result.
     pub fn from_entity(
         e: &Entity,
@@ -73,7 +75,23 @@ impl SamplerSettings {
                     "independent" => SamplerKind::Independent,
                     "sobol" => SamplerKind::Sobol,
                     "zsobol" => SamplerKind::ZSobol,
-                    "halton" | "paddedsobol" | "pmj02bn" => {
+                    "halton" => {
+                        let r = p.get_one_string("randomization", "permutedigits")?;
+                        SamplerKind::Halton(match r {
+                            "none" => crate::samplers::HaltonRandomization::None,
+                            "permutedigits" => crate::samplers::HaltonRandomization::PermuteDigits,
+                            "owen" => crate::samplers::HaltonRandomization::Owen,
+                            _ => {
+                                return Err(Error::new(
+                                    p.loc("randomization").unwrap_or(&e.loc),
+                                    format!(
+                                        "randomization \"{r}\" is not one the Halton sampler has (none, permutedigits, owen)"
+                                    ),
+                                ));
+                            }
+                        })
+                    }
+                    "paddedsobol" | "pmj02bn" => {
                         // These read "randomization"; accept it so it is not reported unused.
                         p.get_opt_string("randomization")?;
                         warnings.push(Warning::new(
@@ -86,7 +104,7 @@ impl SamplerSettings {
                         return Err(Error::new(
                             &e.loc,
                             format!(
-                                "sampler \"{other}\" unknown (nimbus has independent, stratified, sobol and zsobol)"
+                                "sampler \"{other}\" unknown (nimbus has independent, stratified, sobol, zsobol and halton)"
                             ),
                         ));
                     }
@@ -139,9 +157,15 @@ mod tests {
         let s = settings("Sampler \"sobol\" \"string randomization\" \"owen\"").unwrap();
         assert_eq!((s.kind, s.randomization), (SamplerKind::Sobol, Randomization::Owen));
         assert!(settings("Sampler \"zsobol\" \"string randomization\" \"none\"").is_err());
-        // Replaced samplers accept their own randomization values.
-        let h = settings("Sampler \"halton\" \"string randomization\" \"permutedigits\"").unwrap();
-        assert_eq!(h.kind, SamplerKind::ZSobol);
+        // Halton takes its own randomizations (permutedigits by default) and refuses fastowen,
+        // as pbrt-v4 does; replaced samplers accept theirs.
+        let h = settings("Sampler \"halton\"").unwrap();
+        assert_eq!(h.kind, SamplerKind::Halton(crate::samplers::HaltonRandomization::PermuteDigits));
+        let h = settings("Sampler \"halton\" \"string randomization\" \"owen\"").unwrap();
+        assert_eq!(h.kind, SamplerKind::Halton(crate::samplers::HaltonRandomization::Owen));
+        assert!(settings("Sampler \"halton\" \"string randomization\" \"fastowen\"").is_err());
+        let p = settings("Sampler \"pmj02bn\" \"string randomization\" \"permutedigits\"").unwrap();
+        assert_eq!(p.kind, SamplerKind::ZSobol);
     }
 
     #[test]

@@ -157,7 +157,7 @@ const ENTITIES: &[(&str, &str, Outcome)] = &[
     ("sampler", "sobol", Rendered),
     ("sampler", "zsobol", Rendered),
     ("sampler", "halton", Rendered),
-    ("sampler", "paddedsobol", Replaced),
+    ("sampler", "paddedsobol", Rendered),
     ("sampler", "pmj02bn", Replaced),
     ("film", "rgb", Rendered),
     ("film", "gbuffer", Refused),

@@ -14,6 +14,7 @@ mod camera_sample;
 mod halton;
 mod hash;
 mod independent;
+mod padded_sobol;
 mod sobol;
 mod stratified;
 mod zsobol;
@@ -25,6 +26,7 @@ use crate::scene::sampler::{SamplerKind, SamplerSettings};
 pub use camera_sample::{CameraSample, get_camera_sample};
 pub use halton::{HaltonRandomization, HaltonSampler};
 pub use independent::IndependentSampler;
+pub use padded_sobol::PaddedSobolSampler;
 pub use sobol::SobolSampler;
 pub use stratified::StratifiedSampler;
 pub use zsobol::ZSobolSampler;
@@ -42,6 +44,8 @@ pub enum Sampler {
     ZSobol(ZSobolSampler),
     /// The Halton sequence over the image.
     Halton(HaltonSampler),
+    /// Independently scrambled 2D Sobol' sets per dimension pair.
+    PaddedSobol(PaddedSobolSampler),
 }
 
 impl Sampler {
@@ -58,6 +62,9 @@ impl Sampler {
                 Sampler::ZSobol(ZSobolSampler::new(spp, full_resolution, settings.randomization, seed))
             }
             SamplerKind::Halton(r) => Sampler::Halton(HaltonSampler::new(spp, full_resolution, r, seed)),
+            SamplerKind::PaddedSobol => {
+                Sampler::PaddedSobol(PaddedSobolSampler::new(spp, settings.randomization, seed))
+            }
         }
     }
 
@@ -70,6 +77,7 @@ impl Sampler {
             Sampler::Sobol(s) => s.samples_per_pixel(),
             Sampler::ZSobol(s) => s.samples_per_pixel(),
             Sampler::Halton(s) => s.samples_per_pixel(),
+            Sampler::PaddedSobol(s) => s.samples_per_pixel(),
         }
     }
 
@@ -82,6 +90,7 @@ impl Sampler {
             Sampler::Sobol(s) => s.start_pixel_sample(pixel, sample_index, dimension),
             Sampler::ZSobol(s) => s.start_pixel_sample(pixel, sample_index, dimension),
             Sampler::Halton(s) => s.start_pixel_sample(pixel, sample_index, dimension),
+            Sampler::PaddedSobol(s) => s.start_pixel_sample(pixel, sample_index, dimension),
         }
     }
 
@@ -94,6 +103,7 @@ impl Sampler {
             Sampler::Sobol(s) => s.get_1d(),
             Sampler::ZSobol(s) => s.get_1d(),
             Sampler::Halton(s) => s.get_1d(),
+            Sampler::PaddedSobol(s) => s.get_1d(),
         }
     }
 
@@ -106,6 +116,7 @@ impl Sampler {
             Sampler::Sobol(s) => s.get_2d(),
             Sampler::ZSobol(s) => s.get_2d(),
             Sampler::Halton(s) => s.get_2d(),
+            Sampler::PaddedSobol(s) => s.get_2d(),
         }
     }
 

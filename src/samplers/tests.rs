@@ -29,6 +29,8 @@ fn all(spp: u32) -> Vec<(&'static str, Sampler)> {
         ),
         ("halton owen", sampler(SamplerKind::Halton(HaltonRandomization::Owen), spp, Randomization::FastOwen)),
         ("halton none", sampler(SamplerKind::Halton(HaltonRandomization::None), spp, Randomization::FastOwen)),
+        ("paddedsobol fastowen", sampler(SamplerKind::PaddedSobol, spp, Randomization::FastOwen)),
+        ("paddedsobol owen", sampler(SamplerKind::PaddedSobol, spp, Randomization::Owen)),
     ]
 }
 

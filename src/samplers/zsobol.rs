@@ -44,7 +44,7 @@ static SOBOL_MATRICES: [[u32; 64]; 2] = [matrix(0), matrix(1)];
 
 /// Unscrambled Sobol' sample `a` of `dimension` (0 or 1) as a 32-bit fraction.
 #[inline]
-fn sobol_bits(mut a: u64, dimension: usize) -> u32 {
+pub(super) fn sobol_bits(mut a: u64, dimension: usize) -> u32 {
     let m = &SOBOL_MATRICES[dimension];
     let mut v = 0;
     while a != 0 {
@@ -57,7 +57,7 @@ fn sobol_bits(mut a: u64, dimension: usize) -> u32 {
 /// pbrt-v4's `OwenScrambler`: each bit is flipped by a hash of the bits above it (nested
 /// uniform scrambling, Owen 1995).
 #[inline]
-fn owen_scramble(mut v: u32, seed: u32) -> u32 {
+pub(super) fn owen_scramble(mut v: u32, seed: u32) -> u32 {
     if seed & 1 != 0 {
         v ^= 1 << 31;
     }
@@ -73,7 +73,7 @@ fn owen_scramble(mut v: u32, seed: u32) -> u32 {
 /// pbrt-v4's `FastOwenScrambler`: Vegdahl's hash, an approximate Owen scramble in one pass
 /// (Burley, JCGT 2020).
 #[inline]
-fn fast_owen_scramble(v: u32, seed: u32) -> u32 {
+pub(super) fn fast_owen_scramble(v: u32, seed: u32) -> u32 {
     let mut v = v.reverse_bits();
     v ^= v.wrapping_mul(0x3d20_adea);
     v = v.wrapping_add(seed);

@@ -24,6 +24,8 @@ pub enum SamplerKind {
     ZSobol,
     /// `halton`: the Halton sequence over the image.
     Halton(crate::samplers::HaltonRandomization),
+    /// `paddedsobol`: independently scrambled 2D Sobol' sets per dimension pair.
+    PaddedSobol,
 }
 
 /// How the Sobol' samplers randomize their points (pbrt-v4's `randomization` parameter).
@@ -49,7 +51,7 @@ pub struct SamplerSettings {
 }
 
 impl SamplerSettings {
-    /// Reads a sampler entity. pbrt-v4 samplers nimbus lacks (paddedsobol, pmj02bn)
+    /// Reads a sampler entity. The pbrt-v4 sampler nimbus lacks (pmj02bn)
     /// are replaced by zsobol with a warning: the image converges to the same result.
     pub fn from_entity(
         e: &Entity,
@@ -91,7 +93,8 @@ impl SamplerSettings {
                             }
                         })
                     }
-                    "paddedsobol" | "pmj02bn" => {
+                    "paddedsobol" => SamplerKind::PaddedSobol,
+                    "pmj02bn" => {
                         // These read "randomization"; accept it so it is not reported unused.
                         p.get_opt_string("randomization")?;
                         warnings.push(Warning::new(
@@ -104,13 +107,13 @@ impl SamplerSettings {
                         return Err(Error::new(
                             &e.loc,
                             format!(
-                                "sampler \"{other}\" unknown (nimbus has independent, stratified, sobol, zsobol and halton)"
+                                "sampler \"{other}\" unknown (nimbus has independent, stratified, sobol, zsobol, halton and paddedsobol)"
                             ),
                         ));
                     }
                 };
-                // Only sobol and zsobol are checked: the replaced samplers accept other values.
-                if matches!(name, "sobol" | "zsobol") {
+                // Only the Sobol' samplers are checked: the replaced sampler accepts other values.
+                if matches!(name, "sobol" | "zsobol" | "paddedsobol") {
                     let r = p.get_one_string("randomization", "fastowen")?;
                     randomization = match r {
                         "owen" => Randomization::Owen,
@@ -166,6 +169,8 @@ mod tests {
         assert!(settings("Sampler \"halton\" \"string randomization\" \"fastowen\"").is_err());
         let p = settings("Sampler \"pmj02bn\" \"string randomization\" \"permutedigits\"").unwrap();
         assert_eq!(p.kind, SamplerKind::ZSobol);
+        let p = settings("Sampler \"paddedsobol\" \"string randomization\" \"owen\"").unwrap();
+        assert_eq!((p.kind, p.randomization), (SamplerKind::PaddedSobol, Randomization::Owen));
     }
 
     #[test]

@@ -294,15 +294,41 @@ Shape "sphere" "float radius" 0.8"#,
     assert!(close(sigma_a.rgb, glam::Vec3::new(0.014, 0.025, 0.142)), "{:?}", sigma_a.rgb);
     assert_eq!((named.media.len(), named.media[0].g), (1, 0.0));
 
+    // A reflectance and mean free path become σt = 1/mfp and the albedo whose diffusion
+    // profile reflects that much (pbrt-v4's SubsurfaceFromDiffuse): more reflectance, more
+    // albedo.
+    let from_r = load_scene(
+        &scene(
+            r#"Material "subsurface" "rgb reflectance" [0.2 0.5 0.8] "rgb mfp" [0.5 0.5 0.5] "float eta" 1.33
+Shape "sphere" "float radius" 0.8"#,
+        ),
+        &transport(false),
+    );
+    let nimbus::media::MediumKind::Homogeneous { sigma_a, sigma_s, .. } = &from_r.media[0].kind else {
+        panic!("a homogeneous medium")
+    };
+    let (a, s) = (sigma_a.rgb, sigma_s.rgb);
+    assert!(((a + s) - glam::Vec3::splat(2.0)).abs().max_element() < 1e-3, "σt = 1/mfp: {a} + {s}");
+    let albedo = s / (a + s);
+    assert!(albedo.x < albedo.y && albedo.y < albedo.z && albedo.z < 1.0, "{albedo}");
+    let table = nimbus::media::diffusion::DiffusionTable::new(0.0, 1.33);
+    for (rho, r) in [(albedo.x, 0.2), (albedo.y, 0.5), (albedo.z, 0.8)] {
+        assert!((table.rho_eff(rho) - r).abs() < 0.01, "ρ {rho}: ρ_eff {} vs {r}", table.rho_eff(rho));
+    }
+
     for (material, message) in [
         (r#"Material "subsurface" "rgb sigma_a" [1 1 1]"#, "without \"sigma_s\""),
-        (r#"Material "subsurface" "rgb reflectance" [0.5 0.5 0.5]"#, "\"reflectance\""),
+        (
+            r#"Texture "t" "spectrum" "constant"
+Material "subsurface" "texture reflectance" "t""#,
+            "textured \"reflectance\"",
+        ),
         (r#"Material "subsurface" "string name" "Moonrock""#, "\"Moonrock\" not found"),
     ] {
         let text = scene(&format!("{material}\nShape \"sphere\""));
         let desc = nimbus::parser::load_str(&text, "sss.pbrt").unwrap();
         let e = nimbus::scene::build_scene(&desc, &transport(false)).err().expect("refused");
-        assert!(e.to_string().contains("sss.pbrt:9") && e.to_string().contains(message), "{material}: {e}");
+        assert!(e.to_string().contains("sss.pbrt:") && e.to_string().contains(message), "{material}: {e}");
     }
 }
 

@@ -3,6 +3,7 @@
 
 pub mod cloud;
 pub mod dense;
+pub mod diffusion;
 pub mod grid;
 pub mod majorant;
 mod medium;

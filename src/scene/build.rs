@@ -16,7 +16,9 @@ use super::camera::CameraSettings;
 use super::film::FilmSettings;
 use super::filter::FilterSettings;
 use super::lights::{AreaLightSettings, LightKind as LightSpec, LightSettings};
-use super::materials::{ConductorSpec, Eta, HairAbsorptionSpec, MaterialKind, MaterialSettings, Roughness};
+use super::materials::{
+    ConductorSpec, Eta, HairAbsorptionSpec, MaterialKind, MaterialSettings, Roughness, SubsurfaceCoefficients,
+};
 use super::media::{MediumKind as MediumSpec, MediumSettings};
 use super::sampler::SamplerSettings;
 use super::shapes::{ShapeKind, ShapeSettings};
@@ -586,14 +588,26 @@ fn material(
                 n_samples: *n_samples,
             }
         }
-        MaterialKind::Subsurface { eta, roughness: r, sigma_a, sigma_s, scale, g } => {
+        MaterialKind::Subsurface { eta, roughness: r, coefficients, scale, g } => {
             let unbounded = |s: &SpectrumSpec| tb.spectra.unbounded(s, cs).map_err(|x| err(loc, x.to_string()));
-            subsurface = Some(SubsurfaceMedium {
-                sigma_a: unbounded(sigma_a)?.scaled(*scale),
-                sigma_s: unbounded(sigma_s)?.scaled(*scale),
-                g: *g,
-                loc: loc.clone(),
-            });
+            let (sigma_a, sigma_s) = match coefficients {
+                SubsurfaceCoefficients::Sigma { sigma_a, sigma_s } => {
+                    (unbounded(sigma_a)?.scaled(*scale), unbounded(sigma_s)?.scaled(*scale))
+                }
+                SubsurfaceCoefficients::Reflectance { reflectance, mfp } => {
+                    // pbrt-v4 inverts per sampled wavelength; nimbus per RGB channel of the
+                    // reflectance, the coefficients then upsampled as unbounded RGB.
+                    let r = tb.spectra.albedo(reflectance, cs).map_err(|x| err(loc, x.to_string()))?.rgb;
+                    let mfp = unbounded(mfp)?.rgb * *scale;
+                    let table = crate::media::diffusion::DiffusionTable::new(*g, *eta);
+                    let (mut a, mut s) = ([0.0f32; 3], [0.0f32; 3]);
+                    for c in 0..3 {
+                        (a[c], s[c]) = table.coefficients(r[c].clamp(0.0, 1.0), mfp[c].max(f32::MIN_POSITIVE));
+                    }
+                    (unbounded(&SpectrumSpec::Rgb(a))?, unbounded(&SpectrumSpec::Rgb(s))?)
+                }
+            };
+            subsurface = Some(SubsurfaceMedium { sigma_a, sigma_s, g: *g, loc: loc.clone() });
             Material::Dielectric { eta: SpectrumValue::constant(*eta), roughness: roughness(r, tb, loc)? }
         }
         MaterialKind::Hair { absorption, eta, beta_m, beta_n, alpha } => Material::Hair {

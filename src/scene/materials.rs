@@ -57,6 +57,26 @@ pub enum HairAbsorptionSpec {
     },
 }
 
+/// How a `subsurface` material gives its medium.
+#[derive(Clone, Debug, PartialEq)]
+pub enum SubsurfaceCoefficients {
+    /// σa and σs (named, given, or pbrt-v4's defaults).
+    Sigma {
+        /// Absorption.
+        sigma_a: SpectrumSpec,
+        /// Scattering.
+        sigma_s: SpectrumSpec,
+    },
+    /// A total diffuse reflectance and a mean free path, inverted through the photon beam
+    /// diffusion profile as pbrt-v4 does.
+    Reflectance {
+        /// `reflectance`.
+        reflectance: SpectrumSpec,
+        /// `mfp`.
+        mfp: SpectrumSpec,
+    },
+}
+
 /// What a material is.
 #[derive(Clone, Debug, PartialEq)]
 pub enum MaterialKind {
@@ -149,11 +169,10 @@ pub enum MaterialKind {
         eta: f32,
         /// Roughness of the boundary.
         roughness: Roughness,
-        /// Absorption coefficient (before `scale`).
-        sigma_a: SpectrumSpec,
-        /// Scattering coefficient (before `scale`).
-        sigma_s: SpectrumSpec,
-        /// Multiplier on both (pbrt-v4's unit conversion: named coefficients are per mm).
+        /// The medium's coefficients, or what they are derived from.
+        coefficients: SubsurfaceCoefficients,
+        /// Multiplier on the coefficients (pbrt-v4's unit conversion: named ones are per mm)
+        /// and on `mfp`.
         scale: f32,
         /// Henyey-Greenstein asymmetry of the medium.
         g: f32,
@@ -230,7 +249,11 @@ fn named_eta(e: &Entity, name: &str, default: f32) -> Result<Eta, Error> {
 fn subsurface(e: &Entity, warnings: &mut Vec<Warning>) -> Result<MaterialKind, Error> {
     let p = &e.params;
     let mut g = p.get_one_float("g", 0.0)?;
-    let (sigma_a, sigma_s) = if let Some(name) = p.get_opt_string("name")? {
+    let sigma = |a: [f32; 3], s: [f32; 3]| SubsurfaceCoefficients::Sigma {
+        sigma_a: SpectrumSpec::Rgb(a),
+        sigma_s: SpectrumSpec::Rgb(s),
+    };
+    let coefficients = if let Some(name) = p.get_opt_string("name")? {
         let Some((_, ss, sa)) = super::media::MEDIUM_PRESETS.iter().find(|(n, _, _)| *n == name) else {
             return Err(Error::new(
                 p.loc("name").unwrap_or(&e.loc),
@@ -244,7 +267,7 @@ fn subsurface(e: &Entity, warnings: &mut Vec<Warning>) -> Result<MaterialKind, E
             ));
         }
         g = 0.0;
-        (SpectrumSpec::Rgb(*sa), SpectrumSpec::Rgb(*ss))
+        sigma(*sa, *ss)
     } else {
         let constant = |name: &str| -> Result<Option<SpectrumSpec>, Error> {
             if p.peek(name).is_some_and(|q| q.ty == nimbus_parser::ParamType::Texture) {
@@ -256,7 +279,7 @@ fn subsurface(e: &Entity, warnings: &mut Vec<Warning>) -> Result<MaterialKind, E
             spectrum(p, name)
         };
         match (constant("sigma_a")?, constant("sigma_s")?) {
-            (Some(a), Some(s)) => (a, s),
+            (Some(sigma_a), Some(sigma_s)) => SubsurfaceCoefficients::Sigma { sigma_a, sigma_s },
             (Some(_), None) => {
                 return Err(Error::new(
                     p.loc("sigma_a").unwrap_or(&e.loc),
@@ -269,22 +292,20 @@ fn subsurface(e: &Entity, warnings: &mut Vec<Warning>) -> Result<MaterialKind, E
                     "subsurface: \"sigma_s\" given without \"sigma_a\"",
                 ));
             }
-            (None, None) => {
-                if p.peek("reflectance").is_some() {
-                    return Err(Error::new(
-                        p.loc("reflectance").unwrap_or(&e.loc),
-                        "subsurface: coefficients from \"reflectance\" (pbrt-v4's diffusion-table inversion) are not supported by nimbus; give \"sigma_a\" and \"sigma_s\" or a \"name\"",
-                    ));
-                }
-                (SpectrumSpec::Rgb([0.0011, 0.0024, 0.014]), SpectrumSpec::Rgb([2.55, 3.21, 3.77]))
-            }
+            (None, None) => match constant("reflectance")? {
+                Some(reflectance) => SubsurfaceCoefficients::Reflectance {
+                    reflectance,
+                    mfp: constant("mfp")?.unwrap_or(SpectrumSpec::Rgb([1.0; 3])),
+                },
+                // pbrt-v4's defaults (whole milk, per mm).
+                None => sigma([0.0011, 0.0024, 0.014], [2.55, 3.21, 3.77]),
+            },
         }
     };
     Ok(MaterialKind::Subsurface {
         eta: checked_float(p, "eta", 1.33, |v| v > 0.0, "the index of refraction must be positive")?,
         roughness: roughness(e)?,
-        sigma_a,
-        sigma_s,
+        coefficients,
         scale: checked_float(p, "scale", 1.0, |v| v >= 0.0 && v.is_finite(), "must be finite and not negative")?,
         g: if g > -1.0 && g < 1.0 {
             g

@@ -236,6 +236,12 @@ Shape "loopsubdiv" "integer levels" 4 "integer indices" [{}] "point3 P" [{}]"#,
         "covered {covered}, expected {expected}"
     );
     assert!(expected > 0.1 && expected < 0.5, "{expected}");
+    // Its normals face out of the counter-clockwise mesh, so a medium interface (or a
+    // subsurface material) puts the medium inside.
+    let scene = load_scene(&text, &transport(false));
+    let ray = nimbus::geometry::Ray::new(glam::Vec3::new(0.0, 0.0, 5.0), -glam::Vec3::Z);
+    let hit = scene.surfaces.intersect(&ray, f32::INFINITY).expect("the surface");
+    assert!(hit.surface.n.dot(ray.d) < 0.0 && hit.surface.ns.dot(ray.d) < 0.0, "{:?}", hit.surface);
 }
 
 /// `subsurface` is rendered as what its BSSRDF approximates: a dielectric boundary around a

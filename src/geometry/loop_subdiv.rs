@@ -3,10 +3,12 @@
 //! rules on open edges), its vertices then pushed to the limit surface and given the limit
 //! surface's normals. The result is an ordinary triangle mesh, built once at load.
 //!
-//! The limit normals are pbrt-v4's: S × T over the one-ring, which points into a mesh wound
-//! counter-clockwise as seen from outside; a `trianglemesh` with normals turns its geometric
-//! normals to them, so one-sided lights and medium interfaces on a subdivision surface face
-//! as in pbrt-v4.
+//! The limit normals are pbrt-v4's tangents crossed the other way round (T × S): pbrt-v4's
+//! S × T points into a mesh wound counter-clockwise as seen from outside, against the
+//! triangles' own orientation, and since a mesh's geometric normals follow its shading
+//! normals, a subdivision surface there has its inside and outside swapped for one-sided
+//! lights and `MediumInterface` (and `subsurface`, whose medium would end up outside). nimbus
+//! orients them with the winding, as every other mesh; two-sided materials see no difference.
 //!
 //! The mesh is kept as per-level arrays of faces and vertices that refer to each other by
 //! index (pbrt-v4 uses pointers); each level is computed from the previous one.
@@ -323,7 +325,7 @@ pub fn loop_subdivide(positions: &[[f32; 3]], indices: &[u32], levels: u32) -> R
                 };
                 (s, t)
             };
-            s.cross(t).to_array()
+            t.cross(s).to_array()
         })
         .collect();
 
@@ -429,14 +431,13 @@ mod tests {
     }
 
     #[test]
-    fn the_limit_surface_is_smooth_and_symmetric_with_pbrt_v4s_normal_orientation() {
+    fn the_limit_surface_is_smooth_symmetric_and_oriented_with_its_winding() {
         let (p, i) = octahedron();
         let s = loop_subdivide(&p, &i, 3).unwrap();
         // The octahedron's symmetry survives: the six original vertices' limit points are
         // equidistant from the centre and inside the octahedron. Every limit normal is
-        // radial and, as pbrt-v4 computes them (S × T over a one-ring that runs clockwise
-        // about counter-clockwise faces), points inwards: the mesh's geometric normals follow
-        // them, as pbrt-v4's do.
+        // radial and points out of the counter-clockwise-wound mesh (pbrt-v4's would point
+        // in: see the module's documentation).
         let r0 = Vec3::from(s.positions[0]).length();
         for k in 0..6 {
             let q = Vec3::from(s.positions[k]);
@@ -444,7 +445,7 @@ mod tests {
         }
         for (q, n) in s.positions.iter().zip(&s.normals) {
             let (q, n) = (Vec3::from(*q), Vec3::from(*n).normalize());
-            assert!(n.dot(q.normalize()) < -0.8, "normal {n} at {q}");
+            assert!(n.dot(q.normalize()) > 0.8, "normal {n} at {q}");
         }
     }
 

@@ -8,12 +8,14 @@ use super::hash::{encode_morton2, mix_bits};
 use crate::sampling::warp::ONE_MINUS_EPSILON;
 use crate::scene::sampler::Randomization;
 
+#[cfg(test)]
 /// Column `j` of the generator matrix of Sobol' dimension 0: the van der Corput sequence
 /// (bit reversal). Index bits from 32 on fall below 32-bit resolution.
 const fn sobol0_column(j: u32) -> u32 {
     if j < 32 { 1 << (31 - j) } else { 0 }
 }
 
+#[cfg(test)]
 /// Column `j` of the generator matrix of Sobol' dimension 1: Pascal's triangle mod 2, whose
 /// entry (i, j) is odd exactly when the bits of i are a subset of those of j (Lucas).
 /// Equals pbrt-v4's `SobolMatrices32` for dimension 1 (Joe-Kuo), all 52 columns.
@@ -29,6 +31,7 @@ const fn sobol1_column(j: u32) -> u32 {
     c
 }
 
+#[cfg(test)]
 const fn matrix(dimension: u32) -> [u32; 64] {
     let mut m = [0u32; 64];
     let mut j = 0;
@@ -39,19 +42,28 @@ const fn matrix(dimension: u32) -> [u32; 64] {
     m
 }
 
+#[cfg(test)]
 /// The two generator matrices ZSobol uses: every 2D sample is a (0,2)-sequence.
 static SOBOL_MATRICES: [[u32; 64]; 2] = [matrix(0), matrix(1)];
 
-/// Unscrambled Sobol' sample `a` of `dimension` (0 or 1) as a 32-bit fraction.
+/// Unscrambled Sobol' sample `a` of `dimension` (0 or 1) as a 32-bit fraction: the product of
+/// [`SOBOL_MATRICES`] with the bits of `a`, in closed form. Dimension 0 is the bit reversal of
+/// `a`'s low 32 bits (its columns from 32 on are zero). Dimension 1's column j has bit 31 − i
+/// set when i ⊆ j, and only j's low five bits matter, so bits j and j + 32 of `a` fold
+/// together; output bit i is then the parity of `a`'s bits at supersets of i, which five
+/// shift-xor steps compute (the subset-sum transform over GF(2)).
 #[inline]
-pub(super) fn sobol_bits(mut a: u64, dimension: usize) -> u32 {
-    let m = &SOBOL_MATRICES[dimension];
-    let mut v = 0;
-    while a != 0 {
-        v ^= m[a.trailing_zeros() as usize];
-        a &= a - 1;
+pub(super) fn sobol_bits(a: u64, dimension: usize) -> u32 {
+    if dimension == 0 {
+        return (a as u32).reverse_bits();
     }
-    v
+    let mut w = (a as u32) ^ ((a >> 32) as u32);
+    w ^= (w >> 1) & 0x5555_5555;
+    w ^= (w >> 2) & 0x3333_3333;
+    w ^= (w >> 4) & 0x0f0f_0f0f;
+    w ^= (w >> 8) & 0x00ff_00ff;
+    w ^= (w >> 16) & 0x0000_ffff;
+    w.reverse_bits()
 }
 
 /// pbrt-v4's `OwenScrambler`: each bit is flipped by a hash of the bits above it (nested
@@ -236,6 +248,24 @@ impl ZSobolSampler {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn closed_form_sobol_is_the_matrix_product() {
+        let mut x = 0x1234_5678_9abc_def0u64;
+        for k in 0..20_000u64 {
+            x = mix_bits(x ^ k);
+            let a = if k < 4096 { k } else { x >> (k % 64) };
+            for (d, matrix) in SOBOL_MATRICES.iter().enumerate() {
+                let mut v = 0u32;
+                let mut bits = a;
+                while bits != 0 {
+                    v ^= matrix[bits.trailing_zeros() as usize];
+                    bits &= bits - 1;
+                }
+                assert_eq!(sobol_bits(a, d), v, "a = {a:#x}, dimension {d}");
+            }
+        }
+    }
 
     #[test]
     fn generator_matrices_match_pbrt_tables() {

@@ -168,6 +168,70 @@ AttributeEnd
 """)
 
 
+def write_many_lights():
+    """A foggy street: 20 sphere lanterns, 20 lit windows (two triangles each) and 10
+    spotlights, spread over 40 units: light sampling by power picks mostly lights far from the
+    shading point; pbrt-v4's light BVH picks the near ones."""
+    with open("many-lights.pbrt", "w") as f:
+        f.write("""# Many lights: a street in light fog with 20 sphere lanterns, 20 lit windows (one-sided
+# quads, two triangle lights each) and 10 downward spotlights spread over 40 units, 70
+# lights in all: where pbrt-v4's light BVH beats sampling lights by power.
+MakeNamedMedium "fog" "string type" [ "homogeneous" ] "rgb sigma_a" [ 0.01 0.01 0.01 ] "rgb sigma_s" [ 0.06 0.06 0.06 ] "float g" [ 0.3 ]
+MediumInterface "fog" "fog"
+LookAt 0 1.7 -1  0 1.5 20  0 1 0
+Camera "perspective" "float fov" [ 50 ]
+Sampler "zsobol" "integer pixelsamples" [ 64 ]
+Film "rgb" "integer xresolution" [ 128 ] "integer yresolution" [ 80 ] "string filename" [ "many-lights.exr" ]
+Integrator "volpath" "integer maxdepth" [ 8 ]
+WorldBegin
+AttributeBegin
+  MediumInterface "fog" ""
+  Material "interface"
+  Shape "sphere" "float radius" [ 80 ]
+AttributeEnd
+Material "diffuse" "rgb reflectance" [ 0.45 0.45 0.45 ]
+Shape "trianglemesh" "integer indices" [ 0 1 2 0 2 3 ] "point3 P" [ -4 0 -2  4 0 -2  4 0 44  -4 0 44 ]
+Material "diffuse" "rgb reflectance" [ 0.5 0.42 0.35 ]
+Shape "trianglemesh" "integer indices" [ 0 1 2 0 2 3  4 5 6 4 6 7 ]
+  "point3 P" [ -4 0 -2  -4 0 44  -4 6 44  -4 6 -2   4 0 -2  4 6 -2  4 6 44  4 0 44 ]
+""")
+        warm = [(22, 14, 6), (18, 11, 5), (25, 17, 8)]
+        cool = [(5, 7, 12), (6, 8, 10), (8, 8, 9)]
+        for k in range(20):
+            x = -3 if k % 2 == 0 else 3
+            z = 1 + 2 * k
+            L = warm[k % 3]
+            f.write(f"""AttributeBegin
+  Translate {x} 2.6 {z}
+  AreaLightSource "diffuse" "rgb L" [ {L[0]} {L[1]} {L[2]} ]
+  Material "diffuse" "rgb reflectance" [ 0 0 0 ]
+  Shape "sphere" "float radius" [ 0.1 ]
+AttributeEnd
+""")
+        for k in range(20):
+            # Windows face the street: the left wall's towards +x, the right wall's towards -x.
+            side = -1 if k % 2 == 0 else 1
+            x = side * 3.99
+            z0 = 2 + 2 * k
+            L = cool[k % 3]
+            quad = [(x, 1.2, z0), (x, 1.2, z0 + 0.8), (x, 2.0, z0 + 0.8), (x, 2.0, z0)]
+            if side > 0:
+                quad = quad[::-1]
+            pts = "  ".join(f"{a} {b} {c}" for a, b, c in quad)
+            f.write(f"""AttributeBegin
+  AreaLightSource "diffuse" "rgb L" [ {L[0]} {L[1]} {L[2]} ]
+  Material "diffuse" "rgb reflectance" [ 0.1 0.1 0.1 ]
+  Shape "trianglemesh" "integer indices" [ 0 1 2 0 2 3 ] "point3 P" [ {pts} ]
+AttributeEnd
+""")
+        for k in range(10):
+            z = 4 * k + 3
+            f.write(f"""AttributeBegin
+  LightSource "spot" "point3 from" [ 0 4 {z} ] "point3 to" [ 0 0 {z} ] "float coneangle" [ 35 ] "float conedeltaangle" [ 10 ] "rgb I" [ 6 6 5.5 ]
+AttributeEnd
+""")
+
+
 def equal_area_square_to_sphere(u, v):
     u, v = 2 * u - 1, 2 * v - 1
     up, vp = abs(u), abs(v)
@@ -218,4 +282,5 @@ if __name__ == "__main__":
     write_cloud_sun_sky()
     write_graph_cloud()
     write_emissive()
+    write_many_lights()
     write_sky_png("sky.png")

@@ -6,6 +6,7 @@ mod common;
 mod compare;
 mod coverage;
 mod guided;
+mod lights;
 mod materials;
 mod media;
 mod pathgraph;

@@ -1,11 +1,13 @@
 //! Light sources with pbrt-v4's radiometry: point, spot, distant, uniform and image
 //! infinite lights, and diffuse area lights (one per emitting primitive, as in pbrt-v4).
 
+mod bvh;
 mod envmap;
 mod sampler;
 
+pub use bvh::{LightBounds, LightBvh, light_bounds};
 pub use envmap::EnvironmentMap;
-pub use sampler::LightSampler;
+pub use sampler::{LightSampler, LightSamplerKind};
 
 use std::f32::consts::PI;
 

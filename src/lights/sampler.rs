@@ -1,18 +1,41 @@
-//! Choosing one light for next-event estimation: uniformly or in proportion to power.
+//! Choosing one light for next-event estimation: uniformly, in proportion to power, or with
+//! pbrt-v4's light BVH (by each light's importance for the shading point).
 
+use glam::Vec3;
+
+use super::bvh::LightBvh;
 use super::{Light, SceneSphere};
+use crate::accel::ShapeStore;
 use crate::sampling::distribution::AliasTable;
+
+/// How lights are chosen for next-event estimation (pbrt-v4's `lightsampler`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LightSamplerKind {
+    /// Every light equally likely.
+    Uniform,
+    /// Proportional to emitted power.
+    Power,
+    /// pbrt-v4's light BVH: spatially varying, by importance at the shading point.
+    Bvh,
+}
 
 /// Picks lights for next-event estimation. Lights that are not sampled directly (a uniform
 /// environment) have probability 0.
 #[derive(Clone, Debug)]
-pub struct LightSampler {
-    table: Option<AliasTable>,
+pub enum LightSampler {
+    /// A fixed distribution (uniform or by power); `None` when no light is sampled.
+    Table(Option<AliasTable>),
+    /// pbrt-v4's light BVH.
+    Bvh(LightBvh),
 }
 
 impl LightSampler {
-    /// A sampler over `lights`, by power when `by_power` and uniformly otherwise.
-    pub fn new(lights: &[Light], scene: &SceneSphere, by_power: bool) -> LightSampler {
+    /// A sampler over `lights` of the given kind.
+    pub fn new(lights: &[Light], shapes: &ShapeStore, scene: &SceneSphere, kind: LightSamplerKind) -> LightSampler {
+        if kind == LightSamplerKind::Bvh {
+            return LightSampler::Bvh(LightBvh::new(lights, shapes));
+        }
+        let by_power = kind == LightSamplerKind::Power;
         let weights: Vec<f32> = lights
             .iter()
             .map(|l| {
@@ -33,21 +56,28 @@ impl LightSampler {
         } else {
             weights
         };
-        let table = weights.iter().any(|w| *w > 0.0).then(|| AliasTable::new(&weights));
-        LightSampler { table }
+        LightSampler::Table(weights.iter().any(|w| *w > 0.0).then(|| AliasTable::new(&weights)))
     }
 
-    /// Picks a light: (index, probability), or `None` when no light is sampled directly.
+    /// Picks a light for a point `p` with shading normal `n` (zero in media): (index,
+    /// probability), or `None` when no light is sampled there.
     #[inline]
-    pub fn sample(&self, u: f32) -> Option<(usize, f32)> {
-        let t = self.table.as_ref()?;
-        let s = t.sample(u)?;
-        (s.pmf > 0.0).then_some((s.index, s.pmf))
+    pub fn sample(&self, p: Vec3, n: Vec3, u: f32) -> Option<(usize, f32)> {
+        match self {
+            LightSampler::Table(t) => {
+                let s = t.as_ref()?.sample(u)?;
+                (s.pmf > 0.0).then_some((s.index, s.pmf))
+            }
+            LightSampler::Bvh(bvh) => bvh.sample(p, n, u),
+        }
     }
 
-    /// Probability of picking light `index`.
+    /// Probability of picking light `index` for a point `p` with shading normal `n`.
     #[inline]
-    pub fn pmf(&self, index: usize) -> f32 {
-        self.table.as_ref().map_or(0.0, |t| t.pmf(index))
+    pub fn pmf(&self, p: Vec3, n: Vec3, index: usize) -> f32 {
+        match self {
+            LightSampler::Table(t) => t.as_ref().map_or(0.0, |t| t.pmf(index)),
+            LightSampler::Bvh(bvh) => bvh.pmf(p, n, index),
+        }
     }
 }

@@ -33,7 +33,7 @@ use crate::film::filter::Filter;
 use crate::geometry::Bounds3;
 use crate::geometry::ply::read_ply;
 use crate::integrators::IntegratorSettings;
-use crate::lights::{EnvironmentMap, Light, LightKind, LightSampler, SceneSphere};
+use crate::lights::{EnvironmentMap, Light, LightKind, LightSampler, LightSamplerKind, SceneSphere};
 use crate::materials::{ConductorInput, HairAbsorption, Material, RoughnessTex, ShadingPerturbation, resolve};
 use crate::math::Frame;
 use crate::media::dense::DenseGrid;
@@ -1300,8 +1300,12 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions) -> Result<Scene
         lights.push(light(l, &spectra, transport.transport, medium)?);
     }
     let infinite_lights = lights.iter().enumerate().filter(|(_, l)| l.is_infinite()).map(|(i, _)| i as u32).collect();
-    let by_power = !matches!(&integrator, IntegratorSettings::VolPath(v) if v.light_sampler == crate::integrators::volpath::LightSamplerKind::Uniform);
-    let light_sampler = LightSampler::new(&lights, &sphere, by_power);
+    // pbrt-v4's default for every integrator is the light BVH.
+    let kind = match &integrator {
+        IntegratorSettings::VolPath(v) => v.light_sampler,
+        _ => LightSamplerKind::Bvh,
+    };
+    let light_sampler = LightSampler::new(&lights, &surfaces.shapes, &sphere, kind);
     Ok(Scene {
         camera,
         film,

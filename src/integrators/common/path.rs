@@ -134,7 +134,10 @@ pub fn trace_path<C: Channels, O: PathObserver<C>>(
     let mut any_non_specular = false;
     let mut eta_scale = 1.0f32;
     let mut depth = 0u32;
+    // The previous scattering vertex and its shading normal (zero in media): the light
+    // sampler's context there, which MIS needs again when a light is hit.
     let mut prev_p = ray.o;
+    let mut prev_n = Vec3::ZERO;
     let mut extra_done = false;
 
     loop {
@@ -286,6 +289,7 @@ pub fn trace_path<C: Channels, O: PathObserver<C>>(
                 st.beta *= factor;
                 st.r_l = st.r_u / pdf;
                 prev_p = scatter_p;
+                prev_n = Vec3::ZERO;
                 specular_bounce = false;
                 any_non_specular = true;
                 ray = Ray::new(scatter_p, wi);
@@ -313,7 +317,7 @@ pub fn trace_path<C: Channels, O: PathObserver<C>>(
                 let (c, pdf_light) = if depth == 0 || specular_bounce || !config.next_event {
                     (st.beta * le / st.r_u.average(), 0.0)
                 } else {
-                    let pdf = scene.light_sampler.pmf(i as usize)
+                    let pdf = scene.light_sampler.pmf(prev_p, prev_n, i as usize)
                         * light.pdf_li(&LightContext { p: prev_p }, ray.d, None, &scene.surfaces.shapes);
                     (st.beta * le / (st.r_u + st.r_l * pdf).average(), pdf)
                 };
@@ -333,7 +337,7 @@ pub fn trace_path<C: Channels, O: PathObserver<C>>(
                 let (c, pdf_light) = if depth == 0 || specular_bounce || !config.next_event {
                     (st.beta * le / st.r_u.average(), 0.0)
                 } else {
-                    let pdf = scene.light_sampler.pmf(hit.prim.area_light as usize)
+                    let pdf = scene.light_sampler.pmf(prev_p, prev_n, hit.prim.area_light as usize)
                         * light.pdf_li(&LightContext { p: prev_p }, ray.d, Some(s), &scene.surfaces.shapes);
                     (st.beta * le / (st.r_u + st.r_l * pdf).average(), pdf)
                 };
@@ -426,6 +430,7 @@ pub fn trace_path<C: Channels, O: PathObserver<C>>(
             eta_scale *= bs.eta * bs.eta;
         }
         prev_p = s.p;
+        prev_n = s.ns;
         medium = medium_after(scene, &hit, wi, medium);
         ray = s.spawn_ray(wi);
         if rr(&mut st, eta_scale, depth, sampler) {
@@ -521,7 +526,8 @@ fn sample_direct<C: Channels, O: PathObserver<C>>(
     stats: &mut RayStats,
     mis: bool,
 ) -> Option<C> {
-    let (index, pmf) = scene.light_sampler.sample(u_pick)?;
+    let n_ctx = hit.map_or(Vec3::ZERO, |h| h.surface.ns);
+    let (index, pmf) = scene.light_sampler.sample(p, n_ctx, u_pick)?;
     let light = &scene.lights[index];
     let ls = light.sample_li::<C>(&LightContext { p }, u_light, &scene.surfaces.shapes, &scene.sphere, lambda)?;
     if ls.pdf == 0.0 || ls.l.is_zero() {

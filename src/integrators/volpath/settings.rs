@@ -2,16 +2,7 @@
 
 use nimbus_parser::{Entity, Error};
 
-/// How lights are chosen for next-event estimation.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum LightSamplerKind {
-    /// Every light equally likely.
-    Uniform,
-    /// Proportional to emitted power.
-    Power,
-    /// pbrt-v4's light BVH (spatially varying); nimbus samples by power.
-    Bvh,
-}
+pub use crate::lights::LightSamplerKind;
 
 /// `volpath` parameters.
 #[derive(Clone, Debug, PartialEq)]

@@ -4,7 +4,7 @@
 
 use glam::{Affine3A, DMat4, Vec2, Vec3};
 
-use crate::geometry::Ray;
+use crate::geometry::{MotionTransform, Ray};
 use crate::sampling::warp::concentric_disk;
 use crate::scene::camera::{CameraSettings, Projection};
 
@@ -12,6 +12,10 @@ use crate::scene::camera::{CameraSettings, Projection};
 #[derive(Clone, Debug)]
 pub struct Camera {
     world_from_camera: Affine3A,
+    /// The camera's motion over the shutter interval, for animated camera transforms.
+    motion: Option<MotionTransform>,
+    shutter_open: f32,
+    shutter_close: f32,
     /// Screen-space window [xmin, xmax] × [ymin, ymax].
     screen_min: Vec2,
     screen_max: Vec2,
@@ -39,6 +43,9 @@ impl Camera {
         };
         Camera {
             world_from_camera: Affine3A::from_mat4(world_from_camera.as_mat4()),
+            motion: None,
+            shutter_open: settings.shutter_open,
+            shutter_close: settings.shutter_close,
             screen_min,
             screen_max,
             resolution: res,
@@ -49,14 +56,33 @@ impl Camera {
         }
     }
 
-    /// Camera position in world space.
+    /// The camera moving with `motion` (its transform at each ray's time).
+    pub fn with_motion(mut self, motion: MotionTransform) -> Camera {
+        self.world_from_camera = motion.start();
+        self.motion = Some(motion);
+        self
+    }
+
+    /// True when the camera moves during the shutter interval.
+    pub fn moves(&self) -> bool {
+        self.motion.is_some()
+    }
+
+    /// The ray time for a camera sample's time `u` in [0, 1): pbrt-v4's lerp over the
+    /// shutter interval.
+    #[inline]
+    pub fn time(&self, u: f32) -> f32 {
+        self.shutter_open + u * (self.shutter_close - self.shutter_open)
+    }
+
+    /// Camera position in world space (at the start of its motion).
     pub fn position(&self) -> Vec3 {
         self.world_from_camera.translation.into()
     }
 
     /// The ray through continuous raster position `p_film` (pixel (x, y) covers
-    /// [x, x+1)×[y, y+1)), with `u_lens` sampling the thin lens.
-    pub fn generate_ray(&self, p_film: Vec2, u_lens: Vec2) -> Ray {
+    /// [x, x+1)×[y, y+1)), with `u_lens` sampling the thin lens, at time `time`.
+    pub fn generate_ray(&self, p_film: Vec2, u_lens: Vec2, time: f32) -> Ray {
         // Raster → screen: x grows right, y grows down in raster space but up on screen.
         let sx = self.screen_min.x + p_film.x / self.resolution.x * (self.screen_max.x - self.screen_min.x);
         let sy = self.screen_max.y - p_film.y / self.resolution.y * (self.screen_max.y - self.screen_min.y);
@@ -72,7 +98,11 @@ impl Camera {
             o = Vec3::new(o.x + lens.x, o.y + lens.y, 0.0);
             d = (focus - o).normalize();
         }
-        Ray::new(self.world_from_camera.transform_point3(o), self.world_from_camera.transform_vector3(d).normalize())
+        let w = match &self.motion {
+            Some(m) => m.at(time),
+            None => self.world_from_camera,
+        };
+        Ray::timed(w.transform_point3(o), w.transform_vector3(d).normalize(), time)
     }
 }
 
@@ -97,14 +127,14 @@ mod tests {
     fn center_ray_looks_at_the_target_and_fov_spans_the_short_axis() {
         let cam_from_world = look_at([0.0, 1.0, 3.4], [0.0, 1.0, 0.0], [0.0, 1.0, 0.0]).unwrap();
         let cam = Camera::new(&settings(90.0), &cam_from_world.inverse(), [200, 100]);
-        let r = cam.generate_ray(Vec2::new(100.0, 50.0), Vec2::ZERO);
+        let r = cam.generate_ray(Vec2::new(100.0, 50.0), Vec2::ZERO, 0.0);
         assert!((r.o - Vec3::new(0.0, 1.0, 3.4)).length() < 1e-5);
         assert!((r.d - Vec3::new(0.0, 0.0, -1.0)).length() < 1e-5);
         // Top edge at the centre column: 45° up (fov 90 on the shorter, vertical axis).
-        let top = cam.generate_ray(Vec2::new(100.0, 0.0), Vec2::ZERO);
+        let top = cam.generate_ray(Vec2::new(100.0, 0.0), Vec2::ZERO, 0.0);
         assert!((top.d.y - (0.5f32).sqrt()).abs() < 1e-4, "{:?}", top.d);
         // pbrt-v4's left-handed camera: raster +x goes towards world -x for this LookAt.
-        let right = cam.generate_ray(Vec2::new(200.0, 50.0), Vec2::ZERO);
+        let right = cam.generate_ray(Vec2::new(200.0, 50.0), Vec2::ZERO, 0.0);
         assert!(right.d.x < -0.5, "{:?}", right.d);
     }
 }

@@ -289,6 +289,14 @@ AttributeBegin
   Shape "sphere"
 AttributeEnd
 AttributeBegin
+  ActiveTransform StartTime
+  Translate -0.5 0 0
+  ActiveTransform EndTime
+  Translate 0.5 0 0
+  ActiveTransform All
+  Shape "sphere" "float radius" 0.1
+AttributeEnd
+AttributeBegin
   CoordSysTransform "here"
   NamedMaterial "named"
   Import "imp.pbrt"

@@ -9,6 +9,7 @@ mod guided;
 mod lights;
 mod materials;
 mod media;
+mod motion;
 mod pathgraph;
 mod radiancegraph;
 mod render;

@@ -10,7 +10,7 @@ use obvhs::cwbvh::builder::build_cwbvh;
 use obvhs::ray::{Ray as BvhRay, RayHit};
 use obvhs::{Boundable, BvhBuildParams};
 
-use crate::geometry::{Bounds3, Ray};
+use crate::geometry::{Bounds3, MotionTransform, Ray};
 use crate::shapes::{
     Curve, CurveCommon, Cylinder, Disk, Mesh, Sphere, SurfaceDerivatives, SurfaceHit, transform_normal,
     triangle_derivatives, triangle_hit,
@@ -239,10 +239,7 @@ impl Accel {
                 Geometry::Curve(i) => scene.shapes.curve_hit(i, ray, r.tmax),
                 Geometry::Instance(k) => {
                     let inst = &scene.instances[k as usize];
-                    let local = Ray::new(
-                        inst.instance_from_world.transform_point3(ray.o),
-                        inst.instance_from_world.transform_vector3(ray.d),
-                    );
+                    let local = inst.local_ray(ray);
                     let before = best.map(|c| c.t);
                     scene.blas[inst.accel as usize].closest(scene, &local, r.tmax, k, best);
                     let after = best.map(|c| c.t);
@@ -304,10 +301,7 @@ impl Accel {
                 Geometry::Curve(i) => scene.shapes.curve_hit(i, ray, r.tmax).is_some(),
                 Geometry::Instance(k) => {
                     let inst = &scene.instances[k as usize];
-                    let local = Ray::new(
-                        inst.instance_from_world.transform_point3(ray.o),
-                        inst.instance_from_world.transform_vector3(ray.d),
-                    );
+                    let local = inst.local_ray(ray);
                     scene.blas[inst.accel as usize].any(scene, &local, r.tmax, k)
                 }
             };
@@ -316,14 +310,49 @@ impl Accel {
     }
 }
 
-/// One placement of an object definition.
+/// One placement of an object definition, or a moving shape (pbrt-v4's `AnimatedPrimitive`:
+/// a shape under an animated transform is a BVH of its own placed by that motion).
 pub struct Instance {
     /// Index of the object's BVH in [`Surfaces::blas`].
     pub accel: u32,
-    /// World-from-instance.
+    /// World-from-instance (at the start of the motion for moving ones).
     pub world_from_instance: Affine3A,
-    /// Instance-from-world.
+    /// Instance-from-world (likewise).
     pub instance_from_world: Affine3A,
+    /// The motion over the shutter interval, for moving placements.
+    pub motion: Option<Box<MotionTransform>>,
+}
+
+impl Instance {
+    /// A placement that does not move.
+    pub fn fixed(accel: u32, world_from_instance: Affine3A) -> Instance {
+        Instance { accel, world_from_instance, instance_from_world: world_from_instance.inverse(), motion: None }
+    }
+
+    /// A placement moving with `motion`.
+    pub fn moving(accel: u32, motion: MotionTransform) -> Instance {
+        let w = motion.start();
+        Instance { accel, world_from_instance: w, instance_from_world: w.inverse(), motion: Some(Box::new(motion)) }
+    }
+
+    /// (world-from-instance, instance-from-world) at `time`.
+    #[inline]
+    pub fn transforms_at(&self, time: f32) -> (Affine3A, Affine3A) {
+        match &self.motion {
+            None => (self.world_from_instance, self.instance_from_world),
+            Some(m) => {
+                let w = m.at(time);
+                (w, w.inverse())
+            }
+        }
+    }
+
+    /// A world-space ray in the instance's space.
+    #[inline]
+    fn local_ray(&self, ray: &Ray) -> Ray {
+        let (_, f) = self.transforms_at(ray.time);
+        Ray::timed(f.transform_point3(ray.o), f.transform_vector3(ray.d), ray.time)
+    }
 }
 
 /// A surface hit: geometry plus the primitive's attachments.
@@ -335,6 +364,16 @@ pub struct Hit {
     pub prim: Primitive,
     /// The instance it belongs to, or [`NONE`].
     pub instance: u32,
+    /// The time of the ray that found it.
+    pub time: f32,
+}
+
+impl Hit {
+    /// A ray leaving the hit in direction `d`, offset off the surface, at the hit's time.
+    #[inline]
+    pub fn spawn_ray(&self, d: Vec3) -> Ray {
+        Ray { time: self.time, ..self.surface.spawn_ray(d) }
+    }
 }
 
 /// Every surface in the scene and the BVHs over them. A scene without surfaces has no BVH.
@@ -378,7 +417,7 @@ impl Surfaces {
         let mut best = None;
         top.closest(self, ray, t_max, NONE, &mut best);
         let c = best?;
-        Some(Hit { surface: self.surface(&c, ray, false), prim: c.prim, instance: c.instance })
+        Some(Hit { surface: self.surface(&c, ray, false), prim: c.prim, instance: c.instance, time: ray.time })
     }
 
     /// The shading derivatives at a hit, for bump and normal mapping (computed on demand so
@@ -390,16 +429,15 @@ impl Surfaces {
         let (local, inst) = if hit.instance == NONE {
             (*s, None)
         } else {
-            let inst = &self.instances[hit.instance as usize];
-            let f = &inst.instance_from_world;
+            let (w, f) = self.instances[hit.instance as usize].transforms_at(hit.time);
             let local = SurfaceHit {
                 p: f.transform_point3(s.p),
-                n: transform_normal(&inst.world_from_instance, s.n),
-                ns: transform_normal(&inst.world_from_instance, s.ns),
+                n: transform_normal(&w, s.n),
+                ns: transform_normal(&w, s.ns),
                 dpdu: f.transform_vector3(s.dpdu),
                 ..*s
             };
-            (local, Some(inst))
+            (local, Some((w, f)))
         };
         let d = match hit.prim.geometry {
             Geometry::Triangle { mesh, tri } => triangle_derivatives(&self.shapes.meshes[mesh as usize], tri, &local),
@@ -416,7 +454,7 @@ impl Surfaces {
         };
         match inst {
             None => d,
-            Some(inst) => d.transformed(&inst.world_from_instance, &inst.instance_from_world),
+            Some((w, f)) => d.transformed(&w, &f),
         }
     }
 
@@ -442,11 +480,7 @@ impl Surfaces {
                 let local_ray = if c.instance == NONE || ray_is_local {
                     *ray
                 } else {
-                    let inst = &self.instances[c.instance as usize];
-                    Ray::new(
-                        inst.instance_from_world.transform_point3(ray.o),
-                        inst.instance_from_world.transform_vector3(ray.d),
-                    )
+                    self.instances[c.instance as usize].local_ray(ray)
                 };
                 let curve = &self.shapes.curves[i as usize];
                 // The same computation as the traversal's, so the same (closest) hit; should
@@ -468,13 +502,12 @@ impl Surfaces {
         if c.instance == NONE {
             local
         } else {
-            let inst = &self.instances[c.instance as usize];
-            let w = &inst.world_from_instance;
+            let (w, f) = self.instances[c.instance as usize].transforms_at(ray.time);
             SurfaceHit {
                 t: c.t,
                 p: w.transform_point3(local.p),
-                n: transform_normal(&inst.instance_from_world, local.n),
-                ns: transform_normal(&inst.instance_from_world, local.ns),
+                n: transform_normal(&f, local.n),
+                ns: transform_normal(&f, local.ns),
                 uv: local.uv,
                 dpdu: w.transform_vector3(local.dpdu),
                 p_error: local.p_error * w.matrix3.determinant().abs().cbrt(),

@@ -4,11 +4,13 @@
 mod bounds;
 pub mod gltf;
 pub mod loop_subdiv;
+mod motion;
 pub mod obj;
 pub mod ply;
 mod ray;
 
 pub use bounds::Bounds3;
+pub use motion::MotionTransform;
 pub use ray::{Ray, offset_origin, offset_origin_by, position_error, spawn_ray, spawn_ray_to};
 
 /// Triangle mesh data as read from a file, in the file's (object) space.

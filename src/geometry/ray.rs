@@ -2,20 +2,29 @@
 
 use glam::Vec3;
 
-/// A ray with a unit direction.
+/// A ray with a unit direction, at a time within the shutter interval (which only moving
+/// shapes and cameras look at).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Ray {
     /// Origin.
     pub o: Vec3,
     /// Unit direction.
     pub d: Vec3,
+    /// Time (pbrt-v4's ray time: the camera's shutter interval, 0 to 1 by default).
+    pub time: f32,
 }
 
 impl Ray {
-    /// A ray from `o` along the unit vector `d`.
+    /// A ray from `o` along the unit vector `d` at time 0.
     #[inline]
     pub fn new(o: Vec3, d: Vec3) -> Ray {
-        Ray { o, d }
+        Ray { o, d, time: 0.0 }
+    }
+
+    /// A ray from `o` along the unit vector `d` at `time`.
+    #[inline]
+    pub fn timed(o: Vec3, d: Vec3, time: f32) -> Ray {
+        Ray { o, d, time }
     }
 
     /// The point at distance `t`.

@@ -83,7 +83,7 @@ fn camera_ray<C: Channels>(scene: &Scene, sampler: &mut Sampler, pixel: UVec2, s
     let u = sampler.get_1d();
     let lambda = C::sample_lambda(if scene.disable_wavelength_jitter { 0.5 } else { u });
     let cs = get_camera_sample(sampler, pixel, &scene.filter);
-    (scene.camera.generate_ray(cs.p_film, cs.p_lens), lambda, cs.filter_weight)
+    (scene.camera.generate_ray(cs.p_film, cs.p_lens, scene.camera.time(cs.time)), lambda, cs.filter_weight)
 }
 
 /// One whole-image sample: every pixel's camera ray for one sample index, handed to an

@@ -30,8 +30,8 @@ use crate::accel::{Accel, Geometry, Instance, NONE, Primitive, ShapeStore, Surfa
 use crate::camera::Camera;
 use crate::color::{Rgb, pack_voxel};
 use crate::film::filter::Filter;
-use crate::geometry::Bounds3;
 use crate::geometry::ply::read_ply;
+use crate::geometry::{Bounds3, MotionTransform};
 use crate::integrators::IntegratorSettings;
 use crate::lights::{EnvironmentMap, Light, LightKind, LightSampler, LightSamplerKind, SceneSphere};
 use crate::materials::{ConductorInput, HairAbsorption, Material, RoughnessTex, ShadingPerturbation, resolve};
@@ -139,6 +139,11 @@ pub struct Scene {
 }
 
 impl Scene {
+    /// True when shapes or the camera move over the shutter interval (motion blur).
+    pub fn has_motion(&self) -> bool {
+        self.camera.moves() || self.surfaces.instances.iter().any(|i| i.motion.is_some())
+    }
+
     /// The material that scatters at `hit` seen from `wo` (`mix` resolved), with the hit's
     /// shading normal and tangents replaced by the material's bump or normal map.
     #[inline]
@@ -224,6 +229,13 @@ fn fixed_transform(t: &AnimatedTransform, loc: &FileLoc, what: &str) -> Result<A
     affine(&t.start, loc)
 }
 
+/// An animated transform's motion, both keyframes checked as [`affine`] checks them.
+fn motion_transform(t: &AnimatedTransform, loc: &FileLoc) -> Result<MotionTransform, Error> {
+    affine(&t.start, loc)?;
+    affine(&t.end, loc)?;
+    Ok(MotionTransform::new(&t.start, &t.end, t.start_time as f32, t.end_time as f32))
+}
+
 fn affine(m: &DMat4, loc: &FileLoc) -> Result<Affine3A, Error> {
     let row3 = m.row(3);
     if (row3.x, row3.y, row3.z, row3.w) != (0.0, 0.0, 0.0, 1.0) {
@@ -288,7 +300,7 @@ impl TextureBuilder<'_> {
     fn add(&mut self, t: &nimbus_parser::TextureEntity, warnings: &mut Vec<Warning>) -> Result<(), Error> {
         let e = &t.entity;
         let settings = TextureSettings::from_entity(t, warnings)?;
-        let texture_from_world = fixed_transform(&t.world_from_texture, &e.loc, "texture")?.inverse();
+        let texture_from_world = affine(&t.world_from_texture.start, &e.loc)?.inverse();
         let mapping = |m: &Mapping| match m {
             Mapping::Uv { su, sv, du, dv } => TexMapping::Uv { s: Vec2::new(*su, *sv), d: Vec2::new(*du, *dv) },
             Mapping::Spherical => TexMapping::Spherical { texture_from_world },
@@ -667,12 +679,12 @@ impl ShapeBuilder<'_> {
         shape: &ShapeEntity,
         area_lights: &[nimbus_parser::Entity],
         instanced: bool,
+        world: Affine3A,
         prims: &mut Vec<Primitive>,
         bounds: &mut Vec<Bounds3>,
     ) -> Result<(), Error> {
         let e = &shape.entity;
         let settings = ShapeSettings::from_entity(shape)?;
-        let world = fixed_transform(&shape.world_from_object, &e.loc, "shape")?;
         let rev = shape.reverse_orientation;
         let material = (self.material_ids)(&shape.material);
         let interface = (self.interface_ids)(shape.medium_interface.as_ref(), material)?;
@@ -831,7 +843,7 @@ fn light(
 ) -> Result<Light, Error> {
     let e = &l.entity;
     let settings = LightSettings::from_entity(l)?;
-    let world = fixed_transform(&l.world_from_light, &e.loc, "light")?;
+    let world = affine(&l.world_from_light.start, &e.loc)?;
     let rgb = |s: &SpectrumSpec| spectra.illuminant(s, e.color_space).map_err(|m| err(&e.loc, m.to_string()));
     let kind = match &settings.kind {
         LightSpec::Point { intensity, from, power } => {
@@ -923,7 +935,7 @@ fn build_medium(
         Some(s) => spectra.illuminant(s, cs).map_err(|x| err(&e.loc, x.to_string()))?.scaled(settings.le_scale),
         None => SpectrumValue::ZERO,
     };
-    let world = fixed_transform(&m.world_from_medium, &e.loc, "medium")?;
+    let world = affine(&m.world_from_medium.start, &e.loc)?;
     let g = settings.g;
     let dense = |n: [u32; 3], v: &[f32]| {
         DenseGrid::new(glam::UVec3::from(n), v.to_vec()).ok_or_else(|| err(&e.loc, "grid size mismatch"))
@@ -1070,6 +1082,22 @@ fn pixel_bounds(film: &FilmSettings, opts: &BuildOptions, loc: &FileLoc) -> Resu
 pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions) -> Result<Scene, Error> {
     let t0 = Instant::now();
     let mut warnings = desc.warnings.clone();
+    // What pbrt-v4 does not animate it uses at the start of the motion, with these warnings.
+    for l in desc.lights.iter().filter(|l| l.world_from_light.is_animated()) {
+        warnings.push(Warning::new(&l.entity.loc, "Animated lights aren't supported. Using the start transform."));
+    }
+    for m in desc.media.iter().filter(|m| m.world_from_medium.is_animated()) {
+        warnings.push(Warning::new(
+            &m.entity.loc,
+            "Animated transformation provided for medium. Only the start transform will be used.",
+        ));
+    }
+    for t in desc.textures.iter().filter(|t| t.world_from_texture.is_animated()) {
+        warnings.push(Warning::new(
+            &t.entity.loc,
+            "Animated world to texture transforms are not supported. Using the start transform.",
+        ));
+    }
     let mut film = FilmSettings::from_entity(&desc.film)?;
     if opts.quick {
         film.resolution = [(film.resolution[0] / 4).max(1), (film.resolution[1] / 4).max(1)];
@@ -1077,10 +1105,10 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions) -> Result<Scene
     let film_cs = film.color_space;
     let camera_settings = CameraSettings::from_entity(&desc.camera)?;
     let world_from_camera = &desc.camera.world_from_camera;
+    let mut camera = Camera::new(&camera_settings, &world_from_camera.start, film.resolution);
     if world_from_camera.is_animated() {
-        return Err(err(&desc.camera.entity.loc, "animated camera transforms are not supported by nimbus"));
+        camera = camera.with_motion(motion_transform(world_from_camera, &desc.camera.entity.loc)?);
     }
-    let camera = Camera::new(&camera_settings, &world_from_camera.start, film.resolution);
     let pixel_bounds = pixel_bounds(&film, opts, &desc.film.loc)?;
     let mut sampler = SamplerSettings::from_entity(&desc.sampler, desc.options.seed, &mut warnings)?;
     // An explicit --spp is what the user asked for: --quick only quarters the scene's count.
@@ -1236,16 +1264,42 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions) -> Result<Scene
     };
     let mut prims = Vec::new();
     let mut bounds = Vec::new();
-    for shape in &desc.shapes {
-        sb.add(shape, &desc.area_lights, false, &mut prims, &mut bounds)?;
-    }
     let mut blas = Vec::new();
+    let mut instances = Vec::new();
+    for shape in &desc.shapes {
+        let t = &shape.world_from_object;
+        if !t.is_animated() {
+            sb.add(shape, &desc.area_lights, false, affine(&t.start, &shape.entity.loc)?, &mut prims, &mut bounds)?;
+            continue;
+        }
+        // A moving shape: built in its own space as a BVH of its own, placed by its motion at
+        // each ray's time (pbrt-v4's AnimatedPrimitive).
+        if shape.area_light.is_some() {
+            return Err(err(&shape.entity.loc, "animated area lights are not supported (nor are they by pbrt-v4)"));
+        }
+        let motion = motion_transform(t, &shape.entity.loc)?;
+        let (mut p, mut b) = (Vec::new(), Vec::new());
+        sb.add(shape, &desc.area_lights, false, Affine3A::IDENTITY, &mut p, &mut b)?;
+        if let Some(accel) = Accel::build(p, &b) {
+            bounds.push(motion.bounds(&accel.bounds()));
+            blas.push(accel);
+            instances.push(Instance::moving(blas.len() as u32 - 1, motion));
+            prims.push(Primitive {
+                geometry: Geometry::Instance(instances.len() as u32 - 1),
+                material: 0,
+                area_light: NONE,
+                interface: NONE,
+                alpha: NONE,
+            });
+        }
+    }
     let mut blas_of: HashMap<&str, Option<u32>> = HashMap::new();
     for def in &desc.instance_definitions {
         let mut p = Vec::new();
         let mut b = Vec::new();
         for shape in &def.shapes {
-            sb.add(shape, &desc.area_lights, true, &mut p, &mut b)?;
+            let world = fixed_transform(&shape.world_from_object, &shape.entity.loc, "a shape inside ObjectBegin")?;
+            sb.add(shape, &desc.area_lights, true, world, &mut p, &mut b)?;
         }
         let accel = Accel::build(p, &b);
         blas_of.insert(def.name.as_str(), accel.as_ref().map(|_| blas.len() as u32));
@@ -1253,15 +1307,21 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions) -> Result<Scene
             blas.push(a);
         }
     }
-    let mut instances = Vec::new();
     for u in &desc.instances {
         let Some(Some(accel)) = blas_of.get(u.name.as_str()).copied() else {
             continue;
         };
-        let world = fixed_transform(&u.world_from_instance, &u.loc, "object instance")?;
         let object_bounds = blas[accel as usize].bounds();
-        instances.push(Instance { accel, world_from_instance: world, instance_from_world: world.inverse() });
-        bounds.push(object_bounds.transformed(&world));
+        let t = &u.world_from_instance;
+        if t.is_animated() {
+            let motion = motion_transform(t, &u.loc)?;
+            bounds.push(motion.bounds(&object_bounds));
+            instances.push(Instance::moving(accel, motion));
+        } else {
+            let world = affine(&t.start, &u.loc)?;
+            bounds.push(object_bounds.transformed(&world));
+            instances.push(Instance::fixed(accel, world));
+        }
         prims.push(Primitive {
             geometry: Geometry::Instance(instances.len() as u32 - 1),
             material: 0,

@@ -109,6 +109,8 @@ struct PathState<C: Channels> {
     /// light (their factor is small because the guide's density there is high) and undo the
     /// guiding; on β·scale it survives as an unguided path would. 1 on unguided paths.
     rr_scale: f32,
+    /// The path's time (its camera ray's): every ray of the path sees moving shapes there.
+    time: f32,
 }
 
 /// Radiance arriving along `ray` (from the camera, in medium `medium`) at the wavelengths
@@ -129,7 +131,7 @@ pub fn trace_path<C: Channels, O: PathObserver<C>>(
     // Chromatic media need a randomly chosen hero channel for spectral MIS.
     let hero = if scene.has_chromatic_media { C::hero_channel(sampler.get_1d()) } else { 0 };
     let per_segment = config.hero_per_segment && scene.has_chromatic_media;
-    let mut st = PathState { beta: C::ONE, r_u: C::ONE, r_l: C::ONE, hero, rr_scale: 1.0 };
+    let mut st = PathState { beta: C::ONE, r_u: C::ONE, r_l: C::ONE, hero, rr_scale: 1.0, time: ray.time };
     let mut specular_bounce = false;
     let mut any_non_specular = false;
     let mut eta_scale = 1.0f32;
@@ -292,7 +294,7 @@ pub fn trace_path<C: Channels, O: PathObserver<C>>(
                 prev_n = Vec3::ZERO;
                 specular_bounce = false;
                 any_non_specular = true;
-                ray = Ray::new(scatter_p, wi);
+                ray = Ray::timed(scatter_p, wi, st.time);
                 if rr(&mut st, eta_scale, depth, sampler) {
                     return l;
                 }
@@ -352,7 +354,7 @@ pub fn trace_path<C: Channels, O: PathObserver<C>>(
         let Some(mut bxdf) = material.bxdf::<C>(&scene.textures, &tex_ctx, lambda) else {
             // An interface: cross it without counting a bounce.
             medium = medium_after(scene, &hit, ray.d, medium);
-            ray = s.spawn_ray(ray.d);
+            ray = hit.spawn_ray(ray.d);
             continue;
         };
         if depth == config.max_depth {
@@ -432,7 +434,7 @@ pub fn trace_path<C: Channels, O: PathObserver<C>>(
         prev_p = s.p;
         prev_n = s.ns;
         medium = medium_after(scene, &hit, wi, medium);
-        ray = s.spawn_ray(wi);
+        ray = hit.spawn_ray(wi);
         if rr(&mut st, eta_scale, depth, sampler) {
             break;
         }
@@ -549,7 +551,8 @@ fn sample_direct<C: Channels, O: PathObserver<C>>(
         Some(h) => ((h.surface.n, h.surface.p_error), medium_after(scene, h, ls.wi, medium)),
         None => ((Vec3::ZERO, 0.0), medium),
     };
-    let ShadowEstimate { t_ray, r_u, r_l } = transmittance(scene, p, n, medium, &ls, st.hero, lambda, stats)?;
+    let ShadowEstimate { t_ray, r_u, r_l } =
+        transmittance(scene, p, n, medium, &ls, (st.hero, st.time), lambda, stats)?;
     let pdf_light = pmf * ls.pdf;
     let r_l = r_l * st.r_u * pdf_light;
     let r_u = r_u * st.r_u * pdf_scatter;
@@ -578,13 +581,13 @@ fn transmittance<C: Channels>(
     (n, p_error): (Vec3, f32),
     mut medium: u32,
     ls: &LightSample<C>,
-    hero: usize,
+    (hero, time): (usize, f32),
     lambda: &C::Lambda,
     stats: &mut RayStats,
 ) -> Option<ShadowEstimate<C>> {
     let mut est = ShadowEstimate::default();
     let origin = if n == Vec3::ZERO { p } else { offset_origin_by(p, n, ls.wi, p_error) };
-    let mut ray = Ray::new(origin, ls.wi);
+    let mut ray = Ray::timed(origin, ls.wi, time);
     // Distance left to the light point; the light's own surface is not an occluder.
     let mut remaining = if ls.infinite { f32::INFINITY } else { (ls.p - origin).length() * (1.0 - 1e-4) };
     if medium == NONE && !scene.has_interfaces {
@@ -610,7 +613,7 @@ fn transmittance<C: Channels>(
         let Some(h) = hit else { return Some(est) };
         medium = medium_after(scene, &h, ray.d, medium);
         let travelled = h.surface.t;
-        ray = h.surface.spawn_ray(ray.d);
+        ray = h.spawn_ray(ray.d);
         remaining -= travelled;
         if remaining <= 0.0 {
             return Some(est);

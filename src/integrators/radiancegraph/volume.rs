@@ -99,6 +99,9 @@ impl<'a> Volume<'a> {
                 violated.push(format!("a non-emissive medium (medium \"{}\" emits)", m.name));
             }
         }
+        if scene.has_motion() {
+            violated.push("a static scene (shapes or the camera move over the shutter interval)".to_string());
+        }
         let mut lights = Vec::new();
         for light in &scene.lights {
             match &light.kind {

@@ -135,7 +135,7 @@ pub fn intersect<C: Channels>(
         }
         // A medium boundary and nothing else: cross it.
         medium = medium_after(scene, &h, ray.d, medium);
-        let next = h.surface.spawn_ray(ray.d);
+        let next = h.spawn_ray(ray.d);
         t_max -= (next.o - ray.o).dot(ray.d);
         if t_max <= 0.0 {
             return Intersection { event: Event::Escape, ray, medium, beta, r_u };

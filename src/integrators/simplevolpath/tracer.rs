@@ -46,6 +46,8 @@ struct Path<C> {
     depth: u32,
     /// Product of η² over refractions (undone for Russian roulette).
     eta_scale: f32,
+    /// The camera ray's time, which every ray of the path keeps.
+    time: f32,
 }
 
 impl<C: Channels> Path<C> {
@@ -144,7 +146,7 @@ impl DeltaLights {
             Some(h) => (h.surface.offset_origin(ls.wi), medium_after(scene, h, ls.wi, medium)),
             None => (x, medium),
         };
-        let mut ray = Ray::new(origin, ls.wi);
+        let mut ray = Ray::timed(origin, ls.wi, path.time);
         let mut t_max = if ls.infinite { f32::INFINITY } else { (ls.p - origin).length() };
         let (mut tr, mut r_u) = (C::ONE, C::ONE);
         let mut seed = seed;
@@ -157,7 +159,7 @@ impl DeltaLights {
                 // An emissive interface is still only a boundary for the connection.
                 Event::Surface(h) if scene.materials[h.prim.material as usize].is_interface() => {
                     medium = medium_after(scene, &h, ray.d, i.medium);
-                    let next = h.surface.spawn_ray(ray.d);
+                    let next = h.spawn_ray(ray.d);
                     t_max -= (next.o - ray.o).dot(ray.d);
                     if t_max <= 0.0 {
                         break;
@@ -185,7 +187,7 @@ pub fn trace<C: Channels>(
     stats: &mut RayStats,
 ) -> C {
     let hero = if scene.has_chromatic_media { C::hero_channel(sampler.get_1d()) } else { 0 };
-    let mut path = Path { beta: C::ONE, r_u: C::ONE, hero, depth: 0, eta_scale: 1.0 };
+    let mut path = Path { beta: C::ONE, r_u: C::ONE, hero, depth: 0, eta_scale: 1.0, time: ray.time };
     let mut l = C::ZERO;
     let seed = Seed::draw(scene, sampler);
     let mut isect =
@@ -214,7 +216,7 @@ pub fn trace<C: Channels>(
                     // An emissive `interface`: its light is counted; the ray goes on.
                     let medium = medium_after(scene, &hit, isect.ray.d, isect.medium);
                     let seed = Seed::draw(scene, sampler);
-                    let ray = s.spawn_ray(isect.ray.d);
+                    let ray = hit.spawn_ray(isect.ray.d);
                     isect = intersect(scene, ray, medium, f32::INFINITY, seed, hero, lambda, &mut stats.bounce);
                     path.carry(&isect);
                     continue;
@@ -261,8 +263,8 @@ pub fn trace<C: Channels>(
             break;
         }
         let (ray, medium) = match &hit {
-            Some(h) => (h.surface.spawn_ray(s.wi), medium_after(scene, h, s.wi, isect.medium)),
-            None => (Ray::new(x, s.wi), isect.medium),
+            Some(h) => (h.spawn_ray(s.wi), medium_after(scene, h, s.wi, isect.medium)),
+            None => (Ray::timed(x, s.wi, path.time), isect.medium),
         };
         let seed = Seed::draw(scene, sampler);
         let next = intersect(scene, ray, medium, f32::INFINITY, seed, hero, lambda, &mut stats.bounce);

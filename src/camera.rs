@@ -75,6 +75,14 @@ impl Camera {
         self.shutter_open + u * (self.shutter_close - self.shutter_open)
     }
 
+    /// World-from-camera at `time`.
+    pub fn world_from_camera_at(&self, time: f32) -> Affine3A {
+        match &self.motion {
+            Some(m) => m.at(time),
+            None => self.world_from_camera,
+        }
+    }
+
     /// Camera position in world space (at the start of its motion).
     pub fn position(&self) -> Vec3 {
         self.world_from_camera.translation.into()
@@ -98,10 +106,7 @@ impl Camera {
             o = Vec3::new(o.x + lens.x, o.y + lens.y, 0.0);
             d = (focus - o).normalize();
         }
-        let w = match &self.motion {
-            Some(m) => m.at(time),
-            None => self.world_from_camera,
-        };
+        let w = self.world_from_camera_at(time);
         Ray::timed(w.transform_point3(o), w.transform_vector3(d).normalize(), time)
     }
 }

@@ -18,12 +18,21 @@ pub struct Image {
     pub pixels: Vec<Rgb>,
     /// String metadata (`nimbus:spp`, ...), kept in EXR attributes.
     pub metadata: BTreeMap<String, String>,
+    /// Further named channels written beside R, G and B to EXR (a G-buffer's `Albedo.R`,
+    /// `P.X`, ...), each row-major like `pixels`; PNG ignores them.
+    pub channels: Vec<(String, Vec<f32>)>,
 }
 
 impl Image {
     /// A black image.
     pub fn new(width: usize, height: usize) -> Image {
-        Image { width, height, pixels: vec![Rgb::ZERO; width * height], metadata: BTreeMap::new() }
+        Image {
+            width,
+            height,
+            pixels: vec![Rgb::ZERO; width * height],
+            metadata: BTreeMap::new(),
+            channels: Vec::new(),
+        }
     }
 
     /// The pixel at (x, y).
@@ -85,15 +94,29 @@ fn write_exr(path: &Path, image: &crate::imageio::Image) -> Result<(), String> {
     for (k, v) in &image.metadata {
         attributes.other.insert(text(k), AttributeValue::Text(text(v)));
     }
-    let layer = Layer::new(
-        (w, h),
-        attributes,
-        Encoding::FAST_LOSSLESS,
-        SpecificChannels::rgb(|pos: Vec2<usize>| {
-            let p = image.pixels[pos.y() * w + pos.x()];
-            (p.x, p.y, p.z)
-        }),
-    );
+    if image.channels.is_empty() {
+        let layer = Layer::new(
+            (w, h),
+            attributes,
+            Encoding::FAST_LOSSLESS,
+            SpecificChannels::rgb(|pos: Vec2<usize>| {
+                let p = image.pixels[pos.y() * w + pos.x()];
+                (p.x, p.y, p.z)
+            }),
+        );
+        return Image::from_layer(layer).write().to_file(path).map_err(|e| format!("{}: {e}", path.display()));
+    }
+    let mut list: SmallVec<[AnyChannel<FlatSamples>; 4]> = SmallVec::new();
+    for (c, name) in ["R", "G", "B"].iter().enumerate() {
+        list.push(AnyChannel::new(*name, FlatSamples::F32(image.pixels.iter().map(|p| p[c]).collect())));
+    }
+    for (name, values) in &image.channels {
+        if values.len() != w * h {
+            return Err(format!("{}: channel {name} has {} values for {w}x{h} pixels", path.display(), values.len()));
+        }
+        list.push(AnyChannel::new(text(name), FlatSamples::F32(values.clone())));
+    }
+    let layer = Layer::new((w, h), attributes, Encoding::FAST_LOSSLESS, AnyChannels::sort(list));
     Image::from_layer(layer).write().to_file(path).map_err(|e| format!("{}: {e}", path.display()))
 }
 
@@ -157,7 +180,7 @@ pub fn read_png(path: &Path) -> Result<crate::imageio::Image, String> {
         };
         pixels.push(rgb);
     }
-    Ok(crate::imageio::Image { width: w, height: h, pixels, metadata: BTreeMap::new() })
+    Ok(crate::imageio::Image { width: w, height: h, pixels, metadata: BTreeMap::new(), channels: Vec::new() })
 }
 
 /// Reads the first RGB(A) layer of an OpenEXR file (alpha ignored) and its text attributes.
@@ -181,7 +204,22 @@ pub fn read_exr(path: &Path) -> Result<crate::imageio::Image, String> {
     if pixels.iter().any(|p| !p.is_finite()) {
         return Err(format!("{}: image contains NaN or infinite values", path.display()));
     }
-    Ok(crate::imageio::Image { width, height, pixels, metadata })
+    Ok(crate::imageio::Image { width, height, pixels, metadata, channels: Vec::new() })
+}
+
+/// Every channel of an OpenEXR file's first layer other than R, G, B and A, by name (a
+/// G-buffer's `Albedo.R`, `P.X`, ...), as 32-bit floats in row-major order.
+pub fn read_exr_channels(path: &Path) -> Result<Vec<(String, Vec<f32>)>, String> {
+    use exr::prelude::*;
+    let img = read_all_flat_layers_from_file(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let layer = img.layer_data.first().ok_or_else(|| format!("{}: no layer", path.display()))?;
+    Ok(layer
+        .channel_data
+        .list
+        .iter()
+        .map(|c| (c.name.to_string(), c.sample_data.values_as_f32().collect::<Vec<f32>>()))
+        .filter(|(n, _)| !["R", "G", "B", "A"].contains(&n.as_str()))
+        .collect())
 }
 
 #[cfg(test)]

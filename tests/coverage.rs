@@ -160,7 +160,7 @@ const ENTITIES: &[(&str, &str, Outcome)] = &[
     ("sampler", "paddedsobol", Rendered),
     ("sampler", "pmj02bn", Replaced),
     ("film", "rgb", Rendered),
-    ("film", "gbuffer", Refused),
+    ("film", "gbuffer", Rendered),
     ("film", "spectral", Refused),
     ("filter", "box", Rendered),
     ("filter", "gaussian", Rendered),

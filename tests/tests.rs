@@ -5,6 +5,7 @@ mod check;
 mod common;
 mod compare;
 mod coverage;
+mod gbuffer;
 mod guided;
 mod lights;
 mod materials;

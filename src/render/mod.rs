@@ -2,6 +2,8 @@
 //! fixed order so the image is the same at any thread count, progressive passes for a time
 //! budget.
 
+mod gbuffer;
+
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
@@ -13,8 +15,9 @@ use crate::geometry::Ray;
 use crate::imageio::Image;
 use crate::integrators::common::RayStats;
 use crate::integrators::{ImageIntegrator, Integrator, PixelValue};
-use crate::samplers::{Sampler, get_camera_sample};
+use crate::samplers::{CameraSample, Sampler, get_camera_sample};
 use crate::scene::Scene;
+use crate::scene::film::FilmKind;
 use crate::scene::sampler::SamplerSettings;
 use crate::scene::transport::Transport;
 use crate::spectra::{SampledSpectrum, SampledWavelengths};
@@ -46,17 +49,23 @@ pub struct RenderResult {
     pub rays: RayStats,
 }
 
-/// Per-pixel accumulation: Σ w·L and Σ w (pbrt-v4's RGBFilm).
+/// Per-pixel accumulation: Σ w·L and Σ w (pbrt-v4's RGBFilm), and Σ L, Σ L² and the count
+/// of the unweighted samples for the G-buffer's variance channels.
 #[derive(Clone, Copy, Debug, Default)]
 struct PixelSum {
     rgb: [f64; 3],
     weight: f64,
+    sum: [f64; 3],
+    sum_sq: [f64; 3],
+    count: u32,
 }
 
 impl PixelSum {
-    /// Adds one sample with filter weight `w`, clamped to the film's `max` component value.
+    /// Adds one sample with filter weight `w`, clamped to the film's `max` component value;
+    /// the variance sums count it when `counted` (for a G-buffer, when the camera ray sees a
+    /// surface, as pbrt-v4 counts).
     #[inline]
-    fn add(&mut self, mut l: Rgb, w: f32, max: f32) {
+    fn add(&mut self, mut l: Rgb, w: f32, max: f32, counted: bool) {
         if !l.is_finite() {
             // A NaN or infinite sample would poison the pixel; pbrt-v4 logs and zeroes it.
             l = Rgb::ZERO;
@@ -66,10 +75,30 @@ impl PixelSum {
             l *= max / m;
         }
         let w = w as f64;
-        self.rgb[0] += w * l.x as f64;
-        self.rgb[1] += w * l.y as f64;
-        self.rgb[2] += w * l.z as f64;
+        for c in 0..3 {
+            self.rgb[c] += w * l[c] as f64;
+        }
         self.weight += w;
+        if counted {
+            for c in 0..3 {
+                let v = l[c] as f64;
+                self.sum[c] += v;
+                self.sum_sq[c] += v * v;
+            }
+            self.count += 1;
+        }
+    }
+
+    /// Adds another pixel's sums (a later pass of the same pixel).
+    #[inline]
+    fn merge(&mut self, o: &PixelSum) {
+        for c in 0..3 {
+            self.rgb[c] += o.rgb[c];
+            self.sum[c] += o.sum[c];
+            self.sum_sq[c] += o.sum_sq[c];
+        }
+        self.weight += o.weight;
+        self.count += o.count;
     }
 }
 
@@ -84,6 +113,13 @@ fn camera_ray<C: Channels>(scene: &Scene, sampler: &mut Sampler, pixel: UVec2, s
     let lambda = C::sample_lambda(if scene.disable_wavelength_jitter { 0.5 } else { u });
     let cs = get_camera_sample(sampler, pixel, &scene.filter);
     (scene.camera.generate_ray(cs.p_film, cs.p_lens, scene.camera.time(cs.time)), lambda, cs.filter_weight)
+}
+
+/// The camera sample of sample `s` of `pixel`: the same values [`camera_ray`] uses.
+fn camera_sample(scene: &Scene, sampler: &mut Sampler, pixel: UVec2, s: u32) -> CameraSample {
+    sampler.start_pixel_sample(pixel, s, 0);
+    sampler.get_1d();
+    get_camera_sample(sampler, pixel, &scene.filter)
 }
 
 /// One whole-image sample: every pixel's camera ray for one sample index, handed to an
@@ -166,11 +202,18 @@ fn image_sample(
     let pass = ImagePass { scene, sampler, tiles, origin: acc.origin, width: acc.width, sample };
     let (values, stats) = method.sample_image(scene, &pass);
     let max = scene.film.max_component_value;
+    let gbuffer = matches!(scene.film.kind, FilmKind::GBuffer { .. });
     let sums = values
         .into_iter()
         .map(|PixelValue { index, weight, l }| {
             let mut sum = PixelSum::default();
-            sum.add(l, weight, max);
+            // The variance channels count samples whose camera ray (recomputed) sees a surface.
+            let counted = !gbuffer || {
+                let pixel = acc.origin + UVec2::new(index % acc.width, index / acc.width);
+                let (ray, _, _) = camera_ray::<Rgb>(scene, &mut sampler.clone(), pixel, sample);
+                gbuffer::sees_surface(scene, ray)
+            };
+            sum.add(l, weight, max, counted);
             (index, sum)
         })
         .collect();
@@ -207,6 +250,35 @@ impl Accumulator {
             }
         }
         img
+    }
+}
+
+impl Accumulator {
+    /// pbrt-v4's `Variance.*` and `RelativeVariance.*` channels: the sample variance
+    /// (unbiased) in sensor RGB of each pixel's samples that see a surface, and that over
+    /// their mean.
+    fn variance(&self, scene: &Scene) -> Vec<(String, Vec<f32>)> {
+        // RGB transport applies the imaging ratio at output; spectral samples carry it.
+        let k = match scene.transport.transport {
+            Transport::Rgb => f64::from(scene.sensor.imaging_ratio()),
+            Transport::Spectral => 1.0,
+        };
+        let mut out: Vec<(String, Vec<f32>)> = ["Variance.R", "Variance.G", "Variance.B"]
+            .iter()
+            .chain(&["RelativeVariance.R", "RelativeVariance.G", "RelativeVariance.B"])
+            .map(|n| (n.to_string(), Vec::with_capacity(self.pixels.len())))
+            .collect();
+        for p in &self.pixels {
+            let n = p.count as f64;
+            for c in 0..3 {
+                let mean = if n > 0.0 { k * p.sum[c] / n } else { 0.0 };
+                let var =
+                    if n > 1.0 { k * k * (p.sum_sq[c] - p.sum[c] * p.sum[c] / n).max(0.0) / (n - 1.0) } else { 0.0 };
+                out[c].1.push(var as f32);
+                out[3 + c].1.push(if mean != 0.0 { (var / mean) as f32 } else { 0.0 });
+            }
+        }
+        out
     }
 }
 
@@ -281,6 +353,7 @@ fn render_tile<C: FilmChannels>(
     stats: &mut RayStats,
 ) {
     let max = scene.film.max_component_value;
+    let gbuffer = matches!(scene.film.kind, FilmKind::GBuffer { .. });
     for y in tile[1]..tile[3] {
         for x in tile[0]..tile[2] {
             let pixel = UVec2::new(x, y);
@@ -288,8 +361,9 @@ fn render_tile<C: FilmChannels>(
             for s in first..first + count {
                 let (ray, mut lambda, weight) = camera_ray::<C>(scene, sampler, pixel, s);
                 stats.camera += 1;
+                let counted = !gbuffer || gbuffer::sees_surface(scene, ray);
                 let l = C::li(integrator, scene, ray, &mut lambda, sampler, stats);
-                sum.add(l.to_film(&lambda, scene), weight, max);
+                sum.add(l.to_film(&lambda, scene), weight, max, counted);
             }
             let index = (y - acc_origin.y) * acc_width + (x - acc_origin.x);
             out.push((index, sum));
@@ -455,11 +529,7 @@ pub fn render_with_passes(
         for (out, stats) in &results {
             total_stats.add(stats);
             for (i, s) in out {
-                let p = &mut acc.pixels[*i as usize];
-                p.rgb[0] += s.rgb[0];
-                p.rgb[1] += s.rgb[1];
-                p.rgb[2] += s.rgb[2];
-                p.weight += s.weight;
+                acc.pixels[*i as usize].merge(s);
             }
         }
         spp_done += count;
@@ -479,10 +549,10 @@ pub fn render_with_passes(
     if let Some(pb) = progress {
         pb.finish_and_clear();
     }
-    RenderResult {
-        image: acc.image(scene.film_output()),
-        spp: spp_done,
-        seconds: (start.elapsed() - paused).as_secs_f64(),
-        rays: total_stats,
+    let mut image = acc.image(scene.film_output());
+    if let FilmKind::GBuffer { world } = scene.film.kind {
+        image.channels = gbuffer::channels(scene, &base_sampler, &acc, spp_done, world);
+        image.channels.extend(acc.variance(scene));
     }
+    RenderResult { image, spp: spp_done, seconds: (start.elapsed() - paused).as_secs_f64(), rays: total_stats }
 }

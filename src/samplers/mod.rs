@@ -30,6 +30,7 @@ pub use padded_sobol::PaddedSobolSampler;
 pub use sobol::SobolSampler;
 pub use stratified::StratifiedSampler;
 pub use zsobol::ZSobolSampler;
+pub(crate) use zsobol::sobol_bits;
 
 /// One of nimbus's sample generators (a closed set: dispatch is a `match`).
 #[derive(Clone, Debug)]

@@ -53,7 +53,7 @@ static SOBOL_MATRICES: [[u32; 64]; 2] = [matrix(0), matrix(1)];
 /// together; output bit i is then the parity of `a`'s bits at supersets of i, which five
 /// shift-xor steps compute (the subset-sum transform over GF(2)).
 #[inline]
-pub(super) fn sobol_bits(a: u64, dimension: usize) -> u32 {
+pub(crate) fn sobol_bits(a: u64, dimension: usize) -> u32 {
     if dimension == 0 {
         return (a as u32).reverse_bits();
     }

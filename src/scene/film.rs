@@ -1,12 +1,28 @@
-//! Film settings (pbrt-v4's `rgb` film and its `cie1931` sensor).
+//! Film settings (pbrt-v4's `rgb` and `gbuffer` films and their sensors).
 
 use nimbus_parser::{ColorSpace, Entity, Error};
 
 use super::values::checked_float;
 
+/// Which film: pbrt-v4's `rgb`, or `gbuffer` (the same image plus the first visible
+/// surface's albedo, position, normals, uv, depth derivatives and the samples' variance).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FilmKind {
+    /// `rgb`.
+    Rgb,
+    /// `gbuffer`, with positions and normals in camera space (`"coordinatesystem"
+    /// "camera"`, the default) or world space (`"world"`).
+    GBuffer {
+        /// World-space output.
+        world: bool,
+    },
+}
+
 /// Everything a film entity specifies.
 #[derive(Clone, Debug, PartialEq)]
 pub struct FilmSettings {
+    /// The film type.
+    pub kind: FilmKind,
     /// Full image resolution.
     pub resolution: [u32; 2],
     /// Crop window in NDC \[xmin, xmax, ymin, ymax\].
@@ -32,12 +48,28 @@ pub struct FilmSettings {
 }
 
 impl FilmSettings {
-    /// Reads a film entity. Only the `rgb` film is supported.
+    /// Reads a film entity: `rgb` or `gbuffer`.
     pub fn from_entity(e: &Entity) -> Result<FilmSettings, Error> {
-        if e.name != "rgb" {
-            return Err(Error::new(&e.loc, format!("film \"{}\" is not supported by nimbus (it has \"rgb\")", e.name)));
-        }
         let p = &e.params;
+        let kind = match e.name.as_str() {
+            "rgb" => FilmKind::Rgb,
+            "gbuffer" => match p.get_one_string("coordinatesystem", "camera")? {
+                "camera" => FilmKind::GBuffer { world: false },
+                "world" => FilmKind::GBuffer { world: true },
+                other => {
+                    return Err(Error::new(
+                        p.loc("coordinatesystem").unwrap_or(&e.loc),
+                        format!("unknown coordinate system \"{other}\" for the gbuffer film (\"camera\" or \"world\")"),
+                    ));
+                }
+            },
+            other => {
+                return Err(Error::new(
+                    &e.loc,
+                    format!("film \"{other}\" is not supported by nimbus (it has \"rgb\" and \"gbuffer\")"),
+                ));
+            }
+        };
         let x = p.get_one_int("xresolution", 1280)?;
         let y = p.get_one_int("yresolution", 720)?;
         if x <= 0 || y <= 0 {
@@ -86,6 +118,12 @@ impl FilmSettings {
             }
         };
         let filename = p.get_one_string("filename", "pbrt.exr")?.to_string();
+        if matches!(kind, FilmKind::GBuffer { .. }) && !filename.to_ascii_lowercase().ends_with(".exr") {
+            return Err(Error::new(
+                p.loc("filename").unwrap_or(&e.loc),
+                format!("{filename}: EXR is the only format the gbuffer film writes"),
+            ));
+        }
         let diagonal = p.get_one_float("diagonal", 35.0)?;
         let max_component_value =
             checked_float(p, "maxcomponentvalue", f32::INFINITY, |v| v > 0.0, "must be positive")?;
@@ -103,6 +141,7 @@ impl FilmSettings {
             ));
         }
         Ok(FilmSettings {
+            kind,
             resolution: [x as u32, y as u32],
             crop_window,
             pixel_bounds,

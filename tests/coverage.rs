@@ -161,7 +161,7 @@ const ENTITIES: &[(&str, &str, Outcome)] = &[
     ("sampler", "pmj02bn", Replaced),
     ("film", "rgb", Rendered),
     ("film", "gbuffer", Rendered),
-    ("film", "spectral", Refused),
+    ("film", "spectral", Rendered),
     ("filter", "box", Rendered),
     ("filter", "gaussian", Rendered),
     ("filter", "mitchell", Rendered),

@@ -3,7 +3,7 @@
 
 use std::time::Duration;
 
-use glam::{Affine3A, Vec3, Vec3A};
+use glam::{Affine3A, Vec2, Vec3, Vec3A};
 use obvhs::aabb::Aabb;
 use obvhs::cwbvh::CwBvh;
 use obvhs::cwbvh::builder::build_cwbvh;
@@ -12,7 +12,7 @@ use obvhs::{Boundable, BvhBuildParams};
 
 use crate::geometry::{Bounds3, MotionTransform, Ray};
 use crate::shapes::{
-    Curve, CurveCommon, Cylinder, Disk, Mesh, Sphere, SurfaceDerivatives, SurfaceHit, transform_normal,
+    BilinearMesh, Curve, CurveCommon, Cylinder, Disk, Mesh, Sphere, SurfaceDerivatives, SurfaceHit, transform_normal,
     triangle_derivatives, triangle_hit,
 };
 use crate::textures::{Tex, TexContext, Textures};
@@ -38,6 +38,13 @@ pub enum Geometry {
     Cylinder(u32),
     /// A piece of a curve.
     Curve(u32),
+    /// Patch `patch` of bilinear mesh `mesh`.
+    Bilinear {
+        /// Bilinear mesh index.
+        mesh: u32,
+        /// Patch index within the mesh.
+        patch: u32,
+    },
     /// An object instance (only in the top-level BVH).
     Instance(u32),
 }
@@ -72,6 +79,8 @@ pub struct ShapeStore {
     pub curves: Vec<Curve>,
     /// What the pieces of each curve segment share.
     pub curve_segments: Vec<CurveCommon>,
+    /// Bilinear patch meshes (world space, or instance space for instanced ones).
+    pub bilinear_meshes: Vec<BilinearMesh>,
 }
 
 impl ShapeStore {
@@ -81,6 +90,12 @@ impl ShapeStore {
     fn curve_hit(&self, i: u32, ray: &Ray, t_max: f32) -> Option<(f32, Detail)> {
         let c = &self.curves[i as usize];
         c.intersect(&self.curve_segments[c.common as usize], ray, t_max).map(|(t, _)| (t, Detail::Curve))
+    }
+
+    // Out of line like curves: patches are rarer than triangles and their test longer.
+    #[inline(never)]
+    fn patch_hit(&self, mesh: u32, patch: u32, ray: &Ray, t_max: f32) -> Option<(f32, Detail)> {
+        self.bilinear_meshes[mesh as usize].intersect(patch, ray, t_max).map(|(t, u, v)| (t, Detail::Patch(u, v)))
     }
 
     /// Where a non-instance primitive is hit, for the alpha test.
@@ -98,6 +113,7 @@ impl ShapeStore {
                 self.cylinders[i as usize].intersect(ray, t_max).map(|(t, p)| (t, Detail::ObjectPoint(p)))
             }
             Geometry::Curve(i) => self.curve_hit(i, ray, t_max),
+            Geometry::Bilinear { mesh, patch } => self.patch_hit(mesh, patch, ray, t_max),
             Geometry::Instance(_) => None,
         }
     }
@@ -113,6 +129,7 @@ impl ShapeStore {
                 let c = &self.curves[i as usize];
                 c.bounds(&self.curve_segments[c.common as usize])
             }
+            Geometry::Bilinear { mesh, patch } => self.bilinear_meshes[mesh as usize].bounds(patch),
             Geometry::Instance(_) => Bounds3::EMPTY,
         }
     }
@@ -126,6 +143,8 @@ enum Detail {
     /// A curve piece: its details are recomputed for the closest hit only, which keeps
     /// candidates small for every other shape's traversal.
     Curve,
+    /// Bilinear patch parameters (u, v).
+    Patch(f32, f32),
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -237,6 +256,7 @@ impl Accel {
                     scene.shapes.cylinders[i as usize].intersect(ray, r.tmax).map(|(t, p)| (t, Detail::ObjectPoint(p)))
                 }
                 Geometry::Curve(i) => scene.shapes.curve_hit(i, ray, r.tmax),
+                Geometry::Bilinear { mesh, patch } => scene.shapes.patch_hit(mesh, patch, ray, r.tmax),
                 Geometry::Instance(k) => {
                     let inst = &scene.instances[k as usize];
                     let local = inst.local_ray(ray);
@@ -299,6 +319,7 @@ impl Accel {
                 Geometry::Disk(i) => scene.shapes.disks[i as usize].intersect(ray, r.tmax).is_some(),
                 Geometry::Cylinder(i) => scene.shapes.cylinders[i as usize].intersect(ray, r.tmax).is_some(),
                 Geometry::Curve(i) => scene.shapes.curve_hit(i, ray, r.tmax).is_some(),
+                Geometry::Bilinear { mesh, patch } => scene.shapes.patch_hit(mesh, patch, ray, r.tmax).is_some(),
                 Geometry::Instance(k) => {
                     let inst = &scene.instances[k as usize];
                     let local = inst.local_ray(ray);
@@ -444,6 +465,14 @@ impl Surfaces {
             Geometry::Sphere(i) => self.shapes.spheres[i as usize].derivatives(&local),
             Geometry::Disk(i) => self.shapes.disks[i as usize].derivatives(&local),
             Geometry::Cylinder(i) => self.shapes.cylinders[i as usize].derivatives(&local),
+            Geometry::Bilinear { mesh, patch } => {
+                // The patch parameters of the hit point: where a ray back along the normal meets it.
+                let m = &self.shapes.bilinear_meshes[mesh as usize];
+                let size = m.bounds(patch).bounding_sphere().1.max(1e-6);
+                let probe = Ray::new(local.p + local.n * (1e-3 * size), -local.n);
+                let uv = m.param(patch, &probe).map_or(local.uv.clamp(Vec2::ZERO, Vec2::ONE), |(u, v)| Vec2::new(u, v));
+                m.derivatives(patch, &local, uv)
+            }
             // Across a curve, ∂p/∂v spans its width (p_error is twice it); it does not bend.
             Geometry::Curve(_) | Geometry::Instance(_) => SurfaceDerivatives {
                 dpdu: local.dpdu,
@@ -468,6 +497,12 @@ impl Surfaces {
                     unreachable!("barycentrics come from triangles")
                 };
                 triangle_hit(&self.shapes.meshes[mesh as usize], tri, c.t, b1, b2)
+            }
+            Detail::Patch(u, v) => {
+                let Geometry::Bilinear { mesh, patch } = c.prim.geometry else {
+                    unreachable!("patch parameters come from bilinear patches")
+                };
+                self.shapes.bilinear_meshes[mesh as usize].hit(patch, c.t, u, v)
             }
             Detail::ObjectPoint(p) => match c.prim.geometry {
                 Geometry::Sphere(i) => self.shapes.spheres[i as usize].hit(c.t, p),

@@ -56,6 +56,9 @@ pub trait Channels:
     /// same random numbers after it).
     fn sample_lambda(u: f32) -> Self::Lambda;
 
+    /// Wavelengths sampled uniformly over [min, max] nm (pbrt-v4's spectral film).
+    fn sample_lambda_uniform(u: f32, min: f32, max: f32) -> Self::Lambda;
+
     /// Keeps only the first wavelength (pbrt-v4's `TerminateSecondary`, for dispersion).
     fn terminate_secondary(lambda: &mut Self::Lambda);
 
@@ -148,6 +151,9 @@ impl Channels for Rgb {
 
     #[inline]
     fn sample_lambda(_u: f32) {}
+
+    #[inline]
+    fn sample_lambda_uniform(_u: f32, _min: f32, _max: f32) {}
 
     #[inline]
     fn terminate_secondary(_lambda: &mut ()) {}
@@ -254,6 +260,11 @@ impl Channels for SampledSpectrum {
     #[inline]
     fn sample_lambda(u: f32) -> SampledWavelengths {
         SampledWavelengths::sample_visible(u)
+    }
+
+    #[inline]
+    fn sample_lambda_uniform(u: f32, min: f32, max: f32) -> SampledWavelengths {
+        SampledWavelengths::sample_uniform_in(u, min, max)
     }
 
     #[inline]

@@ -24,13 +24,16 @@ pub struct MeshData {
     pub uvs: Vec<[f32; 2]>,
     /// Triangle vertex indices.
     pub indices: Vec<u32>,
+    /// Quads as bilinear patches, four indices each in pbrt-v4's patch order p00, p10, p01,
+    /// p11 (a PLY face a b c d becomes a b d c); only PLY files have them.
+    pub quads: Vec<u32>,
 }
 
 impl MeshData {
     /// Checks indices, array lengths and finiteness; `what` prefixes messages.
     pub fn validate(&self, what: &str) -> Result<(), String> {
         let n = self.positions.len();
-        if let Some(&bad) = self.indices.iter().find(|&&i| i as usize >= n) {
+        if let Some(&bad) = self.indices.iter().chain(&self.quads).find(|&&i| i as usize >= n) {
             return Err(format!("{what}: vertex index {bad} out of range ({n} vertices)"));
         }
         if !self.indices.len().is_multiple_of(3) {

@@ -1,6 +1,6 @@
 //! PLY mesh files (ASCII and binary, optionally gzipped), as pbrt-v4's `plymesh` reads them:
 //! vertex positions, optional normals and texture coordinates, and faces of 3 or 4 vertices
-//! (quads are split into two triangles).
+//! (quads are kept as pbrt-v4's bilinear patches).
 
 use std::io::Read;
 use std::path::Path;
@@ -181,7 +181,7 @@ pub fn parse_ply(data: &[u8]) -> Result<MeshData, String> {
         }
     }
     let n = mesh.positions.len();
-    if let Some(&bad) = mesh.indices.iter().find(|&&i| i as usize >= n) {
+    if let Some(&bad) = mesh.indices.iter().chain(&mesh.quads).find(|&&i| i as usize >= n) {
         return Err(format!("face index {bad} out of range ({n} vertices)"));
     }
     Ok(mesh)
@@ -274,7 +274,8 @@ fn read_faces(body: &mut Body<'_>, el: &Element, mesh: &mut MeshData) -> Result<
         }
         match face.len() {
             3 => mesh.indices.extend_from_slice(&face),
-            4 => mesh.indices.extend_from_slice(&[face[0], face[1], face[2], face[0], face[2], face[3]]),
+            // pbrt-v4 makes a quad a bilinear patch: p00 = a, p10 = b, p01 = d, p11 = c.
+            4 => mesh.quads.extend_from_slice(&[face[0], face[1], face[3], face[2]]),
             n => {
                 return Err(format!("face {f} has {n} vertices; plymesh supports triangles and quads"));
             }
@@ -307,13 +308,14 @@ mod tests {
     use super::*;
 
     #[test]
-    fn ascii_quad_becomes_two_triangles() {
+    fn ascii_quad_becomes_a_bilinear_patch() {
         let text = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n\
                     element face 1\nproperty list uchar int vertex_indices\nend_header\n\
                     0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n";
         let m = parse_ply(text.as_bytes()).unwrap();
         assert_eq!(m.positions.len(), 4);
-        assert_eq!(m.indices, vec![0, 1, 2, 0, 2, 3]);
+        assert!(m.indices.is_empty());
+        assert_eq!(m.quads, vec![0, 1, 3, 2]);
     }
 
     #[test]

@@ -243,6 +243,19 @@ pub fn light_bounds(light: &Light, shapes: &ShapeStore) -> Option<LightBounds> {
                     Some(s) => (s.n, 1.0),
                     None => (Vec3::Z, -1.0),
                 },
+                // A patch's normals lie within the cone of its corners' (pbrt-v4's
+                // BilinearPatch::NormalBounds).
+                Geometry::Bilinear { mesh, patch } => {
+                    let m = &shapes.bilinear_meshes[mesh as usize];
+                    let corners =
+                        [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)].map(|(u, v)| m.hit(patch, 0.0, u, v).n);
+                    let w = corners.iter().sum::<Vec3>().normalize_or_zero();
+                    if w == Vec3::ZERO {
+                        (Vec3::Z, -1.0)
+                    } else {
+                        (w, corners.iter().map(|n| n.dot(w)).fold(1.0, f32::min))
+                    }
+                }
                 _ => (Vec3::Z, -1.0),
             };
             LightBounds {

@@ -237,6 +237,9 @@ impl Light {
                     Geometry::Sphere(i) => shapes.spheres[i as usize].sample(ctx.p, u)?,
                     Geometry::Disk(i) => shapes.disks[i as usize].sample_area(u)?,
                     Geometry::Cylinder(i) => shapes.cylinders[i as usize].sample_area(u)?,
+                    Geometry::Bilinear { mesh, patch } => {
+                        shapes.bilinear_meshes[mesh as usize].sample_area(patch, u)?
+                    }
                     Geometry::Curve(_) | Geometry::Instance(_) => return None,
                 };
                 let to = s.p - ctx.p;
@@ -277,6 +280,18 @@ impl Light {
                 let Some(hit) = hit else { return 0.0 };
                 match *geometry {
                     Geometry::Sphere(i) => shapes.spheres[i as usize].pdf(ctx.p, wi, hit),
+                    // Patches are not sampled uniformly in area: the density at the point the
+                    // direction meets (found again from the reference point).
+                    Geometry::Bilinear { mesh, patch } => {
+                        let m = &shapes.bilinear_meshes[mesh as usize];
+                        let cos = hit.n.dot(wi).abs();
+                        match m.param(patch, &crate::geometry::Ray::new(ctx.p, wi)) {
+                            Some((u, v)) if cos > 0.0 => {
+                                m.pdf_area(patch, Vec2::new(u, v)) * ctx.p.distance_squared(hit.p) / cos
+                            }
+                            _ => 0.0,
+                        }
+                    }
                     _ => {
                         let cos = hit.n.dot(wi).abs();
                         if cos == 0.0 { 0.0 } else { ctx.p.distance_squared(hit.p) / (cos * area) }

@@ -20,7 +20,7 @@ use crate::scene::Scene;
 use crate::scene::film::FilmKind;
 use crate::scene::sampler::SamplerSettings;
 use crate::scene::transport::Transport;
-use crate::spectra::{SampledSpectrum, SampledWavelengths};
+use crate::spectra::{CIE_Y_INTEGRAL, N_SPECTRUM_SAMPLES, SampledSpectrum, SampledWavelengths};
 
 /// Side of a square tile in pixels.
 const TILE: u32 = 16;
@@ -110,9 +110,22 @@ fn camera_ray<C: Channels>(scene: &Scene, sampler: &mut Sampler, pixel: UVec2, s
     // pbrt-v4 draws the wavelengths first; RGB draws the same dimension so the two
     // representations see the same samples afterwards.
     let u = sampler.get_1d();
-    let lambda = C::sample_lambda(if scene.disable_wavelength_jitter { 0.5 } else { u });
+    let u = if scene.disable_wavelength_jitter { 0.5 } else { u };
+    // The spectral film samples its range uniformly, as pbrt-v4's does.
+    let lambda = match scene.film.kind {
+        FilmKind::Spectral { lambda_min, lambda_max, .. } => C::sample_lambda_uniform(u, lambda_min, lambda_max),
+        _ => C::sample_lambda(u),
+    };
     let cs = get_camera_sample(sampler, pixel, &scene.filter);
     (scene.camera.generate_ray(cs.p_film, cs.p_lens, scene.camera.time(cs.time)), lambda, cs.filter_weight)
+}
+
+/// The spectral film's bands: (count, λmin, λmax), or `None` for other films.
+fn spectral_bands(scene: &Scene) -> Option<(usize, f32, f32)> {
+    match scene.film.kind {
+        FilmKind::Spectral { buckets, lambda_min, lambda_max } => Some((buckets as usize, lambda_min, lambda_max)),
+        _ => None,
+    }
 }
 
 /// The camera sample of sample `s` of `pixel`: the same values [`camera_ray`] uses.
@@ -220,23 +233,47 @@ fn image_sample(
     (sums, stats)
 }
 
+/// What rendering one tile (or one whole-image sample) returns: per pixel its index and
+/// sums, the spectral film's band sums of those pixels in the same order, and ray counts.
+type TileResult = (Vec<(u32, PixelSum)>, Vec<f64>, RayStats);
+
 /// The film being accumulated.
 pub struct Accumulator {
     width: u32,
     height: u32,
     origin: UVec2,
     pixels: Vec<PixelSum>,
+    /// The spectral film's bands: per pixel, Σ w·L of each band and then Σ w of each band.
+    bands: Vec<f64>,
 }
 
 impl Accumulator {
-    fn new(bounds: [u32; 4]) -> Accumulator {
+    fn new(bounds: [u32; 4], bands: usize) -> Accumulator {
         let (w, h) = (bounds[2] - bounds[0], bounds[3] - bounds[1]);
         Accumulator {
             width: w,
             height: h,
             origin: UVec2::new(bounds[0], bounds[1]),
             pixels: vec![PixelSum::default(); (w * h) as usize],
+            bands: vec![0.0; (w * h) as usize * 2 * bands],
         }
+    }
+
+    /// pbrt-v4's spectral-film channels `S0.<λ>nm` (band centres, ',' for the decimal point as
+    /// the OpenEXR spectral layout asks): each band's weighted mean radiance.
+    fn band_channels(&self, (n, min, max): (usize, f32, f32)) -> Vec<(String, Vec<f32>)> {
+        (0..n)
+            .map(|b| {
+                let centre = min + (b as f32 + 0.5) / n as f32 * (max - min);
+                let name = format!("S0.{centre:.3}nm").replace('.', ",").replacen(',', ".", 1);
+                let values = self
+                    .bands
+                    .chunks_exact(2 * n)
+                    .map(|p| if p[n + b] > 0.0 { (p[b] / p[n + b]) as f32 } else { 0.0 })
+                    .collect();
+                (name, values)
+            })
+            .collect()
     }
 
     /// The image: each pixel's weighted mean, through `output` (the film's conversion to the
@@ -297,6 +334,12 @@ pub trait FilmChannels: Channels {
 
     /// The sample as the film accumulates it.
     fn to_film(self, lambda: &Self::Lambda, scene: &Scene) -> Rgb;
+
+    /// Adds the sample to a pixel's spectral-film bands `out` (Σ w·L per band, then Σ w per
+    /// band) as pbrt-v4's SpectralFilm does: clamped to `max`, scaled by the CIE Y integral
+    /// (which undoes the lights' photometric normalisation) and not divided by the uniform
+    /// wavelength density. Only spectral transport has bands.
+    fn add_to_bands(self, lambda: &Self::Lambda, weight: f32, max: f32, bands: (usize, f32, f32), out: &mut [f64]);
 }
 
 impl FilmChannels for Rgb {
@@ -315,6 +358,10 @@ impl FilmChannels for Rgb {
     #[inline]
     fn to_film(self, _lambda: &(), _scene: &Scene) -> Rgb {
         self
+    }
+
+    fn add_to_bands(self, _lambda: &(), _weight: f32, _max: f32, _bands: (usize, f32, f32), _out: &mut [f64]) {
+        unreachable!("the spectral film forces spectral transport")
     }
 }
 
@@ -336,6 +383,35 @@ impl FilmChannels for SampledSpectrum {
     fn to_film(self, lambda: &SampledWavelengths, scene: &Scene) -> Rgb {
         scene.sensor.to_sensor_rgb(self, lambda)
     }
+
+    fn add_to_bands(
+        self,
+        lambda: &SampledWavelengths,
+        weight: f32,
+        max: f32,
+        bands: (usize, f32, f32),
+        out: &mut [f64],
+    ) {
+        let (n, min, range) = (bands.0, bands.1, bands.2 - bands.1);
+        let mut l = self;
+        if !(0..N_SPECTRUM_SAMPLES).all(|i| l[i].is_finite()) {
+            return;
+        }
+        let m = (0..N_SPECTRUM_SAMPLES).map(|i| l[i]).fold(0.0f32, f32::max);
+        if m > max {
+            l *= max / m;
+        }
+        for i in 0..N_SPECTRUM_SAMPLES {
+            // A wavelength a dispersive path dropped has no estimate (pbrt-v4 would add its
+            // zero and count its weight).
+            if lambda.pdf[i] == 0.0 {
+                continue;
+            }
+            let b = ((n as f32 * (lambda.lambda[i] - min) / range) as usize).min(n - 1);
+            out[b] += (weight * l[i]) as f64 * CIE_Y_INTEGRAL;
+            out[n + b] += weight as f64;
+        }
+    }
 }
 
 /// Renders samples `[first, first + count)` of every pixel in one tile.
@@ -350,19 +426,28 @@ fn render_tile<C: FilmChannels>(
     first: u32,
     count: u32,
     out: &mut Vec<(u32, PixelSum)>,
+    bands_out: &mut Vec<f64>,
     stats: &mut RayStats,
 ) {
     let max = scene.film.max_component_value;
     let gbuffer = matches!(scene.film.kind, FilmKind::GBuffer { .. });
+    let bands = spectral_bands(scene);
     for y in tile[1]..tile[3] {
         for x in tile[0]..tile[2] {
             let pixel = UVec2::new(x, y);
             let mut sum = PixelSum::default();
+            let band_start = bands_out.len();
+            if let Some((n, ..)) = bands {
+                bands_out.resize(band_start + 2 * n, 0.0);
+            }
             for s in first..first + count {
                 let (ray, mut lambda, weight) = camera_ray::<C>(scene, sampler, pixel, s);
                 stats.camera += 1;
                 let counted = !gbuffer || gbuffer::sees_surface(scene, ray);
                 let l = C::li(integrator, scene, ray, &mut lambda, sampler, stats);
+                if let Some(b) = bands {
+                    l.add_to_bands(&lambda, weight, max, b, &mut bands_out[band_start..]);
+                }
                 sum.add(l.to_film(&lambda, scene), weight, max, counted);
             }
             let index = (y - acc_origin.y) * acc_width + (x - acc_origin.x);
@@ -427,7 +512,8 @@ pub fn render_with_passes(
     // Time spent in `on_pass`, not counted as rendering.
     let mut paused = std::time::Duration::ZERO;
     let bounds = scene.pixel_bounds;
-    let mut acc = Accumulator::new(bounds);
+    let bands = spectral_bands(scene);
+    let mut acc = Accumulator::new(bounds, bands.map_or(0, |b| b.0));
     let tiles = tiles(bounds);
     let full = UVec2::new(scene.film.resolution[0], scene.film.resolution[1]);
     let base_sampler = match options.time_budget {
@@ -483,16 +569,16 @@ pub fn render_with_passes(
         if count == 0 {
             break;
         }
-        let results: Vec<(Vec<(u32, PixelSum)>, RayStats)> = if let Some(method) = integrator.whole_image() {
+        let results: Vec<TileResult> = if let Some(method) = integrator.whole_image() {
             // A whole-image method: `count` samples of the whole image, one after another.
             (spp_done..spp_done + count)
                 .map(|s| {
-                    let r = image_sample(scene, method, &base_sampler, &tiles, &acc, s);
+                    let (sums, stats) = image_sample(scene, method, &base_sampler, &tiles, &acc, s);
                     if let Some(pb) = &progress {
                         pb.inc(tiles.len() as u64);
                     }
-                    rays.fetch_add(r.1.total(), Ordering::Relaxed);
-                    r
+                    rays.fetch_add(stats.total(), Ordering::Relaxed);
+                    (sums, Vec::new(), stats)
                 })
                 .collect()
         } else {
@@ -502,6 +588,7 @@ pub fn render_with_passes(
                     let mut sampler = base_sampler.clone();
                     let mut out = Vec::with_capacity(((tile[2] - tile[0]) * (tile[3] - tile[1])) as usize);
                     let mut stats = RayStats::default();
+                    let mut band_sums = Vec::new();
                     let tile_fn = match scene.transport.transport {
                         Transport::Rgb => render_tile::<Rgb>,
                         Transport::Spectral => render_tile::<SampledSpectrum>,
@@ -516,20 +603,30 @@ pub fn render_with_passes(
                         spp_done,
                         count,
                         &mut out,
+                        &mut band_sums,
                         &mut stats,
                     );
                     if let Some(pb) = &progress {
                         pb.inc(count as u64);
                     }
                     rays.fetch_add(stats.total(), Ordering::Relaxed);
-                    (out, stats)
+                    (out, band_sums, stats)
                 })
                 .collect()
         };
-        for (out, stats) in &results {
+        for (out, band_sums, stats) in &results {
             total_stats.add(stats);
             for (i, s) in out {
                 acc.pixels[*i as usize].merge(s);
+            }
+            // Each pixel of the tile, in order, has 2n band sums.
+            if let Some((n, ..)) = bands {
+                for ((i, _), sums) in out.iter().zip(band_sums.chunks_exact(2 * n)) {
+                    let start = *i as usize * 2 * n;
+                    for (a, b) in acc.bands[start..start + 2 * n].iter_mut().zip(sums) {
+                        *a += b;
+                    }
+                }
             }
         }
         spp_done += count;
@@ -553,6 +650,11 @@ pub fn render_with_passes(
     if let FilmKind::GBuffer { world } = scene.film.kind {
         image.channels = gbuffer::channels(scene, &base_sampler, &acc, spp_done, world);
         image.channels.extend(acc.variance(scene));
+    }
+    if let Some(b) = bands {
+        image.channels = acc.band_channels(b);
+        image.metadata.insert("spectralLayoutVersion".into(), "1.0".into());
+        image.metadata.insert("emissiveUnits".into(), "W.m^-2.sr^-1".into());
     }
     RenderResult { image, spp: spp_done, seconds: (start.elapsed() - paused).as_secs_f64(), rays: total_stats }
 }

@@ -13,7 +13,7 @@ use nimbus_parser::{
 };
 
 use super::camera::CameraSettings;
-use super::film::FilmSettings;
+use super::film::{FilmKind, FilmSettings};
 use super::filter::FilterSettings;
 use super::lights::{AreaLightSettings, LightKind as LightSpec, LightSettings};
 use super::materials::{
@@ -39,7 +39,7 @@ use crate::math::Frame;
 use crate::media::dense::DenseGrid;
 use crate::media::grid::VdbFile;
 use crate::media::{Density, Emission, Field, Medium};
-use crate::shapes::{Curve, CurveCommon, Cylinder, Disk, Mesh, Sphere, uniform_scale};
+use crate::shapes::{BilinearMesh, Curve, CurveCommon, Cylinder, Disk, Mesh, Sphere, uniform_scale};
 use crate::spectra::RgbRole;
 use crate::spectra::{BlackbodyRgbTable, PixelSensor, SpectrumValue};
 use crate::textures::{Tex, TexContext, TexMapping, TexNode, Textures, Wrap};
@@ -725,10 +725,8 @@ impl ShapeBuilder<'_> {
                 self.add_mesh(mesh, [material, interface, alpha], prims, bounds);
             }
             ShapeKind::BilinearMesh(m) => {
-                let tris: Vec<u32> =
-                    m.indices.chunks_exact(4).flat_map(|q| [q[0], q[1], q[3], q[0], q[3], q[2]]).collect();
-                let mesh = Mesh::new(&world, rev, m.positions, m.normals, m.uvs, tris);
-                self.add_mesh(mesh, [material, interface, alpha], prims, bounds);
+                let mesh = BilinearMesh::new(&world, rev, m.positions, m.normals, m.uvs, m.indices.clone());
+                self.add_bilinear(mesh, [material, interface, alpha], prims, bounds);
             }
             ShapeKind::Curve { segments, widths, normals, kind, split_depth } => {
                 if shape.area_light.is_some() {
@@ -754,8 +752,14 @@ impl ShapeBuilder<'_> {
             }
             ShapeKind::PlyMesh(path) => {
                 let ply = read_ply(path).map_err(|m| err(&e.loc, format!("plymesh: {m}")))?;
-                let mesh = Mesh::new(&world, rev, &ply.positions, &ply.normals, &ply.uvs, ply.indices);
-                self.add_mesh(mesh, [material, interface, alpha], prims, bounds);
+                if !ply.quads.is_empty() {
+                    let quads = BilinearMesh::new(&world, rev, &ply.positions, &ply.normals, &ply.uvs, ply.quads);
+                    self.add_bilinear(quads, [material, interface, alpha], prims, bounds);
+                }
+                if !ply.indices.is_empty() {
+                    let mesh = Mesh::new(&world, rev, &ply.positions, &ply.normals, &ply.uvs, ply.indices);
+                    self.add_mesh(mesh, [material, interface, alpha], prims, bounds);
+                }
             }
             ShapeKind::ObjMesh(path) | ShapeKind::GltfMesh(path) => {
                 let meshes = if matches!(settings.kind, ShapeKind::ObjMesh(_)) {
@@ -791,6 +795,7 @@ impl ShapeBuilder<'_> {
                     Geometry::Cylinder(i) => self.store.cylinders[i as usize]
                         .world_area()
                         .ok_or_else(|| err(&e.loc, "an emitting cylinder must not be scaled non-uniformly"))?,
+                    Geometry::Bilinear { mesh, patch } => self.store.bilinear_meshes[mesh as usize].area(patch),
                     Geometry::Curve(_) | Geometry::Instance(_) => continue,
                 };
                 let l = area_light_radiance(&settings, al_entity, area, &self.spectra)?;
@@ -808,6 +813,29 @@ impl ShapeBuilder<'_> {
             }
         }
         Ok(())
+    }
+
+    fn add_bilinear(
+        &mut self,
+        mesh: BilinearMesh,
+        [material, interface, alpha]: [u32; 3],
+        prims: &mut Vec<Primitive>,
+        bounds: &mut Vec<Bounds3>,
+    ) {
+        let id = self.store.bilinear_meshes.len() as u32;
+        self.mesh_bytes +=
+            mesh.positions.len() * 12 + mesh.normals.len() * 12 + mesh.uvs.len() * 8 + mesh.indices.len() * 4;
+        for patch in 0..mesh.patch_count() as u32 {
+            bounds.push(mesh.bounds(patch));
+            prims.push(Primitive {
+                geometry: Geometry::Bilinear { mesh: id, patch },
+                material,
+                area_light: NONE,
+                interface,
+                alpha,
+            });
+        }
+        self.store.bilinear_meshes.push(mesh);
     }
 
     fn add_mesh(
@@ -1201,7 +1229,24 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions) -> Result<Scene
             .find(|m| !m.sigma_a.is_constant() || !m.sigma_s.is_constant())
             .map(|m| format!("{}: subsurface material's sigma_a or sigma_s varies with wavelength", m.loc));
     }
-    let transport = TransportChoice::new(mode, chromatic.as_deref());
+    let mut transport = TransportChoice::new(mode, chromatic.as_deref());
+    // The spectral film records spectra, which only spectral transport has.
+    if let FilmKind::Spectral { .. } = film.kind {
+        if mode == SpectralMode::Off {
+            return Err(err(
+                &desc.film.loc,
+                "the spectral film records spectra: it needs spectral transport, not --spectral off",
+            ));
+        }
+        if matches!(integrator, IntegratorSettings::PathGraph(_)) {
+            return Err(err(
+                &desc.film.loc,
+                "pathgraph accumulates RGB and cannot write the spectral film (use \"rgb\" or \"gbuffer\")",
+            ));
+        }
+        transport =
+            TransportChoice { transport: Transport::Spectral, reason: "the spectral film records spectra".into() };
+    }
 
     // Media: only those the camera, lights or boundary surfaces use are built.
     let mut media = Vec::new();

@@ -6,7 +6,7 @@ use super::values::checked_float;
 
 /// Which film: pbrt-v4's `rgb`, or `gbuffer` (the same image plus the first visible
 /// surface's albedo, position, normals, uv, depth derivatives and the samples' variance).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub enum FilmKind {
     /// `rgb`.
     Rgb,
@@ -15,6 +15,16 @@ pub enum FilmKind {
     GBuffer {
         /// World-space output.
         world: bool,
+    },
+    /// `spectral`: the same image plus radiance in `buckets` equal wavelength bands over
+    /// [`lambda_min`, `lambda_max`] nm (wavelengths sampled uniformly there, as pbrt-v4 does).
+    Spectral {
+        /// Number of bands (`nbuckets`).
+        buckets: u32,
+        /// Shortest wavelength (`lambdamin`).
+        lambda_min: f32,
+        /// Longest wavelength (`lambdamax`).
+        lambda_max: f32,
     },
 }
 
@@ -48,7 +58,7 @@ pub struct FilmSettings {
 }
 
 impl FilmSettings {
-    /// Reads a film entity: `rgb` or `gbuffer`.
+    /// Reads a film entity: `rgb`, `gbuffer` or `spectral`.
     pub fn from_entity(e: &Entity) -> Result<FilmSettings, Error> {
         let p = &e.params;
         let kind = match e.name.as_str() {
@@ -63,10 +73,32 @@ impl FilmSettings {
                     ));
                 }
             },
+            "spectral" => {
+                let buckets = p.get_one_int("nbuckets", 16)?;
+                if buckets <= 0 {
+                    return Err(Error::new(p.loc("nbuckets").unwrap_or(&e.loc), "\"nbuckets\" must be positive"));
+                }
+                let lambda_min = p.get_one_float("lambdamin", 360.0)?;
+                let lambda_max = p.get_one_float("lambdamax", 830.0)?;
+                if !(360.0..=830.0).contains(&lambda_min)
+                    || !(360.0..=830.0).contains(&lambda_max)
+                    || lambda_min >= lambda_max
+                {
+                    return Err(Error::new(
+                        p.loc("lambdamin").or(p.loc("lambdamax")).unwrap_or(&e.loc),
+                        format!(
+                            "the spectral film's range [{lambda_min}, {lambda_max}] nm must be increasing within pbrt-v4's [360, 830]"
+                        ),
+                    ));
+                }
+                FilmKind::Spectral { buckets: buckets as u32, lambda_min, lambda_max }
+            }
             other => {
                 return Err(Error::new(
                     &e.loc,
-                    format!("film \"{other}\" is not supported by nimbus (it has \"rgb\" and \"gbuffer\")"),
+                    format!(
+                        "film \"{other}\" is not supported by nimbus (it has \"rgb\", \"gbuffer\" and \"spectral\")"
+                    ),
                 ));
             }
         };
@@ -118,10 +150,10 @@ impl FilmSettings {
             }
         };
         let filename = p.get_one_string("filename", "pbrt.exr")?.to_string();
-        if matches!(kind, FilmKind::GBuffer { .. }) && !filename.to_ascii_lowercase().ends_with(".exr") {
+        if kind != FilmKind::Rgb && !filename.to_ascii_lowercase().ends_with(".exr") {
             return Err(Error::new(
                 p.loc("filename").unwrap_or(&e.loc),
-                format!("{filename}: EXR is the only format the gbuffer film writes"),
+                format!("{filename}: EXR is the only format the {} film writes", e.name),
             ));
         }
         let diagonal = p.get_one_float("diagonal", 35.0)?;

@@ -1,12 +1,14 @@
 //! Shapes with pbrt-v4's geometry and orientation conventions: intersection, surface
 //! details at a hit, and area sampling for shapes that emit.
 
+mod bilinear;
 mod curve;
 mod cylinder;
 mod disk;
 mod mesh;
 mod sphere;
 
+pub use bilinear::BilinearMesh;
 pub use curve::{
     Curve, CurveCommon, CurveType, cubic_bspline_to_bezier, elevate_quadratic, quadratic_bspline_to_bezier,
 };

@@ -42,16 +42,22 @@ impl SampledWavelengths {
 
     /// pbrt-v4's `SampleUniform`: evenly spaced wavelengths over 360–830 nm from `u`.
     pub fn sample_uniform(u: f32) -> SampledWavelengths {
-        let delta = (LAMBDA_MAX - LAMBDA_MIN) / N_SPECTRUM_SAMPLES as f32;
+        SampledWavelengths::sample_uniform_in(u, LAMBDA_MIN, LAMBDA_MAX)
+    }
+
+    /// pbrt-v4's `SampleUniform(u, min, max)`: wavelengths evenly spaced over [min, max]
+    /// (wrapping), the first at `u`, each with density 1/(max − min).
+    pub fn sample_uniform_in(u: f32, min: f32, max: f32) -> SampledWavelengths {
+        let delta = (max - min) / N_SPECTRUM_SAMPLES as f32;
         let mut lambda = [0.0; N_SPECTRUM_SAMPLES];
-        lambda[0] = LAMBDA_MIN + u * (LAMBDA_MAX - LAMBDA_MIN);
+        lambda[0] = min + u * (max - min);
         for i in 1..N_SPECTRUM_SAMPLES {
             lambda[i] = lambda[i - 1] + delta;
-            if lambda[i] > LAMBDA_MAX {
-                lambda[i] = LAMBDA_MIN + (lambda[i] - LAMBDA_MAX);
+            if lambda[i] > max {
+                lambda[i] = min + (lambda[i] - max);
             }
         }
-        SampledWavelengths { lambda: Vec4::from_array(lambda), pdf: Vec4::splat(1.0 / (LAMBDA_MAX - LAMBDA_MIN)) }
+        SampledWavelengths { lambda: Vec4::from_array(lambda), pdf: Vec4::splat(1.0 / (max - min)) }
     }
 
     /// Keeps only the first wavelength (pbrt-v4's `TerminateSecondary`), for paths whose

@@ -157,6 +157,9 @@ impl Emitter {
                     Geometry::Sphere(i) => shapes.spheres[i as usize].sample_area(u)?,
                     Geometry::Disk(i) => shapes.disks[i as usize].sample_area(u)?,
                     Geometry::Cylinder(i) => shapes.cylinders[i as usize].sample_area(u)?,
+                    Geometry::Bilinear { mesh, patch } => {
+                        shapes.bilinear_meshes[mesh as usize].sample_area(patch, u)?
+                    }
                     Geometry::Curve(_) | Geometry::Instance(_) => return None,
                 };
                 // Natively cosine-weighted about the normal (either side for two-sided

@@ -15,6 +15,7 @@ mod pathgraph;
 mod radiancegraph;
 mod render;
 mod render_cli;
+mod robustness;
 mod shapes;
 mod simplevolpath;
 mod suite;

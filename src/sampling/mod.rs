@@ -2,6 +2,7 @@
 //! tabulated distributions.
 
 pub mod distribution;
+pub mod piecewise_linear;
 pub mod warp;
 
 #[cfg(test)]

@@ -530,3 +530,34 @@ Shape "trianglemesh" "integer indices" [0 1 2 0 2 3] "point3 P" [-10 -10 0  10 -
     let e = nimbus::scene::build_scene(&desc, &transport(false)).err().expect("refused");
     assert!(e.to_string().contains("fbm.pbrt:2") && e.to_string().contains("float texture"), "{e}");
 }
+
+/// pbrt-v4's measured BRDF (a synthetic gray `.bsdf` file): a plane lit and seen straight
+/// down reflects f(z, z)·L, with f from the tables, in RGB and spectral transport alike.
+#[test]
+fn measured_brdf_reflects_its_tabulated_value() {
+    use nimbus::materials::bxdf::{MeasuredBxdf, TransportMode};
+    use nimbus::materials::measured::{MeasuredData, synthetic_bsdf};
+    let dir = crate::common::scratch_dir("measured-plane");
+    let path = dir.as_ref().join("gray.bsdf");
+    std::fs::write(&path, synthetic_bsdf(true)).unwrap();
+    let data = MeasuredData::read(&path, nimbus::parser::ColorSpace::Srgb).unwrap();
+    let f = MeasuredBxdf::<glam::Vec3>::new(std::sync::Arc::new(data), &()).f(
+        glam::Vec3::Z,
+        glam::Vec3::Z,
+        TransportMode::Radiance,
+    );
+    assert!(f.x > 0.0 && (f.x - f.y).abs() < 1e-3 * f.x && (f.x - f.z).abs() < 1e-3 * f.x, "gray tables: {f}");
+    let material = format!("Material \"measured\" \"string filename\" \"{}\"", path.display());
+    for spectral in [false, true] {
+        let img = render_scene(&load_scene(&lit_plane(&material, "0 0 1", 8), &transport(spectral)));
+        let expected = [f.x as f64 * 2.0, f.y as f64 * 4.0, f.z as f64 * 6.0];
+        assert_channels(&img, expected, &format!("measured, spectral {spectral}"));
+    }
+    // A file that is not a tensor file is refused at the parameter.
+    let bad = dir.as_ref().join("bad.bsdf");
+    std::fs::write(&bad, b"tensor_file\0\x01\x00").unwrap();
+    let text = lit_plane(&format!("Material \"measured\" \"string filename\" \"{}\"", bad.display()), "0 0 1", 1);
+    let desc = nimbus::parser::load_str(&text, "m.pbrt").unwrap();
+    let e = nimbus::scene::build_scene(&desc, &Default::default()).err().expect("refused");
+    assert!(e.to_string().contains("m.pbrt:") && e.to_string().contains("bad.bsdf"), "{e}");
+}

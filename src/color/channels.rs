@@ -79,6 +79,10 @@ pub trait Channels:
     /// load and memoising it would cost more than it saves.
     fn voxel_memo_key(lambda: &Self::Lambda) -> Option<glam::Vec4>;
 
+    /// The path's wavelengths in nm (four lanes), or `None` for RGB, whose channels are
+    /// (r, g, b): for tabulated spectral data with an RGB version of its own.
+    fn wavelengths(lambda: &Self::Lambda) -> Option<glam::Vec4>;
+
     /// The channels in four lanes (the last ones zero), for memoised values.
     fn to_lanes(self) -> glam::Vec4;
 
@@ -185,6 +189,11 @@ impl Channels for Rgb {
 
     #[inline]
     fn voxel_memo_key(_lambda: &()) -> Option<glam::Vec4> {
+        None
+    }
+
+    #[inline]
+    fn wavelengths(_lambda: &()) -> Option<glam::Vec4> {
         None
     }
 
@@ -315,6 +324,11 @@ impl Channels for SampledSpectrum {
     /// when secondary wavelengths terminate).
     #[inline]
     fn voxel_memo_key(lambda: &SampledWavelengths) -> Option<glam::Vec4> {
+        Some(lambda.lambda)
+    }
+
+    #[inline]
+    fn wavelengths(lambda: &SampledWavelengths) -> Option<glam::Vec4> {
         Some(lambda.lambda)
     }
 

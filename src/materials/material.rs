@@ -97,6 +97,11 @@ pub enum HairAbsorption {
 /// A material ready to produce BxDFs.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Material {
+    /// A measured BRDF (pbrt-v4's `.bsdf` tables).
+    Measured {
+        /// Its tables.
+        data: crate::materials::measured::SharedMeasured,
+    },
     /// Lambertian.
     Diffuse {
         /// Albedo.
@@ -279,6 +284,8 @@ impl Material {
                     (!eta.is_constant()).then_some("eta (dispersion)")
                 }
             }
+            // The tables are spectral; their RGB version is an approximation.
+            Material::Measured { .. } => Some("measured BRDF"),
             Material::Interface => None,
         }
     }
@@ -379,6 +386,9 @@ impl Material {
                     *max_depth,
                     *n_samples,
                 ))
+            }
+            Material::Measured { data } => {
+                Bxdf::Measured(crate::materials::bxdf::MeasuredBxdf::new(data.0.clone(), lambda))
             }
             Material::Interface => return None,
         })

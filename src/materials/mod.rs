@@ -3,6 +3,7 @@
 
 pub mod bxdf;
 mod material;
+pub mod measured;
 mod shading;
 
 pub use material::{ConductorInput, HairAbsorption, Material, RoughnessTex, resolve};

@@ -531,9 +531,14 @@ struct BuiltMaterial {
     subsurface: Option<SubsurfaceMedium>,
 }
 
+/// Measured BRDFs read so far, by file: materials naming the same file share its tables.
+type MeasuredCache =
+    std::cell::RefCell<HashMap<std::path::PathBuf, std::sync::Arc<crate::materials::measured::MeasuredData>>>;
+
 fn material(
     e: &nimbus_parser::Entity,
     tb: &TextureBuilder,
+    measured: &MeasuredCache,
     warnings: &mut Vec<Warning>,
 ) -> Result<BuiltMaterial, Error> {
     let settings = MaterialSettings::from_entity(e, warnings)?;
@@ -636,6 +641,21 @@ fn material(
             beta_n: tb.float(beta_n, loc)?,
             alpha: tb.float(alpha, loc)?,
         },
+        MaterialKind::Measured { filename } => {
+            let mut cache = measured.borrow_mut();
+            let data = match cache.get(filename) {
+                Some(d) => d.clone(),
+                None => {
+                    let d = std::sync::Arc::new(
+                        crate::materials::measured::MeasuredData::read(filename, tb.spectra.film)
+                            .map_err(|m| err(e.params.loc("filename").unwrap_or(loc), format!("measured: {m}")))?,
+                    );
+                    cache.insert(filename.clone(), d.clone());
+                    d
+                }
+            };
+            Material::Measured { data: crate::materials::measured::SharedMeasured(data) }
+        }
         MaterialKind::Unsupported(_) => Material::Diffuse { reflectance: Tex::Const(SpectrumValue::constant(0.5)) },
     };
     Ok(BuiltMaterial { material, shading, subsurface })
@@ -1184,11 +1204,12 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions) -> Result<Scene
     let mut named = HashMap::new();
     let entities =
         desc.materials.iter().map(|m| (None, m)).chain(desc.named_materials.iter().map(|m| (Some(&m.name), &m.entity)));
+    let measured = MeasuredCache::default();
     for (name, e) in entities {
         if let Some(name) = name {
             named.insert(name.clone(), materials.len() as u32);
         }
-        let built = material(e, &tb, &mut warnings)?;
+        let built = material(e, &tb, &measured, &mut warnings)?;
         materials.push(built.material);
         shading.push(built.shading);
         subsurface.push(built.subsurface);

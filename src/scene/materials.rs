@@ -190,6 +190,11 @@ pub enum MaterialKind {
         /// Cuticle scale tilt (degrees).
         alpha: FloatInput,
     },
+    /// pbrt-v4's measured BRDF from a `.bsdf` tensor file.
+    Measured {
+        /// The file (resolved, existing).
+        filename: std::path::PathBuf,
+    },
     /// A material nimbus lacks, rendered as gray diffuse.
     Unsupported(String),
 }
@@ -445,6 +450,20 @@ impl MaterialSettings {
             },
             "subsurface" => subsurface(e, warnings)?,
             "hair" => hair(e, warnings)?,
+            "measured" => {
+                let Some(name) = p.get_opt_string("filename")? else {
+                    return Err(Error::new(&e.loc, "measured: missing \"string filename\" (a .bsdf file)"));
+                };
+                let loc = p.loc("filename").unwrap_or(&e.loc);
+                let filename = loc.resolve(name);
+                if !filename.is_file() {
+                    return Err(Error::new(
+                        loc,
+                        format!("measured: cannot find \"{name}\" (tried {})", nimbus_parser::loc_shown(&filename)),
+                    ));
+                }
+                MaterialKind::Measured { filename }
+            }
             "mix" => {
                 let names = p.get_strings("materials")?;
                 let [a, b] = <[String; 2]>::try_from(names.to_vec()).map_err(|_| {

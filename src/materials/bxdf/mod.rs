@@ -42,6 +42,7 @@ mod diffuse_transmission;
 mod fresnel;
 mod hair;
 mod layered;
+mod measured;
 mod microfacet;
 mod thin_dielectric;
 
@@ -62,6 +63,7 @@ pub use diffuse_transmission::DiffuseTransmissionBxdf;
 pub use fresnel::{fr_complex, fr_complex_channels, fr_dielectric};
 pub use hair::HairBxdf;
 pub use layered::{CoatedConductorBase, CoatedConductorBxdf, CoatedDiffuseBxdf};
+pub use measured::MeasuredBxdf;
 pub use microfacet::TrowbridgeReitz;
 pub use thin_dielectric::ThinDielectricBxdf;
 
@@ -340,6 +342,8 @@ pub enum Bxdf<C = Rgb> {
     DiffuseTransmission(DiffuseTransmissionBxdf<C>),
     /// Hair fibres.
     Hair(HairBxdf<C>),
+    /// A measured BRDF (pbrt-v4's `.bsdf` tables).
+    Measured(MeasuredBxdf<C>),
 }
 
 impl<C: Channels> Bxdf<C> {
@@ -358,6 +362,7 @@ impl<C: Channels> Bxdf<C> {
             Bxdf::CoatedConductor(b) => b.f(wo, wi, mode),
             Bxdf::DiffuseTransmission(b) => b.f(wo, wi, mode),
             Bxdf::Hair(b) => b.f(wo, wi, mode),
+            Bxdf::Measured(b) => b.f(wo, wi, mode),
         }
     }
 
@@ -384,6 +389,7 @@ impl<C: Channels> Bxdf<C> {
             Bxdf::CoatedConductor(b) => b.sample_f(wo, uc, u, mode, sample_flags),
             Bxdf::DiffuseTransmission(b) => b.sample_f(wo, uc, u, mode, sample_flags),
             Bxdf::Hair(b) => b.sample_f(wo, uc, u, mode, sample_flags),
+            Bxdf::Measured(b) => b.sample_f(wo, uc, u, mode, sample_flags),
         }?;
         (!s.f.is_zero() && s.pdf != 0.0 && s.wi.z != 0.0).then_some(s)
     }
@@ -403,6 +409,7 @@ impl<C: Channels> Bxdf<C> {
             Bxdf::CoatedConductor(b) => b.pdf(wo, wi, mode, sample_flags),
             Bxdf::DiffuseTransmission(b) => b.pdf(wo, wi, mode, sample_flags),
             Bxdf::Hair(b) => b.pdf(wo, wi, mode, sample_flags),
+            Bxdf::Measured(b) => b.pdf(wo, wi, mode, sample_flags),
         }
     }
 
@@ -418,6 +425,7 @@ impl<C: Channels> Bxdf<C> {
             Bxdf::CoatedConductor(b) => b.flags(),
             Bxdf::DiffuseTransmission(b) => b.flags(),
             Bxdf::Hair(b) => b.flags(),
+            Bxdf::Measured(b) => b.flags(),
         }
     }
 
@@ -426,7 +434,11 @@ impl<C: Channels> Bxdf<C> {
     #[inline]
     pub fn regularize(&mut self) {
         match self {
-            Bxdf::Diffuse(_) | Bxdf::ThinDielectric(_) | Bxdf::DiffuseTransmission(_) | Bxdf::Hair(_) => {}
+            Bxdf::Diffuse(_)
+            | Bxdf::ThinDielectric(_)
+            | Bxdf::DiffuseTransmission(_)
+            | Bxdf::Hair(_)
+            | Bxdf::Measured(_) => {}
             Bxdf::Conductor(b) => b.regularize(),
             Bxdf::Dielectric(b) => b.regularize(),
             Bxdf::CoatedDiffuse(b) => b.regularize(),

@@ -5,7 +5,7 @@
 
 use glam::{Affine3A, Vec2, Vec3};
 
-use super::{ShapeSample, SurfaceDerivatives, SurfaceHit, swaps_handedness};
+use super::{ShapeSample, SurfaceDerivatives, SurfaceHit, WorldVertices};
 use crate::geometry::{Bounds3, Ray};
 
 /// Vertex data shared by a mesh's patches.
@@ -69,22 +69,8 @@ impl BilinearMesh {
         uvs: &[[f32; 2]],
         indices: Vec<u32>,
     ) -> BilinearMesh {
-        let m = world_from_object.inverse().matrix3;
-        BilinearMesh {
-            positions: positions.iter().map(|p| world_from_object.transform_point3(Vec3::from(*p))).collect(),
-            normals: normals
-                .iter()
-                .map(|n| {
-                    let n = Vec3::from(*n);
-                    let w = Vec3::new(m.x_axis.dot(n.into()), m.y_axis.dot(n.into()), m.z_axis.dot(n.into()))
-                        .normalize_or_zero();
-                    if reverse_orientation { -w } else { w }
-                })
-                .collect(),
-            uvs: uvs.iter().map(|t| Vec2::from(*t)).collect(),
-            indices,
-            flip_normals: reverse_orientation ^ swaps_handedness(world_from_object),
-        }
+        let v = WorldVertices::new(world_from_object, reverse_orientation, positions, normals, uvs);
+        BilinearMesh { positions: v.positions, normals: v.normals, uvs: v.uvs, indices, flip_normals: v.flip_normals }
     }
 
     /// Number of patches.

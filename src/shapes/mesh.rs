@@ -2,7 +2,7 @@
 
 use glam::{Affine3A, Vec2, Vec3};
 
-use super::{ShapeSample, SurfaceDerivatives, SurfaceHit, swaps_handedness};
+use super::{ShapeSample, SurfaceDerivatives, SurfaceHit, WorldVertices};
 use crate::geometry::{Bounds3, Ray};
 use crate::sampling::warp;
 
@@ -31,24 +31,8 @@ impl Mesh {
         uvs: &[[f32; 2]],
         indices: Vec<u32>,
     ) -> Mesh {
-        let object_from_world = world_from_object.inverse();
-        let m = object_from_world.matrix3;
-        Mesh {
-            positions: positions.iter().map(|p| world_from_object.transform_point3(Vec3::from(*p))).collect(),
-            normals: normals
-                .iter()
-                .map(|n| {
-                    let n = Vec3::from(*n);
-                    let w = Vec3::new(m.x_axis.dot(n.into()), m.y_axis.dot(n.into()), m.z_axis.dot(n.into()))
-                        .normalize_or_zero();
-                    // pbrt-v4 flips stored normals too when the mesh is reversed.
-                    if reverse_orientation { -w } else { w }
-                })
-                .collect(),
-            uvs: uvs.iter().map(|t| Vec2::from(*t)).collect(),
-            indices,
-            flip_normals: reverse_orientation ^ swaps_handedness(world_from_object),
-        }
+        let v = WorldVertices::new(world_from_object, reverse_orientation, positions, normals, uvs);
+        Mesh { positions: v.positions, normals: v.normals, uvs: v.uvs, indices, flip_normals: v.flip_normals }
     }
 
     /// Number of triangles.

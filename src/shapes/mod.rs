@@ -94,6 +94,43 @@ pub struct ShapeSample {
     pub solid_angle: bool,
 }
 
+/// Mesh vertex data taken to world space, shared by triangle and bilinear-patch meshes:
+/// positions, unit normals (transformed as normals, and flipped with ReverseOrientation as
+/// pbrt-v4 flips stored normals), texture coordinates, and whether geometric normals flip
+/// (ReverseOrientation xor a handedness-swapping transform).
+pub(crate) struct WorldVertices {
+    pub positions: Vec<Vec3>,
+    pub normals: Vec<Vec3>,
+    pub uvs: Vec<Vec2>,
+    pub flip_normals: bool,
+}
+
+impl WorldVertices {
+    pub(crate) fn new(
+        world_from_object: &Affine3A,
+        reverse_orientation: bool,
+        positions: &[[f32; 3]],
+        normals: &[[f32; 3]],
+        uvs: &[[f32; 2]],
+    ) -> WorldVertices {
+        let m = world_from_object.inverse().matrix3;
+        WorldVertices {
+            positions: positions.iter().map(|p| world_from_object.transform_point3(Vec3::from(*p))).collect(),
+            normals: normals
+                .iter()
+                .map(|n| {
+                    let n = Vec3::from(*n);
+                    let w = Vec3::new(m.x_axis.dot(n.into()), m.y_axis.dot(n.into()), m.z_axis.dot(n.into()))
+                        .normalize_or_zero();
+                    if reverse_orientation { -w } else { w }
+                })
+                .collect(),
+            uvs: uvs.iter().map(|t| Vec2::from(*t)).collect(),
+            flip_normals: reverse_orientation ^ swaps_handedness(world_from_object),
+        }
+    }
+}
+
 /// Whether a transform flips handedness (negative determinant): pbrt-v4 then flips normals.
 pub fn swaps_handedness(m: &Affine3A) -> bool {
     m.matrix3.determinant() < 0.0

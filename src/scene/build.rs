@@ -838,48 +838,45 @@ impl ShapeBuilder<'_> {
     fn add_bilinear(
         &mut self,
         mesh: BilinearMesh,
-        [material, interface, alpha]: [u32; 3],
+        attrs: [u32; 3],
         prims: &mut Vec<Primitive>,
         bounds: &mut Vec<Bounds3>,
     ) {
         let id = self.store.bilinear_meshes.len() as u32;
-        self.mesh_bytes +=
-            mesh.positions.len() * 12 + mesh.normals.len() * 12 + mesh.uvs.len() * 8 + mesh.indices.len() * 4;
-        for patch in 0..mesh.patch_count() as u32 {
-            bounds.push(mesh.bounds(patch));
-            prims.push(Primitive {
-                geometry: Geometry::Bilinear { mesh: id, patch },
-                material,
-                area_light: NONE,
-                interface,
-                alpha,
-            });
-        }
+        self.mesh_bytes += mesh_bytes(mesh.positions.len(), mesh.normals.len(), mesh.uvs.len(), mesh.indices.len());
+        let piece = |patch| (Geometry::Bilinear { mesh: id, patch }, mesh.bounds(patch));
+        push_pieces(mesh.patch_count(), piece, attrs, prims, bounds);
         self.store.bilinear_meshes.push(mesh);
     }
 
-    fn add_mesh(
-        &mut self,
-        mesh: Mesh,
-        [material, interface, alpha]: [u32; 3],
-        prims: &mut Vec<Primitive>,
-        bounds: &mut Vec<Bounds3>,
-    ) {
+    fn add_mesh(&mut self, mesh: Mesh, attrs: [u32; 3], prims: &mut Vec<Primitive>, bounds: &mut Vec<Bounds3>) {
         let id = self.store.meshes.len() as u32;
         self.triangles += mesh.triangle_count();
-        self.mesh_bytes +=
-            mesh.positions.len() * 12 + mesh.normals.len() * 12 + mesh.uvs.len() * 8 + mesh.indices.len() * 4;
-        for tri in 0..mesh.triangle_count() as u32 {
-            bounds.push(mesh.triangle_bounds(tri));
-            prims.push(Primitive {
-                geometry: Geometry::Triangle { mesh: id, tri },
-                material,
-                area_light: NONE,
-                interface,
-                alpha,
-            });
-        }
+        self.mesh_bytes += mesh_bytes(mesh.positions.len(), mesh.normals.len(), mesh.uvs.len(), mesh.indices.len());
+        let piece = |tri| (Geometry::Triangle { mesh: id, tri }, mesh.triangle_bounds(tri));
+        push_pieces(mesh.triangle_count(), piece, attrs, prims, bounds);
         self.store.meshes.push(mesh);
+    }
+}
+
+/// Bytes of a mesh's vertex arrays (positions, normals, uvs) and indices.
+fn mesh_bytes(positions: usize, normals: usize, uvs: usize, indices: usize) -> usize {
+    positions * 12 + normals * 12 + uvs * 8 + indices * 4
+}
+
+/// Adds `n` primitives of one mesh, piece k's geometry and bounds from `piece(k)`, all with
+/// the shape's [material, interface, alpha].
+fn push_pieces(
+    n: usize,
+    piece: impl Fn(u32) -> (Geometry, Bounds3),
+    [material, interface, alpha]: [u32; 3],
+    prims: &mut Vec<Primitive>,
+    bounds: &mut Vec<Bounds3>,
+) {
+    for k in 0..n as u32 {
+        let (geometry, b) = piece(k);
+        bounds.push(b);
+        prims.push(Primitive { geometry, material, area_light: NONE, interface, alpha });
     }
 }
 

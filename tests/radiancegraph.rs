@@ -152,7 +152,7 @@ fn constraints_are_checked_by_name() {
     for needed in [
         "an isotropic phase function (medium \"m\" has g = 0.4)",
         "gray coefficients (medium \"m\" has chromatic sigma_a or sigma_s)",
-        "distant and uniform infinite lights only (the scene has a point light)",
+        "distant and uniform infinite lights only (the scene has point lights)",
     ] {
         assert!(err.contains(needed), "{needed} not in {err}");
     }

@@ -103,15 +103,25 @@ impl<'a> Volume<'a> {
             violated.push("a static scene (shapes or the camera move over the shutter interval)".to_string());
         }
         let mut lights = Vec::new();
+        // Each other kind once (an emitting mesh has a light per triangle).
+        let mut others: Vec<&str> = Vec::new();
         for light in &scene.lights {
             match &light.kind {
                 LightKind::Distant { w, l } => lights.push(GraphLight::Distant { dir: -*w, l: *l }),
                 LightKind::UniformInfinite { l } => lights.push(GraphLight::Uniform { l: *l }),
-                other => violated.push(format!(
-                    "distant and uniform infinite lights only (the scene has a {} light)",
-                    light_kind_name(other)
-                )),
+                other => {
+                    let name = light_kind_name(other);
+                    if !others.contains(&name) {
+                        others.push(name);
+                    }
+                }
             }
+        }
+        if !others.is_empty() {
+            violated.push(format!(
+                "distant and uniform infinite lights only (the scene has {} lights)",
+                others.join(" and ")
+            ));
         }
         if scene.lights.is_empty() {
             violated.push("at least one light (the scene has none)".to_string());

@@ -216,6 +216,8 @@ fn image_sample(
     let (values, stats) = method.sample_image(scene, &pass);
     let max = scene.film.max_component_value;
     let gbuffer = matches!(scene.film.kind, FilmKind::GBuffer { .. });
+    // One sampler to replay the camera samples with (not a clone per pixel).
+    let mut replay = sampler.clone();
     let sums = values
         .into_iter()
         .map(|PixelValue { index, weight, l }| {
@@ -223,7 +225,7 @@ fn image_sample(
             // The variance channels count samples whose camera ray (recomputed) sees a surface.
             let counted = !gbuffer || {
                 let pixel = acc.origin + UVec2::new(index % acc.width, index / acc.width);
-                let (ray, _, _) = camera_ray::<Rgb>(scene, &mut sampler.clone(), pixel, sample);
+                let (ray, _, _) = camera_ray::<Rgb>(scene, &mut replay, pixel, sample);
                 gbuffer::sees_surface(scene, ray)
             };
             sum.add(l, weight, max, counted);

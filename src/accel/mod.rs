@@ -64,6 +64,13 @@ pub struct Primitive {
     pub alpha: u32,
 }
 
+impl Primitive {
+    /// The top-level primitive of instance `k` (its BVH's primitives carry the attachments).
+    pub fn instance(k: u32) -> Primitive {
+        Primitive { geometry: Geometry::Instance(k), material: 0, area_light: NONE, interface: NONE, alpha: NONE }
+    }
+}
+
 /// All shapes, referenced by index from primitives.
 #[derive(Default)]
 pub struct ShapeStore {

@@ -1347,13 +1347,7 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions) -> Result<Scene
             bounds.push(motion.bounds(&accel.bounds()));
             blas.push(accel);
             instances.push(Instance::moving(blas.len() as u32 - 1, motion));
-            prims.push(Primitive {
-                geometry: Geometry::Instance(instances.len() as u32 - 1),
-                material: 0,
-                area_light: NONE,
-                interface: NONE,
-                alpha: NONE,
-            });
+            prims.push(Primitive::instance(instances.len() as u32 - 1));
         }
     }
     let mut blas_of: HashMap<&str, Option<u32>> = HashMap::new();
@@ -1385,13 +1379,7 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions) -> Result<Scene
             bounds.push(object_bounds.transformed(&world));
             instances.push(Instance::fixed(accel, world));
         }
-        prims.push(Primitive {
-            geometry: Geometry::Instance(instances.len() as u32 - 1),
-            material: 0,
-            area_light: NONE,
-            interface: NONE,
-            alpha: NONE,
-        });
+        prims.push(Primitive::instance(instances.len() as u32 - 1));
     }
     let primitives = prims.len();
     let top = Accel::build(prims, &bounds);

@@ -572,17 +572,21 @@ pub fn render_with_passes(
             break;
         }
         let results: Vec<TileResult> = if let Some(method) = integrator.whole_image() {
-            // A whole-image method: `count` samples of the whole image, one after another.
-            (spp_done..spp_done + count)
-                .map(|s| {
-                    let (sums, stats) = image_sample(scene, method, &base_sampler, &tiles, &acc, s);
-                    if let Some(pb) = &progress {
-                        pb.inc(tiles.len() as u64);
-                    }
-                    rays.fetch_add(stats.total(), Ordering::Relaxed);
-                    (sums, Vec::new(), stats)
-                })
-                .collect()
+            // A whole-image method: `count` samples of the whole image, one after another, each
+            // added to the film before the next is taken (holding a pass's samples until its
+            // end held up to 64 images' sums: memory growing with the pass length).
+            for s in spp_done..spp_done + count {
+                let (sums, stats) = image_sample(scene, method, &base_sampler, &tiles, &acc, s);
+                if let Some(pb) = &progress {
+                    pb.inc(tiles.len() as u64);
+                }
+                rays.fetch_add(stats.total(), Ordering::Relaxed);
+                total_stats.add(&stats);
+                for (i, v) in &sums {
+                    acc.pixels[*i as usize].merge(v);
+                }
+            }
+            Vec::new()
         } else {
             tiles
                 .par_iter()

@@ -6,6 +6,7 @@ mod compare;
 mod convert;
 mod diff;
 mod graph;
+mod memory;
 mod parity;
 mod render;
 

@@ -150,6 +150,13 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
     image.metadata.insert("nimbus:transport".into(), scene.transport.transport.name().to_string());
     image.metadata.insert("nimbus:transport-reason".into(), scene.transport.reason.clone());
     image.metadata.insert("nimbus:sensor".into(), scene.sensor.name().to_string());
+    image.metadata.insert("nimbus:setup-time".into(), format!("{setup:.3}"));
+    image.metadata.insert("nimbus:nonfinite-samples".into(), result.nonfinite_samples.to_string());
+    image.metadata.insert("nimbus:precomputed-bytes".into(), integrator.precomputed_bytes().to_string());
+    let peak_rss = super::memory::peak_rss_bytes();
+    if let Some(bytes) = peak_rss {
+        image.metadata.insert("nimbus:peak-rss-bytes".into(), bytes.to_string());
+    }
     let out = args.outfile.clone().unwrap_or_else(|| PathBuf::from(&scene.film.filename));
     nimbus::imageio::write_image(&out, &image).map_err(anyhow::Error::msg)?;
     let t_written = Instant::now();
@@ -203,6 +210,11 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
         for line in integrator.report() {
             println!("{line}");
         }
+        println!(
+            "memory      peak {} resident; {} NaN or infinite samples (zeroed)",
+            peak_rss.map_or("unknown".into(), |b| format!("{:.1} MiB", b as f64 / (1 << 20) as f64)),
+            result.nonfinite_samples
+        );
         println!("lights      {}", scene.lights.len());
         for m in &scene.media {
             println!(

@@ -174,6 +174,14 @@ pub trait Integrator: Sync {
     fn report(&self) -> Vec<String> {
         Vec::new()
     }
+
+    /// Bytes of a scene-wide structure the method precomputed before rendering, at its
+    /// largest (the radiance graph while it was built or loaded): reported apart from the
+    /// render's memory, since it is the method's trade of memory for time. 0 for methods
+    /// that precompute nothing.
+    fn precomputed_bytes(&self) -> usize {
+        0
+    }
 }
 
 /// A method that estimates every pixel at once: one sample of the image from one pass of
@@ -215,6 +223,11 @@ pub trait RayIntegrator: Sync {
     fn report(&self) -> Vec<String> {
         Vec::new()
     }
+
+    /// See [`Integrator::precomputed_bytes`].
+    fn precomputed_bytes(&self) -> usize {
+        0
+    }
 }
 
 impl<T: RayIntegrator> Integrator for T {
@@ -239,5 +252,9 @@ impl<T: RayIntegrator> Integrator for T {
 
     fn report(&self) -> Vec<String> {
         RayIntegrator::report(self)
+    }
+
+    fn precomputed_bytes(&self) -> usize {
+        RayIntegrator::precomputed_bytes(self)
     }
 }

@@ -47,6 +47,9 @@ pub struct RenderResult {
     pub seconds: f64,
     /// Rays traced.
     pub rays: RayStats,
+    /// Samples whose radiance was NaN or infinite (zeroed, as pbrt-v4 does; counted so that
+    /// a method producing them is seen).
+    pub nonfinite_samples: u64,
 }
 
 /// Per-pixel accumulation: Σ w·L and Σ w (pbrt-v4's RGBFilm), and Σ L, Σ L² and the count
@@ -58,6 +61,7 @@ struct PixelSum {
     sum: [f64; 3],
     sum_sq: [f64; 3],
     count: u32,
+    nonfinite: u32,
 }
 
 impl PixelSum {
@@ -69,6 +73,7 @@ impl PixelSum {
         if !l.is_finite() {
             // A NaN or infinite sample would poison the pixel; pbrt-v4 logs and zeroes it.
             l = Rgb::ZERO;
+            self.nonfinite += 1;
         }
         let m = l.max_element();
         if m > max {
@@ -99,6 +104,7 @@ impl PixelSum {
         }
         self.weight += o.weight;
         self.count += o.count;
+        self.nonfinite += o.nonfinite;
     }
 }
 
@@ -662,5 +668,12 @@ pub fn render_with_passes(
         image.metadata.insert("spectralLayoutVersion".into(), "1.0".into());
         image.metadata.insert("emissiveUnits".into(), "W.m^-2.sr^-1".into());
     }
-    RenderResult { image, spp: spp_done, seconds: (start.elapsed() - paused).as_secs_f64(), rays: total_stats }
+    let nonfinite_samples = acc.pixels.iter().map(|p| p.nonfinite as u64).sum();
+    RenderResult {
+        image,
+        spp: spp_done,
+        seconds: (start.elapsed() - paused).as_secs_f64(),
+        rays: total_stats,
+        nonfinite_samples,
+    }
 }

@@ -59,6 +59,7 @@ impl RadianceGraphSettings {
 /// scene's config (or the defaults), keeping the largest bounce count it asks for.
 pub fn create(settings: &RadianceGraphSettings, scene: &Scene) -> Result<render::RadianceGraphIntegrator, String> {
     let volume = Volume::new(scene)?;
+    let mut build_peak = 0;
     let cache = match &settings.graph_data {
         Some(path) => {
             let f = file::GraphFile::read(path, Some(file::scene_hash(&volume)))?;
@@ -77,11 +78,12 @@ pub fn create(settings: &RadianceGraphSettings, scene: &Scene) -> Result<render:
                 Some(path) => GraphConfig::from_file(path).map_err(|e| e.to_string())?,
                 None => GraphConfig::default(),
             };
-            let (graphs, _) = build(scene, &config, None, scene.sampler.seed as u64)?;
+            let (graphs, stats) = build(scene, &config, None, scene.sampler.seed as u64)?;
+            build_peak = stats.stages.iter().map(|s| s.peak_bytes).max().unwrap_or(0);
             graphs.into_largest()
         }
     };
-    Ok(render_integrator(&volume, cache).with_estimator(settings.estimator))
+    Ok(render_integrator(&volume, cache).with_estimator(settings.estimator).with_build_peak(build_peak))
 }
 
 /// The integrator over `cache` for `volume`'s lights.

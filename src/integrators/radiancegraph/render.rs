@@ -36,6 +36,16 @@ pub struct RadianceCache {
 }
 
 impl RadianceCache {
+    /// Bytes held: per node its position, range and one scalar per light; the cell map.
+    pub fn memory_bytes(&self) -> usize {
+        self.positions.capacity() * 12
+            + self.ranges_sq.capacity() * 4
+            + self.radiance.capacity() * 4
+            + self.members.capacity() * 4
+            // hashbrown: key, value and one control byte per bucket.
+            + self.cells.capacity() * (12 + 8 + 1)
+    }
+
     /// A cache over nodes at `positions` with render search ranges `ranges` and, per light,
     /// one transported radiance scalar per node.
     pub fn new(positions: Vec<Vec3>, ranges: Vec<f32>, radiance: Vec<Vec<f32>>) -> RadianceCache {
@@ -150,6 +160,9 @@ pub struct RadianceGraphIntegrator {
     lights: Vec<SpectrumValue>,
     /// Uniform infinite lights, seen directly by rays that leave the medium.
     sky: Vec<SpectrumValue>,
+    /// Bytes of the graph at its largest: the build's peak, or the cache when it was read
+    /// from a file.
+    graph_bytes: usize,
 }
 
 impl RadianceGraphIntegrator {
@@ -157,7 +170,14 @@ impl RadianceGraphIntegrator {
     /// uniform lights a camera ray sees when it leaves the scene.
     pub fn new(cache: RadianceCache, lights: Vec<SpectrumValue>, sky: Vec<SpectrumValue>) -> RadianceGraphIntegrator {
         assert_eq!(cache.lights(), lights.len());
-        RadianceGraphIntegrator { cache, estimator: Estimator::default(), lights, sky }
+        let graph_bytes = cache.memory_bytes();
+        RadianceGraphIntegrator { cache, estimator: Estimator::default(), lights, sky, graph_bytes }
+    }
+
+    /// The same, with the graph's build having peaked at `bytes` (more than the cache kept).
+    pub fn with_build_peak(mut self, bytes: usize) -> RadianceGraphIntegrator {
+        self.graph_bytes = self.graph_bytes.max(bytes);
+        self
     }
 
     /// The same with another estimator along camera rays.
@@ -183,6 +203,19 @@ impl RadianceGraphIntegrator {
 impl RayIntegrator for RadianceGraphIntegrator {
     fn name(&self) -> &'static str {
         "radiancegraph"
+    }
+
+    fn report(&self) -> Vec<String> {
+        vec![format!(
+            "graph       {} nodes, cache {:.2} MiB, {:.2} MiB at the graph's largest",
+            self.cache.positions.len(),
+            self.cache.memory_bytes() as f64 / (1 << 20) as f64,
+            self.graph_bytes as f64 / (1 << 20) as f64
+        )]
+    }
+
+    fn precomputed_bytes(&self) -> usize {
+        self.graph_bytes
     }
 
     fn li<C: Channels>(

@@ -1,0 +1,23 @@
+//! The process's memory as the operating system counts it.
+
+/// Peak resident set size of this process in bytes (Linux's `VmHWM`); `None` where
+/// `/proc/self/status` does not say.
+pub fn peak_rss_bytes() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib * 1024)
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    #[cfg(target_os = "linux")]
+    fn peak_rss_grows_with_what_was_touched() {
+        let before = super::peak_rss_bytes().expect("Linux reports VmHWM");
+        let block = vec![1u8; 64 << 20];
+        std::hint::black_box(&block);
+        let after = super::peak_rss_bytes().unwrap();
+        assert!(after >= before.max(64 << 20), "{before} -> {after}");
+    }
+}

@@ -18,4 +18,5 @@ mod render_cli;
 mod robustness;
 mod shapes;
 mod simplevolpath;
+mod stress;
 mod suite;

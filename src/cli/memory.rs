@@ -1,12 +1,22 @@
 //! The process's memory as the operating system counts it.
 
+/// A `kB` field of `/proc/self/status`, in bytes.
+fn status_bytes(field: &str) -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with(field))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib * 1024)
+}
+
 /// Peak resident set size of this process in bytes (Linux's `VmHWM`); `None` where
 /// `/proc/self/status` does not say.
 pub fn peak_rss_bytes() -> Option<u64> {
-    let status = std::fs::read_to_string("/proc/self/status").ok()?;
-    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
-    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kib * 1024)
+    status_bytes("VmHWM:")
+}
+
+/// Resident set size of this process now, in bytes (`VmRSS`).
+pub fn rss_bytes() -> Option<u64> {
+    status_bytes("VmRSS:")
 }
 
 #[cfg(test)]
@@ -19,5 +29,6 @@ mod tests {
         std::hint::black_box(&block);
         let after = super::peak_rss_bytes().unwrap();
         assert!(after >= before.max(64 << 20), "{before} -> {after}");
+        assert!(super::rss_bytes().unwrap() <= after);
     }
 }

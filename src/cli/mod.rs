@@ -8,7 +8,9 @@ mod diff;
 mod graph;
 mod memory;
 mod parity;
+mod plot;
 mod render;
+mod stress;
 
 use std::process::ExitCode;
 
@@ -42,6 +44,10 @@ enum Command {
     /// Judge two renders (different seeds) against a reference as the pbrt-v4 parity suite
     /// does: relative mean difference and block-noise excess.
     Parity(parity::ParityArgs),
+    /// Render every integrator on a matrix of small scenes that each vary one condition, at
+    /// equal time against VolPath references: where each method is better, the same, worse,
+    /// biased or refuses (stress.csv, stress.md, a heat map).
+    Stress(stress::StressArgs),
 }
 
 /// Parses the command line and runs the subcommand; errors print to stderr and give exit
@@ -57,6 +63,7 @@ pub fn run() -> ExitCode {
         Command::Convert(args) => convert::run(&args),
         Command::Bench(args) => bench::run(&args),
         Command::Graph(args) => graph::run(&args),
+        Command::Stress(args) => stress::run(&args),
     };
     match result {
         Ok(code) => code,

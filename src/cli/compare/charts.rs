@@ -3,16 +3,15 @@
 
 use std::path::Path;
 
-use anyhow::{Context, Result, anyhow};
+use anyhow::Result;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use super::run::Mode;
 use super::{Comparison, Run};
+use crate::cli::plot::{FAMILY, plot_err, short, write_both};
 
-const FONT: &[u8] = include_bytes!("../../../assets/fonts/DejaVuSans-subset.ttf");
-const FAMILY: &str = "sans-serif";
 const SIZE: (u32, u32) = (800, 500);
 
 /// Tableau 10: one color per integrator, in the order given on the command line.
@@ -40,58 +39,11 @@ fn color_of(cmp: &Comparison, integrator: &str) -> RGBColor {
     COLORS[i % COLORS.len()]
 }
 
-/// A number with about three significant digits and no trailing zeros: 0.25, 3, 120.
-pub fn short(v: f64) -> String {
-    if v == 0.0 || !v.is_finite() {
-        return format!("{v}");
-    }
-    if !(1e-3..1e5).contains(&v.abs()) {
-        return format!("{v:.0e}");
-    }
-    let decimals = (2 - v.abs().log10().floor() as i32).max(0) as usize;
-    let s = format!("{v:.decimals$}");
-    if s.contains('.') { s.trim_end_matches('0').trim_end_matches('.').to_string() } else { s }
-}
-
 fn mode_title(cmp: &Comparison, mode: Mode) -> String {
     match mode {
         Mode::EqualTime => format!("equal time, {} s", short(cmp.time_budget.unwrap_or(0.0))),
         Mode::EqualSpp => format!("equal spp, {} spp", cmp.spp.unwrap_or(0)),
     }
-}
-
-type Svg<'a> = DrawingArea<SVGBackend<'a>, Shift>;
-type Bitmap<'a> = DrawingArea<BitMapBackend<'a>, Shift>;
-
-/// Writes `<base>.svg` and `<base>.png`, drawn by `svg` and `png` (the same generic drawing
-/// function on each backend).
-fn write_both(
-    base: &Path,
-    svg: impl FnOnce(Svg<'_>) -> Result<()>,
-    png: impl FnOnce(Bitmap<'_>) -> Result<()>,
-) -> Result<()> {
-    plotters::style::register_font(FAMILY, FontStyle::Normal, FONT)
-        .map_err(|_| anyhow!("the embedded chart font cannot be read"))?;
-    let mut text = String::new();
-    svg(SVGBackend::with_string(&mut text, SIZE).into_drawing_area())?;
-    let path = base.with_extension("svg");
-    std::fs::write(&path, text).with_context(|| format!("writing {}", path.display()))?;
-
-    let mut rgb = vec![255u8; (SIZE.0 * SIZE.1 * 3) as usize];
-    png(BitMapBackend::with_buffer(&mut rgb, SIZE).into_drawing_area())?;
-    let path = base.with_extension("png");
-    let mut bytes = Vec::new();
-    let mut enc = png::Encoder::new(&mut bytes, SIZE.0, SIZE.1);
-    enc.set_color(png::ColorType::Rgb);
-    enc.set_depth(png::BitDepth::Eight);
-    let mut writer = enc.write_header().context("encoding a chart")?;
-    writer.write_image_data(&rgb).context("encoding a chart")?;
-    writer.finish().context("encoding a chart")?;
-    std::fs::write(&path, bytes).with_context(|| format!("writing {}", path.display()))
-}
-
-fn plot_err<E: std::fmt::Display>(e: E) -> anyhow::Error {
-    anyhow!("drawing a chart: {e}")
 }
 
 /// Lower and upper ends of a log axis around the positive values.
@@ -105,7 +57,7 @@ fn log_range(values: impl Iterator<Item = f64>) -> (f64, f64) {
 /// relMSE against time since the scene was built, log-log, a line per integrator through its
 /// checkpoints: equal-time runs if there are any, else equal-spp runs.
 pub fn error_vs_time(cmp: &Comparison, base: &Path) -> Result<()> {
-    write_both(base, |root| draw_error_vs_time(cmp, root), |root| draw_error_vs_time(cmp, root))
+    write_both(base, SIZE, |root| draw_error_vs_time(cmp, root), |root| draw_error_vs_time(cmp, root))
 }
 
 fn draw_error_vs_time<DB: DrawingBackend>(cmp: &Comparison, root: DrawingArea<DB, Shift>) -> Result<()>
@@ -168,7 +120,7 @@ where
 /// The final relMSE of each integrator as bars: equal time if it was asked for, else equal
 /// spp. Each bar is labelled with its value and spp.
 pub fn final_error_bars(cmp: &Comparison, base: &Path) -> Result<()> {
-    write_both(base, |root| draw_bars(cmp, root), |root| draw_bars(cmp, root))
+    write_both(base, SIZE, |root| draw_bars(cmp, root), |root| draw_bars(cmp, root))
 }
 
 fn draw_bars<DB: DrawingBackend>(cmp: &Comparison, root: DrawingArea<DB, Shift>) -> Result<()>

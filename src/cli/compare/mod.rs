@@ -8,7 +8,7 @@
 
 mod charts;
 mod report;
-mod run;
+pub(crate) mod run;
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -65,7 +65,7 @@ pub struct CompareArgs {
 }
 
 /// The scene's name without `.pbrt` / `.pbrt.gz`.
-fn scene_stem(path: &Path) -> String {
+pub(crate) fn scene_stem(path: &Path) -> String {
     let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_else(|| "scene".into());
     let name = name.strip_suffix(".gz").unwrap_or(&name);
     name.strip_suffix(".pbrt").unwrap_or(name).to_string()

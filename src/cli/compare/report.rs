@@ -133,7 +133,7 @@ pub fn markdown(cmp: &Comparison) -> String {
                 "| {} | {} | {} | {} | {:.3e} | {:.3e} | {:.3e} | {:.3e} | {:.3e} | {:.3e} | {:+.2}% |",
                 r.integrator,
                 r.mode.label(),
-                super::charts::short(c.seconds),
+                crate::cli::plot::short(c.seconds),
                 c.spp,
                 m.rel_mse,
                 m.rel_mse * c.seconds,

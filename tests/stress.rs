@@ -1,0 +1,99 @@
+//! `nimbus stress`: a tiny matrix (two conditions × every integrator) runs cell by cell in
+//! child processes, judges every cell against volpath, reuses its cached references, and
+//! reports a cell that does not finish as a failure with a non-zero exit.
+
+use crate::common::{nimbus, scratch_dir};
+
+/// A 16×16 homogeneous sphere behind an `interface` boundary lit by `light`; the sampler's
+/// 64 spp is the reference's.
+fn condition(what: &str, light: &str) -> String {
+    format!(
+        "# nimbus stress matrix, condition test: {what}.\n\
+         LookAt 0 0 4.5  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" 32\n\
+         Sampler \"zsobol\" \"integer pixelsamples\" 64\nIntegrator \"volpath\" \"integer maxdepth\" 100\n\
+         Film \"rgb\" \"integer xresolution\" 16 \"integer yresolution\" 16\n\
+         MakeNamedMedium \"m\" \"string type\" \"homogeneous\" \"rgb sigma_a\" [0.2 0.2 0.2] \"rgb sigma_s\" [1.8 1.8 1.8]\n\
+         WorldBegin\n{light}\nAttributeBegin\nMediumInterface \"m\" \"\"\nMaterial \"interface\"\n\
+         Shape \"sphere\" \"float radius\" 1\nAttributeEnd\n"
+    )
+}
+
+fn csv_rows(text: &str) -> Vec<std::collections::HashMap<String, String>> {
+    let mut lines = text.lines();
+    let header: Vec<String> = lines.next().unwrap().split(',').map(String::from).collect();
+    lines
+        .map(|l| {
+            // The last field (the reason) may be quoted and hold commas.
+            let fields: Vec<&str> = l.splitn(header.len(), ',').collect();
+            header.iter().cloned().zip(fields.iter().map(|f| f.trim_matches('"').to_string())).collect()
+        })
+        .collect()
+}
+
+#[test]
+fn stress_judges_every_cell_and_reports_failures() {
+    let dir = scratch_dir("stress");
+    let scenes = dir.join("scenes");
+    std::fs::create_dir_all(&scenes).unwrap();
+    let sun = "LightSource \"distant\" \"point3 from\" [-1 1.5 1] \"point3 to\" [0 0 0] \"rgb L\" [3 3 3]";
+    std::fs::write(scenes.join("a-sun.pbrt"), condition("a distant sun", sun)).unwrap();
+    let point = "LightSource \"point\" \"point3 from\" [-2 2.5 2] \"rgb I\" [5 5 5]";
+    std::fs::write(scenes.join("b-point.pbrt"), condition("a point light", point)).unwrap();
+    // A coarse, quick graph for the radiance graph (its config beside the scene).
+    let graph = r#"{"graphBuilder": {"radiusModifier": 60, "dimensionSteps": 50, "iterationsPerStep": 4}}"#;
+    std::fs::write(scenes.join("a-sun.json"), graph).unwrap();
+    let out = dir.join("out");
+    let args = |time: &str, extra: &[&str]| {
+        let mut v: Vec<String> =
+            ["stress", "--scenes", scenes.to_str().unwrap(), "--out", out.to_str().unwrap()].map(String::from).to_vec();
+        v.extend(["--time".into(), time.into()]);
+        v.extend(extra.iter().map(|s| s.to_string()));
+        v
+    };
+    let run = |a: Vec<String>| nimbus(&a.iter().map(String::as_str).collect::<Vec<_>>());
+
+    let first = run(args("0.3", &[]));
+    let err = String::from_utf8_lossy(&first.stderr);
+    assert!(first.status.success(), "{err}");
+    assert!(err.contains("reference: rendering volpath at 64 spp"), "{err}");
+    assert!(scenes.join("a-sun.volpath-64spp-seed2.exr").exists());
+    let rows = csv_rows(&std::fs::read_to_string(out.join("stress.csv")).unwrap());
+    assert_eq!(rows.len(), 2 * 5, "two conditions x five integrators");
+    for r in &rows {
+        let (cond, name, verdict) = (&r["condition"], &r["integrator"], r["verdict"].as_str());
+        match (name.as_str(), cond.as_str()) {
+            ("volpath", _) => assert_eq!(verdict, "baseline"),
+            ("radiancegraph", "b-point") => {
+                assert_eq!(verdict, "refused");
+                assert!(r["reason"].contains("distant and uniform infinite lights only"), "{}", r["reason"]);
+            }
+            _ => assert!(["better", "same", "worse"].contains(&verdict), "{cond}/{name}: {verdict} {}", r["reason"]),
+        }
+        if verdict != "refused" {
+            let relmse: f64 = r["relmse"].parse().unwrap();
+            assert!(relmse.is_finite() && relmse > 0.0, "{cond}/{name}");
+            assert_eq!(r["nonfinite_samples"], "0");
+            assert!(r["peak_rss_bytes"].parse::<u64>().unwrap() > 0);
+        }
+    }
+    for file in ["stress.md", "heatmap.svg", "heatmap.png", "cells/a-sun/guided.exr", "cells/b-point/radiancegraph.log"]
+    {
+        assert!(out.join(file).exists(), "{file}");
+    }
+    let md = std::fs::read_to_string(out.join("stress.md")).unwrap();
+    assert!(md.contains("| a-sun | 1x |") && md.contains("radiancegraph on b-point: refused"), "{md}");
+
+    // The references are reused; a cell stopped at the timeout is a failure, and the run
+    // says so with its exit code.
+    let second = run(args("0.3", &["--integrators", "volpath", "--conditions", "a-sun", "--timeout", "0.001"]));
+    let err = String::from_utf8_lossy(&second.stderr);
+    assert!(!second.status.success());
+    assert!(err.contains("(cached)") && err.contains("1 cell(s) failed"), "{err}");
+    let md = std::fs::read_to_string(out.join("stress.md")).unwrap();
+    assert!(md.contains("volpath on a-sun: FAILED: still running after 0 s"), "{md}");
+
+    let bad = run(args("0.3", &["--integrators", "nosuch"]));
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("unknown integrator \"nosuch\""));
+    let none = run(args("0.3", &["--conditions", "zzz"]));
+    assert!(String::from_utf8_lossy(&none.stderr).contains("no condition scenes"));
+}

@@ -2,14 +2,17 @@
 
 mod bench;
 mod check;
+mod cluster;
 mod compare;
 mod convert;
 mod diff;
 mod graph;
 mod memory;
+mod merge;
 mod parity;
 mod plot;
 mod render;
+mod scene_hash;
 mod stress;
 
 use std::process::ExitCode;
@@ -48,6 +51,12 @@ enum Command {
     /// equal time against VolPath references: where each method is better, the same, worse,
     /// biased or refuses (stress.csv, stress.md, a heat map).
     Stress(stress::StressArgs),
+    /// Split a render into a Slurm job array (tiles, seed batches or camera frames), with a
+    /// precomputation job it depends on for methods that precompute; `--submit` submits it.
+    Cluster(cluster::ClusterArgs),
+    /// Assemble the parts of a split render: tiles by their pixel bounds, seed batches by an
+    /// spp-weighted average, checked against each other's metadata.
+    Merge(merge::MergeArgs),
 }
 
 /// Parses the command line and runs the subcommand; errors print to stderr and give exit
@@ -64,6 +73,8 @@ pub fn run() -> ExitCode {
         Command::Bench(args) => bench::run(&args),
         Command::Graph(args) => graph::run(&args),
         Command::Stress(args) => stress::run(&args),
+        Command::Cluster(args) => cluster::run(&args),
+        Command::Merge(args) => merge::run(&args),
     };
     match result {
         Ok(code) => code,

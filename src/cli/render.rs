@@ -54,6 +54,10 @@ pub struct RenderArgs {
     /// Render progressively for this many seconds instead of to the scene's spp.
     #[arg(long)]
     time: Option<f64>,
+    /// Replace the scene's camera transform by this `LookAt` (eye, look-at point, up): another
+    /// view of the same scene, e.g. a frame of an orbit. The camera's medium stays the scene's.
+    #[arg(long, num_args = 9, value_names = ["EX", "EY", "EZ", "LX", "LY", "LZ", "UX", "UY", "UZ"], allow_negative_numbers = true)]
+    lookat: Option<Vec<f64>>,
     /// No progress bar or summary.
     #[arg(long)]
     quiet: bool,
@@ -85,13 +89,21 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
     {
         anyhow::bail!("--time must be a positive number of seconds");
     }
-    let desc = match nimbus::parser::load_file(&args.scene) {
+    let mut desc = match nimbus::parser::load_file(&args.scene) {
         Ok(d) => d,
         Err(e) => {
             scene_error(&e);
             return Ok(ExitCode::FAILURE);
         }
     };
+    if let Some(v) = &args.lookat {
+        let camera_from_world =
+            nimbus::parser::transform::look_at([v[0], v[1], v[2]], [v[3], v[4], v[5]], [v[6], v[7], v[8]])
+                .ok_or_else(|| anyhow::anyhow!("--lookat: the view direction is zero or parallel to up"))?;
+        let world_from_camera = camera_from_world.inverse();
+        let t = &mut desc.camera.world_from_camera;
+        (t.start, t.end) = (world_from_camera, world_from_camera);
+    }
     let t_parsed = Instant::now();
     let opts = BuildOptions {
         integrator: args.integrator.clone(),
@@ -159,6 +171,17 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
     image.metadata.insert("nimbus:transport-reason".into(), scene.transport.reason.clone());
     image.metadata.insert("nimbus:sensor".into(), scene.sensor.name().to_string());
     image.metadata.insert("nimbus:setup-time".into(), format!("{setup:.3}"));
+    // Where this image lies in the film, so that parts rendered with --pixelbounds merge.
+    let pbrt_order = |b: [u32; 4]| super::merge::bounds_text([b[0], b[2], b[1], b[3]]);
+    image.metadata.insert("nimbus:pixel-bounds".into(), pbrt_order(scene.pixel_bounds));
+    image.metadata.insert("nimbus:film-bounds".into(), pbrt_order(scene.film_bounds));
+    if args.scene.as_os_str() != "-" {
+        image.metadata.insert("nimbus:scene-hash".into(), super::scene_hash::of_file(&args.scene)?);
+    }
+    if let Some(v) = &args.lookat {
+        let text: Vec<String> = v.iter().map(f64::to_string).collect();
+        image.metadata.insert("nimbus:camera".into(), format!("LookAt {}", text.join(" ")));
+    }
     image.metadata.insert("nimbus:nonfinite-samples".into(), result.nonfinite_samples.to_string());
     image.metadata.insert("nimbus:precomputed-bytes".into(), precomputed.to_string());
     let peak_rss = super::memory::peak_rss_bytes();

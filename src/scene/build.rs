@@ -94,6 +94,9 @@ pub struct Scene {
     pub film: FilmSettings,
     /// Pixels to render: [x0, y0, x1, y1), within the full resolution.
     pub pixel_bounds: [u32; 4],
+    /// The film's own pixel bounds (its `cropwindow` or `pixelbounds`, not the command
+    /// line's): the whole image that parts rendered with `--pixelbounds` make up.
+    pub film_bounds: [u32; 4],
     /// Sampler settings (spp, seed, kind).
     pub sampler: SamplerSettings,
     /// The reconstruction filter.
@@ -1155,6 +1158,8 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions) -> Result<Scene
         camera = camera.with_motion(motion_transform(world_from_camera, &desc.camera.entity.loc)?);
     }
     let pixel_bounds = pixel_bounds(&film, opts, &desc.film.loc)?;
+    let film_opts = BuildOptions { pixel_bounds: None, crop_window: None, ..Default::default() };
+    let film_bounds = self::pixel_bounds(&film, &film_opts, &desc.film.loc)?;
     let mut sampler = SamplerSettings::from_entity(&desc.sampler, desc.options.seed, &mut warnings)?;
     // An explicit --spp is what the user asked for: --quick only quarters the scene's count.
     if let Some(spp) = opts.spp {
@@ -1421,6 +1426,7 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions) -> Result<Scene
         camera,
         film,
         pixel_bounds,
+        film_bounds,
         sampler,
         filter,
         integrator,

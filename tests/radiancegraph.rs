@@ -229,3 +229,19 @@ fn unknown_estimator_is_an_error() {
     let err = build_scene(&desc, &BuildOptions::default()).err().expect("refused");
     assert!(err.to_string().contains("unknown estimator \"trackleng\" (deltatracking or collision)"), "{err}");
 }
+
+/// A graph that outgrows its memory limit stops the build with a message naming the node
+/// radius and what to change, instead of growing until the system kills the process.
+#[test]
+fn a_graph_too_large_for_memory_is_refused_by_name() {
+    let desc = nimbus::parser::load_str(&cube_text(2.0, "volpath", ""), "cube.pbrt").unwrap();
+    let scene = build_scene(&desc, &BuildOptions::default()).unwrap();
+    let volume = Volume::new(&scene).unwrap();
+    let config = GraphConfig::from_json(SMALL_CONFIG).unwrap();
+    let radius = volume.radius * 2.0 / 1000.0 * 20.0;
+    let build = |limit| radiancegraph::build::build_graph(&volume, &config.graph_builder, radius, 7, limit);
+    let err = build(64 << 10).err().expect("64 KiB holds no graph of this scene");
+    assert!(err.contains("outgrew 0.0 GiB") && err.contains("radiusModifier") && err.contains("1/50 of"), "{err}");
+    let (graph, report) = build(usize::MAX).unwrap();
+    assert!(graph.len() > 1000 && report.peak.0 + report.peak.1 > 64 << 10);
+}

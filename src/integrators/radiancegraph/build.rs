@@ -77,8 +77,41 @@ impl BuildReport {
 /// keep the thesis's loop running forever).
 const MAX_ROUNDS: u32 = 64;
 
+/// Bytes the graph may hold (its own count) before the build stops: half the memory the
+/// system has available when the build starts (Linux's `MemAvailable`), so that a node radius
+/// far too small for the volume ends in a message instead of the out-of-memory killer.
+pub fn default_memory_limit() -> usize {
+    let available = std::fs::read_to_string("/proc/meminfo").ok().and_then(|m| {
+        let line = m.lines().find(|l| l.starts_with("MemAvailable:"))?;
+        line.split_whitespace().nth(1)?.parse::<usize>().ok()
+    });
+    available.map_or(usize::MAX, |kib| kib * 1024 / 2)
+}
+
+/// The message for a graph that outgrew `limit` bytes.
+fn too_large(graph: &BuildGraph, limit: usize, paths: (u64, u64), volume: &Volume) -> String {
+    format!(
+        "the radiance graph outgrew {:.1} GiB ({} nodes after {} of {} light paths): its node radius {} is \
+         1/{:.0} of the medium's diameter; raise graphBuilder.radiusModifier in the config or give \
+         --node-radius (the thesis's default radius builds tens of millions of nodes in a dense medium)",
+        limit as f64 / (1u64 << 30) as f64,
+        graph.len(),
+        paths.0,
+        paths.1,
+        graph.radius(),
+        2.0 * volume.radius / graph.radius()
+    )
+}
+
 /// Builds the graph of `volume` with node radius `radius`; `seed` picks the random streams.
-pub fn build_graph(volume: &Volume, config: &Config, radius: f32, seed: u64) -> (BuildGraph, BuildReport) {
+/// Stops with a message once the graph holds more than `memory_limit` bytes.
+pub fn build_graph(
+    volume: &Volume,
+    config: &Config,
+    radius: f32,
+    seed: u64,
+    memory_limit: usize,
+) -> Result<(BuildGraph, BuildReport), String> {
     let mut graph = BuildGraph::new(radius);
     let mut report = BuildReport::default();
     let max_depth = config.max_depth as usize;
@@ -109,6 +142,7 @@ pub fn build_graph(volume: &Volume, config: &Config, radius: f32, seed: u64) -> 
     // Grouping is sequential (each path sees the nodes of the paths before it); it runs on one
     // thread while the others trace the next batch.
     let mut pending: Option<Vec<Traced>> = None;
+    let total = report.light_paths;
     for (b, chunk) in starts.chunks(batch).enumerate() {
         let (traced, ()) = rayon::join(
             || trace_batch(b, chunk),
@@ -119,6 +153,9 @@ pub fn build_graph(volume: &Volume, config: &Config, radius: f32, seed: u64) -> 
                 }
             },
         );
+        if report.peak.0 + report.peak.1 > memory_limit {
+            return Err(too_large(&graph, memory_limit, ((b * batch) as u64 * per_start, total), volume));
+        }
         pending = Some(traced);
     }
     if let Some(p) = pending.take() {
@@ -127,7 +164,10 @@ pub fn build_graph(volume: &Volume, config: &Config, radius: f32, seed: u64) -> 
     }
     reinforce(volume, config, &mut graph, seed, report.light_paths, &mut report);
     report.note_memory(&graph);
-    (graph, report)
+    if report.peak.0 + report.peak.1 > memory_limit {
+        return Err(too_large(&graph, memory_limit, (total, total), volume));
+    }
+    Ok((graph, report))
 }
 
 /// The first segments of light paths: for a distant light, `dimensionSteps`² parallel rays on

@@ -183,7 +183,8 @@ pub fn build(
     }
     let mut stages = Vec::new();
     let t = Instant::now();
-    let (graph, report) = build::build_graph(&volume, &config.graph_builder, radius, seed);
+    let (graph, report) =
+        build::build_graph(&volume, &config.graph_builder, radius, seed, build::default_memory_limit())?;
     let edges_more_than_once = graph.edges_more_than_once();
     stages.push(Stage { name: "build", seconds: t.elapsed().as_secs_f64(), peak_bytes: report.peak.0 + report.peak.1 });
     if graph.is_empty() {

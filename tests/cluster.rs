@@ -224,3 +224,53 @@ fn guided_tasks_load_the_trees_their_precompute_job_trained() {
     ok(&["merge", out.to_str().unwrap(), "-o", merged.to_str().unwrap()]);
     assert_eq!(read(&merged).metadata["nimbus:spp"], "4");
 }
+
+#[test]
+fn extra_film_channels_merge_with_their_tiles() {
+    let dir = scratch_dir("cluster-channels");
+    // A G-buffer film: its 22 channels are placed tile by tile, bit for bit.
+    let s = dir.join("g.pbrt");
+    let floor = "Material \"diffuse\"\nShape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] \
+                 \"point3 P\" [-5 -0.8 -5 5 -0.8 -5 5 -0.8 5 -5 -0.8 5]\n";
+    let text = scene(2).replace("Film \"rgb\"", "Film \"gbuffer\"") + floor;
+    std::fs::write(&s, &text).unwrap();
+    let out = dir.join("tiles");
+    ok(&["cluster", s.to_str().unwrap(), "--tiles", "2", "--seed", "3", "--out", out.to_str().unwrap()]);
+    run_tasks(&out, |_| true);
+    let merged = dir.join("merged.exr");
+    ok(&["merge", out.to_str().unwrap(), "-o", merged.to_str().unwrap()]);
+    let single = dir.join("single.exr");
+    ok(&["render", s.to_str().unwrap(), "--seed", "3", "--quiet", "--outfile", single.to_str().unwrap()]);
+    let channels = |p: &Path| nimbus::imageio::read_exr_channels(p).unwrap();
+    let (m, r) = (channels(&merged), channels(&single));
+    assert!(
+        m.len() >= 20 && m.iter().any(|(n, _)| n == "Variance.R"),
+        "{:?}",
+        m.iter().map(|c| &c.0).collect::<Vec<_>>()
+    );
+    assert!(m == r, "every channel of the tiles is the single render's");
+    // Its variance channels cannot be averaged over seed batches: refused, not guessed.
+    let seeds = dir.join("seeds");
+    ok(&["cluster", s.to_str().unwrap(), "--seeds", "2", "--out", seeds.to_str().unwrap()]);
+    run_tasks(&seeds, |_| true);
+    let err = fails(&["merge", seeds.to_str().unwrap(), "-o", dir.join("x.exr").to_str().unwrap()]);
+    assert!(err.contains("Variance.") && err.contains("--tiles"), "{err}");
+    // A spectral film's bands average over seed batches like its RGB.
+    let sp = dir.join("s.pbrt");
+    std::fs::write(&sp, scene(4).replace("Film \"rgb\"", "Film \"spectral\" \"integer nbuckets\" 4")).unwrap();
+    let batches = dir.join("bands");
+    ok(&["cluster", sp.to_str().unwrap(), "--seeds", "2", "--out", batches.to_str().unwrap()]);
+    run_tasks(&batches, |_| true);
+    ok(&["merge", batches.to_str().unwrap(), "-o", merged.to_str().unwrap()]);
+    let parts = [batches.join("seed-000.exr"), batches.join("seed-001.exr")].map(|p| channels(&p));
+    let m = channels(&merged);
+    assert_eq!(m.len(), 4);
+    for (c, (name, values)) in m.iter().enumerate() {
+        assert!(name.starts_with("S0."), "{name}");
+        for (i, v) in values.iter().enumerate() {
+            let mean = 0.5 * (parts[0][c].1[i] + parts[1][c].1[i]);
+            assert!((v - mean).abs() <= 1e-6 * mean.abs().max(1.0), "{name}[{i}]: {v} vs {mean}");
+        }
+    }
+    assert_eq!(read(&merged).metadata.get("spectralLayoutVersion").map(String::as_str), Some("1.0"));
+}

@@ -48,7 +48,9 @@ pub fn bounds_text(b: [u32; 4]) -> String {
 }
 
 fn read_part(path: &Path) -> Result<Part> {
-    let image = nimbus::imageio::read_exr(path).map_err(anyhow::Error::msg)?;
+    let mut image = nimbus::imageio::read_exr(path).map_err(anyhow::Error::msg)?;
+    // A G-buffer's or spectral film's channels beyond RGB travel with the part.
+    image.channels = nimbus::imageio::read_exr_channels(path).map_err(anyhow::Error::msg)?;
     let meta = |k: &str| -> Result<String> {
         image.metadata.get(k).cloned().with_context(|| {
             format!("{}: no \"{k}\" in its metadata (not a part rendered by nimbus render)", path.display())
@@ -89,7 +91,7 @@ fn expected_parts(dir: &Path) -> Result<Option<(String, Vec<String>)>> {
     Ok(Some((manifest.mode, manifest.tasks.iter().map(|t| t.output.clone()).collect())))
 }
 
-fn name(p: &Path) -> String {
+fn name_of(p: &Path) -> String {
     p.file_name().map_or_else(|| p.display().to_string(), |n| n.to_string_lossy().into_owned())
 }
 
@@ -136,8 +138,8 @@ pub fn merge_dir(dir: &Path, output: &Path) -> Result<Image> {
             if a != b {
                 bail!(
                     "{} is from another {what} ({b}) than {} ({a}): parts must be one render split up",
-                    name(&p.path),
-                    name(&first.path)
+                    name_of(&p.path),
+                    name_of(&first.path)
                 );
             }
             Ok(())
@@ -145,6 +147,8 @@ pub fn merge_dir(dir: &Path, output: &Path) -> Result<Image> {
         differs("scene", &first.scene_hash, &p.scene_hash)?;
         differs("integrator", &first.integrator, &p.integrator)?;
         differs("film", &bounds_text(first.film_bounds), &bounds_text(p.film_bounds))?;
+        let names = |q: &Part| q.image.channels.iter().map(|(n, _)| n.clone()).collect::<Vec<_>>().join(" ");
+        differs("film's channels", &names(first), &names(p))?;
     }
     // Seed batches: the parts of each pixel bounds, no seed twice.
     let mut groups: BTreeMap<[u32; 4], Vec<&Part>> = BTreeMap::new();
@@ -153,8 +157,8 @@ pub fn merge_dir(dir: &Path, output: &Path) -> Result<Image> {
         if let Some(q) = group.iter().find(|q| q.seed == p.seed) {
             bail!(
                 "{} and {} are the same pixels with the same seed ({}): the batch would count the same samples twice",
-                name(&q.path),
-                name(&p.path),
+                name_of(&q.path),
+                name_of(&p.path),
                 p.seed
             );
         }
@@ -167,21 +171,39 @@ pub fn merge_dir(dir: &Path, output: &Path) -> Result<Image> {
             if a[0] < b[1] && b[0] < a[1] && a[2] < b[3] && b[2] < a[3] {
                 bail!(
                     "{} (pixels {}) and {} (pixels {}) overlap",
-                    name(&ga[0].path),
+                    name_of(&ga[0].path),
                     bounds_text(*a),
-                    name(&gb[0].path),
+                    name_of(&gb[0].path),
                     bounds_text(*b)
                 );
             }
         }
     }
+    // A variance is not the mean of the batches' variances (their means differ too), and the
+    // parts do not carry what pooling needs.
+    if let Some((name, _)) = first.image.channels.iter().find(|(n, _)| n.contains("Variance."))
+        && let Some((_, group)) = tiles.iter().find(|(_, g)| g.len() > 1)
+    {
+        bail!(
+            "{} and {} are seed batches of a film with a \"{name}\" channel, which averaging would get \
+             wrong: split such a film into --tiles",
+            name_of(&group[0].path),
+            name_of(&group[1].path)
+        );
+    }
     let fb = first.film_bounds;
     let (w, h) = ((fb[1] - fb[0]) as usize, (fb[3] - fb[2]) as usize);
     let mut covered = vec![false; w * h];
     let mut image = Image::new(w, h);
+    image.channels = first.image.channels.iter().map(|(n, _)| (n.clone(), vec![0.0; w * h])).collect();
     for (b, group) in &tiles {
         if b[0] < fb[0] || b[1] > fb[1] || b[2] < fb[2] || b[3] > fb[3] {
-            bail!("{} (pixels {}) lies outside the film ({})", name(&group[0].path), bounds_text(*b), bounds_text(fb));
+            bail!(
+                "{} (pixels {}) lies outside the film ({})",
+                name_of(&group[0].path),
+                bounds_text(*b),
+                bounds_text(fb)
+            );
         }
         let total: f64 = group.iter().map(|p| p.spp as f64).sum();
         let (tw, th) = ((b[1] - b[0]) as usize, (b[3] - b[2]) as usize);
@@ -198,6 +220,15 @@ pub fn merge_dir(dir: &Path, output: &Path) -> Result<Image> {
                 };
                 image.pixels[fy * w + fx] = v;
                 covered[fy * w + fx] = true;
+                for (c, (_, out)) in image.channels.iter_mut().enumerate() {
+                    let at = y * tw + x;
+                    out[fy * w + fx] = if group.len() == 1 {
+                        group[0].image.channels[c].1[at]
+                    } else {
+                        let sum: f64 = group.iter().map(|p| p.image.channels[c].1[at] as f64 * p.spp as f64).sum();
+                        (sum / total) as f32
+                    };
+                }
             }
         }
     }
@@ -210,11 +241,13 @@ pub fn merge_dir(dir: &Path, output: &Path) -> Result<Image> {
     let mut seeds: Vec<i32> = parts.iter().map(|p| p.seed).collect();
     seeds.sort_unstable();
     seeds.dedup();
+    // The first part's metadata (the film's own keys, e.g. a spectral film's layout), less what
+    // belongs to one part, then what the merge knows.
+    let per_part = ["time", "setup-time", "peak-rss-bytes", "nonfinite-samples", "precomputed-bytes", "spp", "seed"];
+    image.metadata = first.image.metadata.clone();
+    image.metadata.retain(|k, _| !per_part.iter().any(|p| k.strip_prefix("nimbus:") == Some(p)));
     let m = &mut image.metadata;
-    m.insert("nimbus:scene-hash".into(), first.scene_hash.clone());
-    m.insert("nimbus:integrator".into(), first.integrator.clone());
     m.insert("nimbus:pixel-bounds".into(), bounds_text(fb));
-    m.insert("nimbus:film-bounds".into(), bounds_text(fb));
     if spp.iter().all(|&s| s == spp[0]) {
         m.insert("nimbus:spp".into(), spp[0].to_string());
     }
@@ -224,11 +257,6 @@ pub fn merge_dir(dir: &Path, output: &Path) -> Result<Image> {
         m.insert("nimbus:seeds".into(), seeds.iter().map(i32::to_string).collect::<Vec<_>>().join(" "));
     }
     m.insert("nimbus:merged-parts".into(), parts.len().to_string());
-    for key in ["nimbus:scene", "nimbus:transport", "nimbus:sensor"] {
-        if let Some(v) = first.image.metadata.get(key) {
-            m.insert(key.into(), v.clone());
-        }
-    }
     Ok(image)
 }
 

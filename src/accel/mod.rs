@@ -480,10 +480,11 @@ impl Surfaces {
                 let uv = m.param(patch, &probe).map_or(local.uv.clamp(Vec2::ZERO, Vec2::ONE), |(u, v)| Vec2::new(u, v));
                 m.derivatives(patch, &local, uv)
             }
-            // Across a curve, ∂p/∂v spans its width (p_error is twice it); it does not bend.
+            // Across a curve, ∂p/∂v spans its width (its p_error, as pbrt-v4 bounds it); it does
+            // not bend.
             Geometry::Curve(_) | Geometry::Instance(_) => SurfaceDerivatives {
                 dpdu: local.dpdu,
-                dpdv: local.ns.cross(local.dpdu).normalize_or_zero() * 0.5 * local.p_error,
+                dpdv: local.ns.cross(local.dpdu).normalize_or_zero() * local.p_error,
                 dndu: Vec3::ZERO,
                 dndv: Vec3::ZERO,
             },

@@ -13,6 +13,7 @@ mod materials;
 mod media;
 mod motion;
 mod pathgraph;
+mod pbrt_v4_parity;
 mod radiancegraph;
 mod render;
 mod render_cli;

@@ -52,6 +52,22 @@ fn renders_exr_with_metadata_and_png() {
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let img = nimbus::imageio::read_image(&png).unwrap();
     assert_eq!((img.width, img.height), (8, 4));
+    // pbrt-v4 writes the four numbers with commas; both forms select the same pixels.
+    let (a, b) = (dir.join("a.exr"), dir.join("b.exr"));
+    let bounds = |out: &std::path::Path, b: &[&str]| {
+        let mut args =
+            vec!["render", scene.to_str().unwrap(), "--quiet", "--seed", "2", "--outfile", out.to_str().unwrap()];
+        args.extend_from_slice(b);
+        nimbus(&args)
+    };
+    assert!(bounds(&a, &["--pixelbounds", "2,10,1,5"]).status.success());
+    assert!(bounds(&b, &["--pixelbounds", "2", "10", "1", "5"]).status.success());
+    let (a, b) = (nimbus::imageio::read_exr(&a).unwrap(), nimbus::imageio::read_exr(&b).unwrap());
+    assert_eq!((a.width, a.height), (8, 4));
+    assert_eq!(a.pixels, b.pixels);
+    assert!(bounds(&dir.join("c.exr"), &["--cropwindow", "0,0.5,0,0.5"]).status.success());
+    let three = bounds(&dir.join("d.exr"), &["--pixelbounds", "2,10,1"]);
+    assert!(!three.status.success() && String::from_utf8_lossy(&three.stderr).contains("takes four numbers"));
 }
 
 #[test]

@@ -28,11 +28,12 @@ pub struct RenderArgs {
     /// Sampler seed.
     #[arg(long)]
     seed: Option<i32>,
-    /// Render only this part of the image, in NDC: x0 x1 y0 y1.
-    #[arg(long, num_args = 4, value_names = ["X0", "X1", "Y0", "Y1"], allow_negative_numbers = true)]
+    /// Render only this part of the image, in NDC: x0 x1 y0 y1 (or x0,x1,y0,y1 as pbrt-v4
+    /// writes it).
+    #[arg(long, num_args = 1..=4, value_delimiter = ',', value_names = ["X0", "X1", "Y0", "Y1"], allow_negative_numbers = true)]
     cropwindow: Option<Vec<f32>>,
-    /// Render only these pixels: x0 x1 y0 y1.
-    #[arg(long, num_args = 4, value_names = ["X0", "X1", "Y0", "Y1"], allow_negative_numbers = true)]
+    /// Render only these pixels: x0 x1 y0 y1 (or x0,x1,y0,y1 as pbrt-v4 writes it).
+    #[arg(long, num_args = 1..=4, value_delimiter = ',', value_names = ["X0", "X1", "Y0", "Y1"], allow_negative_numbers = true)]
     pixelbounds: Option<Vec<i32>>,
     /// Quarter resolution and samples.
     #[arg(long)]
@@ -88,6 +89,16 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
         && (!t.is_finite() || t <= 0.0)
     {
         anyhow::bail!("--time must be a positive number of seconds");
+    }
+    for (flag, n) in [
+        ("--cropwindow", args.cropwindow.as_ref().map(Vec::len)),
+        ("--pixelbounds", args.pixelbounds.as_ref().map(Vec::len)),
+    ] {
+        if let Some(n) = n
+            && n != 4
+        {
+            anyhow::bail!("{flag} takes four numbers, x0 x1 y0 y1 (or x0,x1,y0,y1 as pbrt-v4 writes them); got {n}");
+        }
     }
     let mut desc = match nimbus::parser::load_file(&args.scene) {
         Ok(d) => d,

@@ -66,9 +66,11 @@ fn gbuffer_channels_describe_the_visible_surface() {
             assert!((channel(&img, c)[i] - want).abs() < 1e-5, "{c} {}", channel(&img, c)[i]);
         }
         assert!((channel(&img, "P.Z")[i] - 3.0).abs() < 1e-4, "camera-space depth {}", channel(&img, "P.Z")[i]);
+        // The plane's winding points its normal away from the camera (+z); pbrt-v4 turns the
+        // normals to face the viewer (camera space: −z).
         for n in ["N", "Ns"] {
             let z = channel(&img, &format!("{n}.Z"))[i];
-            assert!((z.abs() - 1.0).abs() < 1e-5, "{n} faces the camera: {z}");
+            assert!((z + 1.0).abs() < 1e-5, "{n} faces the camera: {z}");
         }
         assert!(channel(&img, "dzdx")[i] < 1e-5 && channel(&img, "dzdy")[i] < 1e-5, "fronto-parallel");
         assert!(channel(&img, "Variance.R")[i] > 0.0, "a diffuse plane under a sky is noisy");

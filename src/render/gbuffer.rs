@@ -135,10 +135,13 @@ fn visible_surface(
         };
         let (dpdx, dpdy) = (on_plane(&dx), on_plane(&dy));
         let out_n = |n: Vec3| output_from_world.matrix3.inverse().transpose().mul_vec3a(n.into()).normalize_or_zero();
+        // Facing the viewer, as pbrt-v4's VisibleSurface (FaceForward(n, wo)): a surface's
+        // normal otherwise follows its winding or orientation.
+        let facing = |n: Vec3| if n.dot(wo) < 0.0 { -n } else { n };
         let surface = VisibleSurface {
             p: output_from_world.transform_point3(s.p),
-            n: Vec3::from(out_n(s.n)),
-            ns: Vec3::from(out_n(s.ns)),
+            n: Vec3::from(out_n(facing(s.n))),
+            ns: Vec3::from(out_n(facing(s.ns))),
             uv: s.uv,
             dzdx: output_from_world.transform_vector3(dpdx).z,
             dzdy: output_from_world.transform_vector3(dpdy).z,

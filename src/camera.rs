@@ -6,6 +6,7 @@ use glam::{Affine3A, DMat4, Vec2, Vec3};
 
 use crate::geometry::{MotionTransform, Ray};
 use crate::sampling::warp::concentric_disk;
+use crate::sampling::warp::equal_area_square_to_sphere;
 use crate::scene::camera::{CameraSettings, Projection};
 
 /// A camera that turns film positions into world-space rays.
@@ -21,6 +22,8 @@ pub struct Camera {
     screen_max: Vec2,
     resolution: Vec2,
     perspective: bool,
+    /// For a spherical camera, whether its mapping is equal-area (else equirectangular).
+    spherical: Option<bool>,
     /// tan(fov / 2) for perspective cameras.
     tan_half_fov: f32,
     lens_radius: f32,
@@ -39,7 +42,11 @@ impl Camera {
         };
         let (perspective, tan_half_fov) = match settings.projection {
             Projection::Perspective { fov } => (true, (fov.to_radians() / 2.0).tan()),
-            Projection::Orthographic => (false, 1.0),
+            Projection::Orthographic | Projection::Spherical { .. } => (false, 1.0),
+        };
+        let spherical = match settings.projection {
+            Projection::Spherical { equal_area } => Some(equal_area),
+            _ => None,
         };
         Camera {
             world_from_camera: Affine3A::from_mat4(world_from_camera.as_mat4()),
@@ -50,6 +57,7 @@ impl Camera {
             screen_max,
             resolution: res,
             perspective,
+            spherical,
             tan_half_fov,
             lens_radius: settings.lens_radius,
             focal_distance: settings.focal_distance,
@@ -91,6 +99,9 @@ impl Camera {
     /// The ray through continuous raster position `p_film` (pixel (x, y) covers
     /// [x, x+1)×[y, y+1)), with `u_lens` sampling the thin lens, at time `time`.
     pub fn generate_ray(&self, p_film: Vec2, u_lens: Vec2, time: f32) -> Ray {
+        if let Some(equal_area) = self.spherical {
+            return self.spherical_ray(p_film, equal_area, time);
+        }
         // Raster → screen: x grows right, y grows down in raster space but up on screen.
         let sx = self.screen_min.x + p_film.x / self.resolution.x * (self.screen_max.x - self.screen_min.x);
         let sy = self.screen_max.y - p_film.y / self.resolution.y * (self.screen_max.y - self.screen_min.y);
@@ -111,6 +122,39 @@ impl Camera {
     }
 }
 
+impl Camera {
+    /// pbrt-v4's `SphericalCamera::GenerateRay`: the film is a map of all directions (no lens,
+    /// no screen window), then y and z swap so that the map's pole is camera +y.
+    fn spherical_ray(&self, p_film: Vec2, equal_area: bool, time: f32) -> Ray {
+        let uv = p_film / self.resolution;
+        let d = if equal_area {
+            equal_area_square_to_sphere(wrap_equal_area_square(uv))
+        } else {
+            let (theta, phi) = (std::f32::consts::PI * uv.y, 2.0 * std::f32::consts::PI * uv.x);
+            Vec3::new(theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos())
+        };
+        let d = Vec3::new(d.x, d.z, d.y);
+        let w = self.world_from_camera_at(time);
+        Ray::timed(w.transform_point3(Vec3::ZERO), w.transform_vector3(d).normalize(), time)
+    }
+}
+
+/// pbrt-v4's `WrapEqualAreaSquare`: points just outside the square (a filter's reach past the
+/// film's edge) mirror back into it as the octahedral map's edges meet.
+fn wrap_equal_area_square(mut uv: Vec2) -> Vec2 {
+    if uv.x < 0.0 {
+        uv = Vec2::new(-uv.x, 1.0 - uv.y);
+    } else if uv.x > 1.0 {
+        uv = Vec2::new(2.0 - uv.x, 1.0 - uv.y);
+    }
+    if uv.y < 0.0 {
+        uv = Vec2::new(1.0 - uv.x, -uv.y);
+    } else if uv.y > 1.0 {
+        uv = Vec2::new(1.0 - uv.x, 2.0 - uv.y);
+    }
+    uv
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -126,6 +170,28 @@ mod tests {
             shutter_open: 0.0,
             shutter_close: 1.0,
         }
+    }
+
+    #[test]
+    fn spherical_cameras_map_the_film_to_every_direction() {
+        let look = look_at([0.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, 1.0, 0.0]).unwrap().inverse();
+        let spherical =
+            |equal_area| CameraSettings { projection: Projection::Spherical { equal_area }, ..settings(90.0) };
+        // Equirectangular: the top row looks up (camera +y), the bottom down, the centre along
+        // camera −x (φ = π), a quarter across along camera +z (φ = π/2).
+        let cam = Camera::new(&spherical(false), &look, [64, 32]);
+        let d = |x: f32, y: f32| cam.generate_ray(Vec2::new(x, y), Vec2::ZERO, 0.0).d;
+        assert!((d(32.0, 0.0) - Vec3::Y).length() < 1e-5, "{:?}", d(32.0, 0.0));
+        assert!((d(32.0, 32.0) + Vec3::Y).length() < 1e-5);
+        assert!((d(32.0, 16.0) + Vec3::X).length() < 1e-5, "{:?}", d(32.0, 16.0));
+        assert!((d(16.0, 16.0) - Vec3::Z).length() < 1e-5, "{:?}", d(16.0, 16.0));
+        // Equal-area: the centre of the square is the pole (up), its corners the other pole.
+        let cam = Camera::new(&spherical(true), &look, [32, 32]);
+        let d = |x: f32, y: f32| cam.generate_ray(Vec2::new(x, y), Vec2::ZERO, 0.0).d;
+        assert!((d(16.0, 16.0) - Vec3::Y).length() < 1e-5, "{:?}", d(16.0, 16.0));
+        assert!((d(0.0, 0.0) + Vec3::Y).length() < 1e-5, "{:?}", d(0.0, 0.0));
+        // A filter's reach past the edge wraps back onto the sphere continuously.
+        assert!((d(-0.01, 8.0) - d(0.01, 24.0)).length() < 0.01);
     }
 
     #[test]

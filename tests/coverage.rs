@@ -116,7 +116,7 @@ const ENTITIES: &[(&str, &str, Outcome)] = &[
     ("camera", "perspective", Rendered),
     ("camera", "orthographic", Rendered),
     ("camera", "realistic", Refused),
-    ("camera", "spherical", Refused),
+    ("camera", "spherical", Rendered),
     ("light", "point", Rendered),
     ("light", "spot", Rendered),
     ("light", "distant", Rendered),

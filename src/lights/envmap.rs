@@ -1,9 +1,10 @@
 //! Image environment maps in pbrt-v4's equal-area octahedral parameterisation (Clarberg
 //! 2008), importance-sampled by a piecewise-constant distribution over the image.
 
-use std::f32::consts::{FRAC_2_PI, FRAC_PI_4, PI};
+use std::f32::consts::PI;
 use std::path::Path;
 
+use crate::sampling::warp::{equal_area_sphere_to_square, equal_area_square_to_sphere};
 use glam::{Affine3A, Vec2, Vec3};
 
 use nimbus_parser::ColorSpace;
@@ -23,45 +24,6 @@ pub struct EnvironmentMap {
     light_from_world: Affine3A,
     distribution: PiecewiseConstant2D,
     average: f32,
-}
-
-/// Maps the unit square to the unit sphere, preserving area.
-pub fn equal_area_square_to_sphere(p: Vec2) -> Vec3 {
-    let u = 2.0 * p.x - 1.0;
-    let v = 2.0 * p.y - 1.0;
-    let up = u.abs();
-    let vp = v.abs();
-    let signed_distance = 1.0 - (up + vp);
-    let d = signed_distance.abs();
-    let r = 1.0 - d;
-    let phi = if r == 0.0 { 1.0 } else { (vp - up) / r + 1.0 } * FRAC_PI_4;
-    let z = (1.0 - r * r).copysign(signed_distance);
-    let cos_phi = phi.cos().copysign(u);
-    let sin_phi = phi.sin().copysign(v);
-    let s = r * (2.0 - r * r).max(0.0).sqrt();
-    Vec3::new(cos_phi * s, sin_phi * s, z)
-}
-
-/// Inverse of [`equal_area_square_to_sphere`].
-pub fn equal_area_sphere_to_square(d: Vec3) -> Vec2 {
-    let (x, y, z) = (d.x.abs(), d.y.abs(), d.z.abs());
-    let r = (1.0 - z).max(0.0).sqrt();
-    let a = x.max(y);
-    let b = if a == 0.0 { 0.0 } else { x.min(y) / a };
-    let mut phi = b.atan() * FRAC_2_PI;
-    if x < y {
-        phi = 1.0 - phi;
-    }
-    let mut v = phi * r;
-    let mut u = r - v;
-    if d.z < 0.0 {
-        std::mem::swap(&mut u, &mut v);
-        u = 1.0 - u;
-        v = 1.0 - v;
-    }
-    let u = u.copysign(d.x);
-    let v = v.copysign(d.y);
-    Vec2::new((u + 1.0) * 0.5, (v + 1.0) * 0.5)
 }
 
 impl EnvironmentMap {

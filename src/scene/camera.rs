@@ -14,6 +14,12 @@ pub enum Projection {
     },
     /// `orthographic`
     Orthographic,
+    /// `spherical`: every direction around the camera, by pbrt-v4's `mapping`.
+    Spherical {
+        /// `"equalarea"` (pbrt-v4's default: the equal-area octahedral square) rather than
+        /// `"equirectangular"`.
+        equal_area: bool,
+    },
 }
 
 /// Everything a camera entity specifies.
@@ -66,10 +72,24 @@ impl CameraSettings {
                 )?,
             },
             "orthographic" => Projection::Orthographic,
+            "spherical" => Projection::Spherical {
+                equal_area: match p.get_one_string("mapping", "equalarea")? {
+                    "equalarea" => true,
+                    "equirectangular" => false,
+                    other => {
+                        return Err(Error::new(
+                            p.loc("mapping").unwrap_or(&e.loc),
+                            format!("spherical camera mapping \"{other}\" is unknown (equalarea or equirectangular)"),
+                        ));
+                    }
+                },
+            },
             other => {
                 return Err(Error::new(
                     &e.loc,
-                    format!("camera \"{other}\" is not supported by nimbus (it has perspective and orthographic)"),
+                    format!(
+                        "camera \"{other}\" is not supported by nimbus (it has perspective, orthographic and spherical)"
+                    ),
                 ));
             }
         };

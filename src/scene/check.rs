@@ -210,6 +210,9 @@ pub fn check_scene(scene: &SceneDescription) -> Result<SceneCheck, Error> {
     let camera_text = match camera.projection {
         Projection::Perspective { fov } => format!("{}, fov {fov}°", scene.camera.entity.name),
         Projection::Orthographic => scene.camera.entity.name.clone(),
+        Projection::Spherical { equal_area } => {
+            format!("{}, {}", scene.camera.entity.name, if equal_area { "equal-area" } else { "equirectangular" })
+        }
     };
     let camera_text = match &scene.camera.medium {
         Some(m) => format!("{camera_text}, inside medium \"{m}\""),

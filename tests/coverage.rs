@@ -121,7 +121,7 @@ const ENTITIES: &[(&str, &str, Outcome)] = &[
     ("light", "spot", Rendered),
     ("light", "distant", Rendered),
     ("light", "infinite", Rendered),
-    ("light", "goniometric", Refused),
+    ("light", "goniometric", Rendered),
     ("light", "projection", Refused),
     ("area light", "diffuse", Rendered),
     ("material", "diffuse", Rendered),
@@ -191,9 +191,15 @@ fn every_pbrt_v4_entity_type_is_rendered_refused_or_replaced_by_name() {
     let dir = crate::common::scratch_dir("coverage-measured");
     let bsdf = dir.as_ref().join("brdf.bsdf");
     std::fs::write(&bsdf, nimbus::materials::measured::synthetic_bsdf(false)).unwrap();
+    // A goniometric light needs a square image.
+    let map = dir.as_ref().join("light.exr");
+    let mut img = nimbus::imageio::Image::new(4, 4);
+    img.pixels.iter_mut().for_each(|p| *p = glam::Vec3::ONE);
+    nimbus::imageio::write_image(&map, &img).unwrap();
     for &(kind, name, expected) in ENTITIES {
         let (text, directive) = scene(kind, name);
         let text = text.replace("\"brdf.bsdf\"", &format!("\"{}\"", bsdf.display()));
+        let text = text.replace("\"light.exr\"", &format!("\"{}\"", map.display()));
         let line = text.lines().position(|l| l.starts_with(directive)).expect("the directive") + 1;
         let at = format!("coverage.pbrt:{line}:");
         let desc = match nimbus::parser::load_str(&text, "coverage.pbrt") {

@@ -48,3 +48,30 @@ fn light_bvh_beats_power_sampling_with_many_lights() {
         assert!((m - r).abs() < 4.0 * se + 0.005 * r, "power: channel {c}: {m} vs reference {r} (se {se})");
     }
 }
+
+/// pbrt-v4's goniometric light: without an image it warns and emits nothing (the light is
+/// left out, said by name); an image that is not square is no equal-area map and is refused,
+/// naming the file. (Its picture is judged against pbrt-v4 in `pbrt_v4_parity.rs`.)
+#[test]
+fn goniometric_lights_need_a_square_image() {
+    let dir = crate::common::scratch_dir("goniometric");
+    let text = |light: &str| {
+        format!(
+            "LookAt 0 3 6  0 0 0  0 1 0\nCamera \"perspective\"\nFilm \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8\n\
+             WorldBegin\nShape \"sphere\"\n{light}\n"
+        )
+    };
+    let path = dir.join("s.pbrt");
+    std::fs::write(&path, text("LightSource \"goniometric\" \"rgb I\" [1 1 1]")).unwrap();
+    let desc = nimbus::parser::load_file(&path).unwrap();
+    let scene = nimbus::scene::build_scene(&desc, &BuildOptions::default()).unwrap();
+    assert!(scene.lights.is_empty());
+    assert!(scene.warnings.iter().any(|w| w.message.contains("goniometric")), "{:?}", scene.warnings);
+    let mut img = nimbus::imageio::Image::new(4, 2);
+    img.pixels.iter_mut().for_each(|p| *p = glam::Vec3::ONE);
+    nimbus::imageio::write_image(&dir.join("wide.exr"), &img).unwrap();
+    std::fs::write(&path, text("LightSource \"goniometric\" \"string filename\" \"wide.exr\"")).unwrap();
+    let desc = nimbus::parser::load_file(&path).unwrap();
+    let e = nimbus::scene::build_scene(&desc, &BuildOptions::default()).err().expect("a 4x2 map is refused");
+    assert!(e.message.contains("wide.exr") && e.message.contains("not square"), "{}", e.message);
+}

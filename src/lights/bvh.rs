@@ -220,6 +220,15 @@ pub fn light_bounds(light: &Light, shapes: &ShapeStore) -> Option<LightBounds> {
             cos_theta_e: cos_half_pi,
             two_sided: false,
         },
+        // Bounded as an isotropic point light of its power (as pbrt-v4 bounds it).
+        LightKind::Goniometric { p, i, image } => LightBounds {
+            bounds: Bounds3::new(*p, *p),
+            w: Vec3::Z,
+            phi: 4.0 * PI * i.rgb.max_element() * image.mean(),
+            cos_theta_o: -1.0,
+            cos_theta_e: cos_half_pi,
+            two_sided: false,
+        },
         LightKind::Spot { p, frame, i, cos_falloff_start, cos_falloff_end } => LightBounds {
             bounds: Bounds3::new(*p, *p),
             w: frame.z,

@@ -3,6 +3,7 @@
 
 mod bvh;
 mod envmap;
+pub mod goniometric;
 mod sampler;
 
 pub use bvh::{LightBounds, LightBvh, light_bounds};
@@ -29,6 +30,15 @@ pub enum LightKind {
         p: Vec3,
         /// Radiant intensity.
         i: SpectrumValue,
+    },
+    /// Point source whose intensity `i` is weighted by direction by an equal-area image.
+    Goniometric {
+        /// Position.
+        p: Vec3,
+        /// Radiant intensity where the image is 1.
+        i: SpectrumValue,
+        /// The directional weights.
+        image: std::sync::Arc<goniometric::GoniometricImage>,
     },
     /// Point source limited to a cone with a smooth falloff.
     Spot {
@@ -120,7 +130,13 @@ pub struct SceneSphere {
 impl Light {
     /// True for lights with a delta distribution (never hit by rays).
     pub fn is_delta(&self) -> bool {
-        matches!(self.kind, LightKind::Point { .. } | LightKind::Spot { .. } | LightKind::Distant { .. })
+        matches!(
+            self.kind,
+            LightKind::Point { .. }
+                | LightKind::Goniometric { .. }
+                | LightKind::Spot { .. }
+                | LightKind::Distant { .. }
+        )
     }
 
     /// True for lights at infinity that escaped rays see.
@@ -138,6 +154,7 @@ impl Light {
     pub fn power(&self, scene: &SceneSphere) -> f32 {
         let p = match &self.kind {
             LightKind::Point { i, .. } => 4.0 * PI * average(i.rgb),
+            LightKind::Goniometric { i, image, .. } => 4.0 * PI * average(i.rgb) * image.mean(),
             LightKind::Spot { i, cos_falloff_start, cos_falloff_end, .. } => {
                 2.0 * PI * average(i.rgb) * ((1.0 - cos_falloff_start) + (cos_falloff_start - cos_falloff_end) / 2.0)
             }
@@ -169,6 +186,26 @@ impl Light {
                 let wi = (*p - ctx.p) / d2.sqrt();
                 Some(LightSample {
                     l: C::eval(i, lambda) / d2,
+                    wi,
+                    pdf: 1.0,
+                    p: *p,
+                    n: Vec3::ZERO,
+                    delta: true,
+                    infinite: false,
+                })
+            }
+            LightKind::Goniometric { p, i, image } => {
+                let d2 = p.distance_squared(ctx.p);
+                if d2 == 0.0 {
+                    return None;
+                }
+                let wi = (*p - ctx.p) / d2.sqrt();
+                let weight = image.lookup(-wi);
+                if weight <= 0.0 {
+                    return None;
+                }
+                Some(LightSample {
+                    l: C::eval(i, lambda) * (weight / d2),
                     wi,
                     pdf: 1.0,
                     p: *p,
@@ -273,7 +310,10 @@ impl Light {
     /// from `ctx`; for area lights `hit` is where that direction meets the light.
     pub fn pdf_li(&self, ctx: &LightContext, wi: Vec3, hit: Option<&SurfaceHit>, shapes: &ShapeStore) -> f32 {
         match &self.kind {
-            LightKind::Point { .. } | LightKind::Spot { .. } | LightKind::Distant { .. } => 0.0,
+            LightKind::Point { .. }
+            | LightKind::Goniometric { .. }
+            | LightKind::Spot { .. }
+            | LightKind::Distant { .. } => 0.0,
             LightKind::UniformInfinite { .. } => warp::UNIFORM_SPHERE_PDF,
             LightKind::ImageInfinite(map) => map.pdf(wi),
             LightKind::Area { geometry, area, .. } => {

@@ -888,7 +888,7 @@ fn light(
     spectra: &SpectrumResolver<'_>,
     transport: Transport,
     medium: u32,
-) -> Result<Light, Error> {
+) -> Result<Option<Light>, Error> {
     let e = &l.entity;
     let settings = LightSettings::from_entity(l)?;
     let world = affine(&l.world_from_light.start, &e.loc)?;
@@ -900,6 +900,27 @@ fn light(
                 scale *= phi / (4.0 * std::f32::consts::PI);
             }
             LightKind::Point { p: world.transform_point3(Vec3::from(*from)), i: rgb(intensity)?.scaled(scale) }
+        }
+        LightSpec::Goniometric { intensity, filename, power } => {
+            let Some(path) = filename else {
+                // pbrt-v4 warns and the light emits nothing; nimbus says so and leaves it out.
+                return Ok(None);
+            };
+            let image = crate::lights::goniometric::GoniometricImage::read(path, &world)
+                .map_err(|m| err(&e.loc, format!("goniometric light: {m}")))?;
+            let mut scale = settings.scale;
+            if let Some(phi) = power {
+                let k_e = 4.0 * std::f32::consts::PI * image.mean();
+                if k_e <= 0.0 {
+                    return Err(err(&e.loc, "goniometric light: \"power\" is given but its image is black"));
+                }
+                scale *= phi / k_e;
+            }
+            LightKind::Goniometric {
+                p: world.transform_point3(Vec3::ZERO),
+                i: rgb(intensity)?.scaled(scale),
+                image: std::sync::Arc::new(image),
+            }
         }
         LightSpec::Spot { intensity, from, to, cone_angle, cone_delta_angle, power } => {
             let cos_end = cone_angle.to_radians().cos();
@@ -953,7 +974,7 @@ fn light(
             return Err(err(&e.loc, "infinite light without radiance or image"));
         }
     };
-    Ok(Light { kind, medium })
+    Ok(Some(Light { kind, medium }))
 }
 
 /// Names of the media that the camera, lights or boundary surfaces refer to.
@@ -1413,7 +1434,13 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions) -> Result<Scene
     };
     for l in &desc.lights {
         let medium = l.medium.as_deref().map_or(NONE, |n| media_ids.get(n).copied().unwrap_or(NONE));
-        lights.push(light(l, &spectra, transport.transport, medium)?);
+        match light(l, &spectra, transport.transport, medium)? {
+            Some(light) => lights.push(light),
+            None => warnings.push(Warning::new(
+                &l.entity.loc,
+                "No \"filename\" parameter provided for goniometric light (it emits nothing).",
+            )),
+        }
     }
     let infinite_lights = lights.iter().enumerate().filter(|(_, l)| l.is_infinite()).map(|(i, _)| i as u32).collect();
     // pbrt-v4's default for every integrator is the light BVH.

@@ -21,6 +21,16 @@ pub enum LightKind {
         /// Total emitted power, if given (overrides the intensity's scale).
         power: Option<f32>,
     },
+    /// `goniometric`: a point light at the light's origin whose intensity varies with
+    /// direction by an equal-area image (its channels averaged).
+    Goniometric {
+        /// Intensity.
+        intensity: SpectrumSpec,
+        /// The image, if a file was given (pbrt-v4 warns without one; the light is then dark).
+        filename: Option<PathBuf>,
+        /// Total emitted power, if given.
+        power: Option<f32>,
+    },
     /// `spot`: a point light restricted to a cone from `from` towards `to`.
     Spot {
         /// Intensity.
@@ -83,7 +93,7 @@ fn positive_opt(e: &Entity, name: &str) -> Result<Option<f32>, Error> {
 }
 
 impl LightSettings {
-    /// Reads a light entity. Lights nimbus lacks (goniometric, projection) are reported by name.
+    /// Reads a light entity. Lights nimbus lacks (projection) are reported by name.
     pub fn from_entity(light: &LightEntity) -> Result<LightSettings, Error> {
         let e = &light.entity;
         let p = &e.params;
@@ -108,6 +118,27 @@ impl LightSettings {
                 cone_delta_angle: checked_float(p, "conedeltaangle", 5.0, |a| a >= 0.0, "cannot be negative")?,
                 power: positive_opt(e, "power")?,
             },
+            "goniometric" => {
+                let filename = match p.get_opt_string("filename")? {
+                    None => None,
+                    Some(name) => {
+                        let loc = p.loc("filename").unwrap_or(&e.loc);
+                        let path = loc.resolve(name);
+                        if !path.is_file() {
+                            return Err(Error::new(
+                                loc,
+                                format!("goniometric light: cannot find image \"{name}\" (tried {})", shown(&path)),
+                            ));
+                        }
+                        Some(path)
+                    }
+                };
+                LightKind::Goniometric {
+                    intensity: spectrum(p, "I")?.unwrap_or_else(white),
+                    filename,
+                    power: positive_opt(e, "power")?,
+                }
+            }
             "distant" => {
                 let from = p.get_one_point3("from", [0.0; 3])?;
                 let to = p.get_one_point3("to", [0.0, 0.0, 1.0])?;
@@ -156,7 +187,7 @@ impl LightSettings {
                 return Err(Error::new(
                     &e.loc,
                     format!(
-                        "light \"{other}\" is not supported by nimbus (it has point, spot, distant, infinite and diffuse area lights)"
+                        "light \"{other}\" is not supported by nimbus (it has point, spot, goniometric, distant, infinite and diffuse area lights)"
                     ),
                 ));
             }

@@ -128,6 +128,11 @@ impl Emitter {
                 let (d, pdf) = leave(*p, &warp::uniform_sphere, &|_| warp::UNIFORM_SPHERE_PDF);
                 (Ray::new(*p, d), C::eval(i, lambda) / pdf)
             }
+            LightKind::Goniometric { p, i, image } => {
+                // Directions as a point light's, weighted by the map.
+                let (d, pdf) = leave(*p, &warp::uniform_sphere, &|_| warp::UNIFORM_SPHERE_PDF);
+                (Ray::new(*p, d), C::eval(i, lambda) * (image.lookup(d) / pdf))
+            }
             LightKind::Spot { p, frame, i, cos_falloff_start, cos_falloff_end } => {
                 let end = *cos_falloff_end;
                 let native = |u: Vec2| frame.to_world(warp::uniform_cone(u, end));
@@ -194,7 +199,7 @@ impl Emitter {
             }
         };
         let power = power / pick.pmf;
-        let delta = matches!(light.kind, LightKind::Point { .. } | LightKind::Spot { .. } | LightKind::Distant { .. });
+        let delta = light.is_delta();
         (power.max_element() > 0.0 && power.is_finite()).then_some(Photon { ray, medium, power, delta })
     }
 }

@@ -288,6 +288,7 @@ pub fn sample_event(medium: &Medium, ray: &Ray, t_max: f32, rng: &mut Pcg32) -> 
 fn light_kind_name(k: &LightKind) -> &'static str {
     match k {
         LightKind::Point { .. } => "point",
+        LightKind::Goniometric { .. } => "goniometric",
         LightKind::Spot { .. } => "spot",
         LightKind::Distant { .. } => "distant",
         LightKind::UniformInfinite { .. } => "uniform infinite",

@@ -178,63 +178,15 @@ impl Light {
         lambda: &C::Lambda,
     ) -> Option<LightSample<C>> {
         match &self.kind {
-            LightKind::Point { p, i } => {
-                let d2 = p.distance_squared(ctx.p);
-                if d2 == 0.0 {
-                    return None;
-                }
-                let wi = (*p - ctx.p) / d2.sqrt();
-                Some(LightSample {
-                    l: C::eval(i, lambda) / d2,
-                    wi,
-                    pdf: 1.0,
-                    p: *p,
-                    n: Vec3::ZERO,
-                    delta: true,
-                    infinite: false,
-                })
-            }
-            LightKind::Goniometric { p, i, image } => {
-                let d2 = p.distance_squared(ctx.p);
-                if d2 == 0.0 {
-                    return None;
-                }
-                let wi = (*p - ctx.p) / d2.sqrt();
+            LightKind::Point { p, i } => point_sample(*p, ctx.p, |_| Some(C::eval(i, lambda))),
+            LightKind::Goniometric { p, i, image } => point_sample(*p, ctx.p, |wi| {
                 let weight = image.lookup(-wi);
-                if weight <= 0.0 {
-                    return None;
-                }
-                Some(LightSample {
-                    l: C::eval(i, lambda) * (weight / d2),
-                    wi,
-                    pdf: 1.0,
-                    p: *p,
-                    n: Vec3::ZERO,
-                    delta: true,
-                    infinite: false,
-                })
-            }
-            LightKind::Spot { p, frame, i, cos_falloff_start, cos_falloff_end } => {
-                let d2 = p.distance_squared(ctx.p);
-                if d2 == 0.0 {
-                    return None;
-                }
-                let wi = (*p - ctx.p) / d2.sqrt();
-                let cos = frame.z.dot(-wi);
-                let falloff = smoothstep(*cos_falloff_end, *cos_falloff_start, cos);
-                if falloff == 0.0 {
-                    return None;
-                }
-                Some(LightSample {
-                    l: C::eval(i, lambda) * (falloff / d2),
-                    wi,
-                    pdf: 1.0,
-                    p: *p,
-                    n: Vec3::ZERO,
-                    delta: true,
-                    infinite: false,
-                })
-            }
+                (weight > 0.0).then(|| C::eval(i, lambda) * weight)
+            }),
+            LightKind::Spot { p, frame, i, cos_falloff_start, cos_falloff_end } => point_sample(*p, ctx.p, |wi| {
+                let falloff = smoothstep(*cos_falloff_end, *cos_falloff_start, frame.z.dot(-wi));
+                (falloff > 0.0).then(|| C::eval(i, lambda) * falloff)
+            }),
             LightKind::Distant { w, l } => Some(LightSample {
                 l: C::eval(l, lambda),
                 wi: *w,
@@ -375,4 +327,18 @@ pub fn smoothstep(a: f32, b: f32, x: f32) -> f32 {
     }
     let t = ((x - a) / (b - a)).clamp(0.0, 1.0);
     t * t * (3.0 - 2.0 * t)
+}
+
+/// The sample of a light at point `p` seen from `from`: the intensity it sends towards
+/// `from` (`intensity(wi)` with `wi` pointing at the light; `None` for none) over the squared
+/// distance.
+#[inline]
+fn point_sample<C: Channels>(p: Vec3, from: Vec3, intensity: impl FnOnce(Vec3) -> Option<C>) -> Option<LightSample<C>> {
+    let d2 = p.distance_squared(from);
+    if d2 == 0.0 {
+        return None;
+    }
+    let wi = (p - from) / d2.sqrt();
+    let i = intensity(wi)?;
+    Some(LightSample { l: i / d2, wi, pdf: 1.0, p, n: Vec3::ZERO, delta: true, infinite: false })
 }

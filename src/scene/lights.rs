@@ -92,6 +92,19 @@ fn positive_opt(e: &Entity, name: &str) -> Result<Option<f32>, Error> {
     Ok(v)
 }
 
+/// The light's `"string filename"`, resolved as pbrt-v4 resolves paths and checked to exist
+/// (`what` names the light in the error).
+fn image_file(e: &Entity, what: &str) -> Result<Option<PathBuf>, Error> {
+    let p = &e.params;
+    let Some(name) = p.get_opt_string("filename")? else { return Ok(None) };
+    let loc = p.loc("filename").unwrap_or(&e.loc);
+    let path = loc.resolve(name);
+    if !path.is_file() {
+        return Err(Error::new(loc, format!("{what}: cannot find image \"{name}\" (tried {})", shown(&path))));
+    }
+    Ok(Some(path))
+}
+
 impl LightSettings {
     /// Reads a light entity. Lights nimbus lacks (projection) are reported by name.
     pub fn from_entity(light: &LightEntity) -> Result<LightSettings, Error> {
@@ -118,27 +131,11 @@ impl LightSettings {
                 cone_delta_angle: checked_float(p, "conedeltaangle", 5.0, |a| a >= 0.0, "cannot be negative")?,
                 power: positive_opt(e, "power")?,
             },
-            "goniometric" => {
-                let filename = match p.get_opt_string("filename")? {
-                    None => None,
-                    Some(name) => {
-                        let loc = p.loc("filename").unwrap_or(&e.loc);
-                        let path = loc.resolve(name);
-                        if !path.is_file() {
-                            return Err(Error::new(
-                                loc,
-                                format!("goniometric light: cannot find image \"{name}\" (tried {})", shown(&path)),
-                            ));
-                        }
-                        Some(path)
-                    }
-                };
-                LightKind::Goniometric {
-                    intensity: spectrum(p, "I")?.unwrap_or_else(white),
-                    filename,
-                    power: positive_opt(e, "power")?,
-                }
-            }
+            "goniometric" => LightKind::Goniometric {
+                intensity: spectrum(p, "I")?.unwrap_or_else(white),
+                filename: image_file(e, "goniometric light")?,
+                power: positive_opt(e, "power")?,
+            },
             "distant" => {
                 let from = p.get_one_point3("from", [0.0; 3])?;
                 let to = p.get_one_point3("to", [0.0, 0.0, 1.0])?;
@@ -157,20 +154,7 @@ impl LightSettings {
             }
             "infinite" => {
                 let radiance = spectrum(p, "L")?;
-                let filename = match p.get_opt_string("filename")? {
-                    None => None,
-                    Some(name) => {
-                        let loc = p.loc("filename").unwrap_or(&e.loc);
-                        let path = loc.resolve(name);
-                        if !path.is_file() {
-                            return Err(Error::new(
-                                loc,
-                                format!("infinite light: cannot find image \"{name}\" (tried {})", shown(&path)),
-                            ));
-                        }
-                        Some(path)
-                    }
-                };
+                let filename = image_file(e, "infinite light")?;
                 if radiance.is_some() && filename.is_some() {
                     return Err(Error::new(&e.loc, "infinite light: give either \"L\" or \"filename\", not both"));
                 }

@@ -122,7 +122,7 @@ const ENTITIES: &[(&str, &str, Outcome)] = &[
     ("light", "distant", Rendered),
     ("light", "infinite", Rendered),
     ("light", "goniometric", Rendered),
-    ("light", "projection", Refused),
+    ("light", "projection", Rendered),
     ("area light", "diffuse", Rendered),
     ("material", "diffuse", Rendered),
     ("material", "conductor", Rendered),

@@ -75,3 +75,14 @@ fn goniometric_lights_need_a_square_image() {
     let e = nimbus::scene::build_scene(&desc, &BuildOptions::default()).err().expect("a 4x2 map is refused");
     assert!(e.message.contains("wide.exr") && e.message.contains("not square"), "{}", e.message);
 }
+
+/// pbrt-v4 stops when a projection light has no image; so does nimbus, saying so.
+#[test]
+fn projection_lights_need_an_image() {
+    let text = "LookAt 0 3 6  0 0 0  0 1 0\nCamera \"perspective\"\nFilm \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8\n\
+                WorldBegin\nShape \"sphere\"\nLightSource \"projection\" \"float fov\" 30\n";
+    let desc = nimbus::parser::load_str(text, "p.pbrt").unwrap();
+    let e = nimbus::scene::build_scene(&desc, &BuildOptions::default()).err().expect("refused");
+    assert!(e.message.contains("projection light") && e.message.contains("filename"), "{}", e.message);
+    assert!(e.to_string().contains("p.pbrt:6"), "{e}");
+}

@@ -229,6 +229,14 @@ pub fn light_bounds(light: &Light, shapes: &ShapeStore) -> Option<LightBounds> {
             cos_theta_e: cos_half_pi,
             two_sided: false,
         },
+        LightKind::Projection { p, scale, image } => LightBounds {
+            bounds: Bounds3::new(*p, *p),
+            w: Vec3::Z,
+            phi: scale * image.power_rgb().max_element(),
+            cos_theta_o: -1.0,
+            cos_theta_e: cos_half_pi,
+            two_sided: false,
+        },
         LightKind::Spot { p, frame, i, cos_falloff_start, cos_falloff_end } => LightBounds {
             bounds: Bounds3::new(*p, *p),
             w: frame.z,

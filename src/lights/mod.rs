@@ -4,6 +4,7 @@
 mod bvh;
 mod envmap;
 pub mod goniometric;
+pub mod projection;
 mod sampler;
 
 pub use bvh::{LightBounds, LightBvh, light_bounds};
@@ -19,7 +20,7 @@ use crate::color::{Channels, Rgb, average};
 use crate::math::Frame;
 use crate::sampling::warp;
 use crate::shapes::{SurfaceHit, triangle_sample};
-use crate::spectra::SpectrumValue;
+use crate::spectra::{RgbRole, SpectrumValue};
 
 /// What a light is.
 #[derive(Clone, Debug)]
@@ -39,6 +40,15 @@ pub enum LightKind {
         i: SpectrumValue,
         /// The directional weights.
         image: std::sync::Arc<goniometric::GoniometricImage>,
+    },
+    /// Point source projecting an RGB image through a pinhole (pbrt-v4's `projection`).
+    Projection {
+        /// Position.
+        p: Vec3,
+        /// Multiplier on the image's RGB (pbrt-v4's `scale`, after `power`).
+        scale: f32,
+        /// The image and its frustum.
+        image: std::sync::Arc<projection::ProjectionImage>,
     },
     /// Point source limited to a cone with a smooth falloff.
     Spot {
@@ -155,6 +165,7 @@ impl Light {
         let p = match &self.kind {
             LightKind::Point { i, .. } => 4.0 * PI * average(i.rgb),
             LightKind::Goniometric { i, image, .. } => 4.0 * PI * average(i.rgb) * image.mean(),
+            LightKind::Projection { scale, image, .. } => scale * average(image.power_rgb()),
             LightKind::Spot { i, cos_falloff_start, cos_falloff_end, .. } => {
                 2.0 * PI * average(i.rgb) * ((1.0 - cos_falloff_start) + (cos_falloff_start - cos_falloff_end) / 2.0)
             }
@@ -182,6 +193,10 @@ impl Light {
             LightKind::Goniometric { p, i, image } => point_sample(*p, ctx.p, |wi| {
                 let weight = image.lookup(-wi);
                 (weight > 0.0).then(|| C::eval(i, lambda) * weight)
+            }),
+            LightKind::Projection { p, scale, image } => point_sample(*p, ctx.p, |wi| {
+                let rgb = image.lookup(-wi)?;
+                (rgb.max_element() > 0.0).then(|| C::from_rgb(rgb, RgbRole::Illuminant, image.space, lambda) * *scale)
             }),
             LightKind::Spot { p, frame, i, cos_falloff_start, cos_falloff_end } => point_sample(*p, ctx.p, |wi| {
                 let falloff = smoothstep(*cos_falloff_end, *cos_falloff_start, frame.z.dot(-wi));
@@ -264,6 +279,7 @@ impl Light {
         match &self.kind {
             LightKind::Point { .. }
             | LightKind::Goniometric { .. }
+            | LightKind::Projection { .. }
             | LightKind::Spot { .. }
             | LightKind::Distant { .. } => 0.0,
             LightKind::UniformInfinite { .. } => warp::UNIFORM_SPHERE_PDF,

@@ -922,6 +922,20 @@ fn light(
                 image: std::sync::Arc::new(image),
             }
         }
+        LightSpec::Projection { filename, fov, power } => {
+            let image = crate::lights::projection::ProjectionImage::read(filename, *fov, &world)
+                .map_err(|m| err(&e.loc, format!("projection light: {m}")))?;
+            let mut scale = settings.scale;
+            if let Some(phi) = power {
+                // pbrt-v4's k_e: the image's luminance over the frustum's solid angle.
+                let k_e = crate::color::luminance(image.power_rgb());
+                if k_e <= 0.0 {
+                    return Err(err(&e.loc, "projection light: \"power\" is given but its image is black"));
+                }
+                scale *= phi / k_e;
+            }
+            LightKind::Projection { p: world.transform_point3(Vec3::ZERO), scale, image: std::sync::Arc::new(image) }
+        }
         LightSpec::Spot { intensity, from, to, cone_angle, cone_delta_angle, power } => {
             let cos_end = cone_angle.to_radians().cos();
             let cos_start = (cone_angle - cone_delta_angle).to_radians().cos();

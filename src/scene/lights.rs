@@ -31,6 +31,15 @@ pub enum LightKind {
         /// Total emitted power, if given.
         power: Option<f32>,
     },
+    /// `projection`: an RGB image projected from the light's origin along its +z axis.
+    Projection {
+        /// The image.
+        filename: PathBuf,
+        /// Field of view of the projection, degrees.
+        fov: f32,
+        /// Total emitted power, if given.
+        power: Option<f32>,
+    },
     /// `spot`: a point light restricted to a cone from `from` towards `to`.
     Spot {
         /// Intensity.
@@ -106,7 +115,7 @@ fn image_file(e: &Entity, what: &str) -> Result<Option<PathBuf>, Error> {
 }
 
 impl LightSettings {
-    /// Reads a light entity. Lights nimbus lacks (projection) are reported by name.
+    /// Reads a light entity. A light nimbus lacks is reported by name.
     pub fn from_entity(light: &LightEntity) -> Result<LightSettings, Error> {
         let e = &light.entity;
         let p = &e.params;
@@ -134,6 +143,13 @@ impl LightSettings {
             "goniometric" => LightKind::Goniometric {
                 intensity: spectrum(p, "I")?.unwrap_or_else(white),
                 filename: image_file(e, "goniometric light")?,
+                power: positive_opt(e, "power")?,
+            },
+            "projection" => LightKind::Projection {
+                filename: image_file(e, "projection light")?.ok_or_else(|| {
+                    Error::new(&e.loc, "projection light: it needs a \"filename\" (the image it projects)")
+                })?,
+                fov: checked_float(p, "fov", 90.0, |f| f > 0.0 && f < 180.0, "must be between 0 and 180 degrees")?,
                 power: positive_opt(e, "power")?,
             },
             "distant" => {
@@ -171,7 +187,7 @@ impl LightSettings {
                 return Err(Error::new(
                     &e.loc,
                     format!(
-                        "light \"{other}\" is not supported by nimbus (it has point, spot, goniometric, distant, infinite and diffuse area lights)"
+                        "light \"{other}\" is not supported by nimbus (it has point, spot, goniometric, projection, distant, infinite and diffuse area lights)"
                     ),
                 ));
             }

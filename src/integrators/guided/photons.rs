@@ -22,6 +22,7 @@ use crate::sampling::rng::Pcg32;
 use crate::sampling::warp;
 use crate::scene::Scene;
 use crate::shapes::triangle_sample;
+use crate::spectra::RgbRole;
 use crate::textures::TexContext;
 
 /// A photon leaving a light, carrying the channels `C` of the scene's transport.
@@ -132,6 +133,14 @@ impl Emitter {
                 // Directions as a point light's, weighted by the map.
                 let (d, pdf) = leave(*p, &warp::uniform_sphere, &|_| warp::UNIFORM_SPHERE_PDF);
                 (Ray::new(*p, d), C::eval(i, lambda) * (image.lookup(d) / pdf))
+            }
+            LightKind::Projection { p, scale, image } => {
+                let (d, pdf) = leave(*p, &warp::uniform_sphere, &|_| warp::UNIFORM_SPHERE_PDF);
+                let l = match image.lookup(d) {
+                    Some(rgb) => C::from_rgb(rgb, RgbRole::Illuminant, image.space, lambda) * (*scale / pdf),
+                    None => C::ZERO,
+                };
+                (Ray::new(*p, d), l)
             }
             LightKind::Spot { p, frame, i, cos_falloff_start, cos_falloff_end } => {
                 let end = *cos_falloff_end;

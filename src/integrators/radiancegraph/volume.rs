@@ -289,6 +289,7 @@ fn light_kind_name(k: &LightKind) -> &'static str {
     match k {
         LightKind::Point { .. } => "point",
         LightKind::Goniometric { .. } => "goniometric",
+        LightKind::Projection { .. } => "projection",
         LightKind::Spot { .. } => "spot",
         LightKind::Distant { .. } => "distant",
         LightKind::UniformInfinite { .. } => "uniform infinite",

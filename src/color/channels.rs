@@ -248,6 +248,11 @@ impl Channels for Rgb {
     }
 
     #[inline]
+    fn exp_neg(self) -> Rgb {
+        crate::math::exp4(-self.extend(0.0)).truncate()
+    }
+
+    #[inline]
     fn zip_map(self, o: Rgb, f: impl Fn(f32, f32) -> f32) -> Rgb {
         Rgb::new(f(self.x, o.x), f(self.y, o.y), f(self.z, o.z))
     }
@@ -380,6 +385,11 @@ impl Channels for SampledSpectrum {
     #[inline]
     fn map(self, f: impl Fn(f32) -> f32) -> SampledSpectrum {
         SampledSpectrum::new(f(self.x), f(self.y), f(self.z), f(self.w))
+    }
+
+    #[inline]
+    fn exp_neg(self) -> SampledSpectrum {
+        crate::math::exp4(-self)
     }
 
     #[inline]

@@ -3,9 +3,11 @@
 pub mod cell_map;
 pub mod fnv;
 mod frame;
+mod lanes;
 pub mod noise;
 
 pub use frame::Frame;
+pub use lanes::{exp4, ln4};
 
 use glam::Vec3;
 

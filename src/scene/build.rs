@@ -1067,11 +1067,6 @@ fn build_medium(
             // Voxels packed for the transport: film RGB, or the sigmoid polynomial and scale of
             // the scene's RGB as a spectrum (pbrt-v4's SampledGrid of RGB spectra).
             let spectral = transport == Transport::Spectral;
-            if spectral {
-                // Built once per color space; first here, not inside the parallel loop below
-                // (whose workers would wait on it instead of building it).
-                crate::spectra::SigmoidTable::get(cs);
-            }
             let rgb_grid = |v: &[[f32; 3]], f: &(dyn Fn(Rgb) -> Vec4 + Sync)| {
                 use rayon::prelude::*;
                 DenseGrid::new(glam::UVec3::from(*n), v.par_iter().map(|c| f(Rgb::from(*c))).collect())

@@ -18,7 +18,6 @@ use std::sync::{Mutex, OnceLock};
 
 use glam::{DMat3, DVec3, Vec4};
 use nimbus_parser::ColorSpace;
-use rayon::prelude::*;
 
 use super::cie::{LAMBDA_MAX, LAMBDA_MIN, cie_xyz_bar};
 use super::colorspace::rgb_color_space;
@@ -290,65 +289,65 @@ pub fn fit_sigmoid(space: ColorSpace, rgb: [f32; 3]) -> SigmoidPolynomial {
     p
 }
 
-/// pbrt-v4's `RGBToSpectrumTable` layout, built once per color space on first use: for each
-/// largest component (3), brightness z (on pbrt-v4's smoothstep² nodes) and the other two
-/// components relative to it (x, y), the coefficients, trilinearly interpolated.
+/// pbrt-v4's `RGBToSpectrumTable` layout: for each largest component (3), brightness z (on
+/// pbrt-v4's smoothstep² nodes) and the other two components relative to it (x, y), the
+/// coefficients, trilinearly interpolated. pbrt-v4 computes its table when it is built;
+/// nimbus fits a column (one largest component, x and y, every z) the first time a lookup
+/// needs it, so a render pays for the colours its scene has: a chromatic smoke of a few
+/// hues fits a few dozen of the 3 × 32² columns (the whole table took 0.17 s of a 2-core
+/// render's start-up).
 pub struct SigmoidTable {
+    space: ColorSpace,
     res: usize,
     z_nodes: Vec<f32>,
-    coeffs: Vec<[f32; 3]>,
+    /// Per column, `(maxc · res + y) · res + x`: the coefficients at each z node.
+    columns: Vec<OnceLock<Box<[[f32; 3]]>>>,
 }
 
-/// Resolution of [`SigmoidTable`]: 3 × 32³ fits take about a second of one core; pbrt-v4's
-/// 64³ would take eight. The round-trip error it adds is measured in the tests.
+/// Resolution of [`SigmoidTable`]: 3 × 32³ fits take about a second of one core (for scenes
+/// of every colour); pbrt-v4's 64³ would take eight. The round-trip error it adds is measured
+/// in the tests.
 const TABLE_RES: usize = 32;
 
 impl SigmoidTable {
     fn new(space: ColorSpace, res: usize) -> SigmoidTable {
-        let fitter = Fitter::get(space, Quadrature::Coarse);
         let smooth = |x: f64| x * x * (3.0 - 2.0 * x);
-        let z_nodes: Vec<f64> = (0..res).map(|k| smooth(smooth(k as f64 / (res - 1) as f64))).collect();
-        // One column (maxc, x, y) per task: march z up from a fifth and down from there, as
-        // rgb2spec_opt does, each solve warm-started from its neighbour.
-        let columns: Vec<Vec<(usize, [f32; 3])>> = (0..3 * res * res)
-            .into_par_iter()
-            .map(|col| {
-                let (l, j, i) = (col / (res * res), (col / res) % res, col % res);
-                let (x, y) = (i as f64 / (res - 1) as f64, j as f64 / (res - 1) as f64);
-                let rgb_at = |b: f64| {
-                    let mut v = DVec3::ZERO;
-                    v[l] = b;
-                    v[(l + 1) % 3] = x * b;
-                    v[(l + 2) % 3] = y * b;
-                    v
-                };
-                let mut out = Vec::with_capacity(res);
-                let start = res / 5;
+        let z_nodes = (0..res).map(|k| smooth(smooth(k as f64 / (res - 1) as f64)) as f32).collect();
+        SigmoidTable { space, res, z_nodes, columns: (0..3 * res * res).map(|_| OnceLock::new()).collect() }
+    }
+
+    /// Column `(l, j, i)`'s coefficients, fitted as `rgb2spec_opt` fits a column: z marched up
+    /// from a fifth and down from there, each solve warm-started from its neighbour (the
+    /// same fits whichever lookup asks first, so renders do not depend on thread timing).
+    fn column(&self, l: usize, j: usize, i: usize) -> &[[f32; 3]] {
+        let res = self.res;
+        self.columns[(l * res + j) * res + i].get_or_init(|| {
+            let fitter = Fitter::get(self.space, Quadrature::Coarse);
+            let (x, y) = (i as f64 / (res - 1) as f64, j as f64 / (res - 1) as f64);
+            let rgb_at = |b: f64| {
+                let mut v = DVec3::ZERO;
+                v[l] = b;
+                v[(l + 1) % 3] = x * b;
+                v[(l + 2) % 3] = y * b;
+                v
+            };
+            let z = |k: usize| {
+                let smooth = |x: f64| x * x * (3.0 - 2.0 * x);
+                smooth(smooth(k as f64 / (res - 1) as f64))
+            };
+            let mut out = vec![[0.0; 3]; res];
+            let start = res / 5;
+            // Both marches start from zero at `start`, so both give it the same value.
+            for ks in [(start..res).collect::<Vec<_>>(), (0..=start).rev().collect()] {
                 let mut c = DVec3::ZERO;
-                for (k, z) in z_nodes.iter().enumerate().skip(start) {
-                    c = fitter.gauss_newton(rgb_at(*z), c);
-                    out.push((k, c));
+                for k in ks {
+                    c = fitter.gauss_newton(rgb_at(z(k)), c);
+                    let p = to_nm(c);
+                    out[k] = [p.c0, p.c1, p.c2];
                 }
-                let mut c = DVec3::ZERO;
-                for k in (0..=start).rev() {
-                    c = fitter.gauss_newton(rgb_at(z_nodes[k]), c);
-                    if k != start {
-                        out.push((k, c));
-                    }
-                }
-                out.into_iter()
-                    .map(|(k, c)| {
-                        let p = to_nm(c);
-                        ((((l * res + k) * res + j) * res) + i, [p.c0, p.c1, p.c2])
-                    })
-                    .collect()
-            })
-            .collect();
-        let mut coeffs = vec![[0.0; 3]; 3 * res * res * res];
-        for (idx, c) in columns.into_iter().flatten() {
-            coeffs[idx] = c;
-        }
-        SigmoidTable { res, z_nodes: z_nodes.iter().map(|z| *z as f32).collect(), coeffs }
+            }
+            out.into_boxed_slice()
+        })
     }
 
     /// The table of `space`, built on first use.
@@ -386,8 +385,11 @@ impl SigmoidTable {
         let zi = self.z_nodes.partition_point(|n| *n < z).saturating_sub(1).min(res - 2);
         let (dx, dy) = (x - xi as f32, y - yi as f32);
         let dz = (z - self.z_nodes[zi]) / (self.z_nodes[zi + 1] - self.z_nodes[zi]);
-        let co =
-            |ox: usize, oy: usize, oz: usize| self.coeffs[((maxc * res + zi + oz) * res + yi + oy) * res + xi + ox];
+        let columns = [
+            [self.column(maxc, yi, xi), self.column(maxc, yi, xi + 1)],
+            [self.column(maxc, yi + 1, xi), self.column(maxc, yi + 1, xi + 1)],
+        ];
+        let co = |ox: usize, oy: usize, oz: usize| columns[oy][ox][zi + oz];
         let lerp = |t: f32, a: [f32; 3], b: [f32; 3]| [0, 1, 2].map(|i| a[i] + (b[i] - a[i]) * t);
         let c = lerp(
             dz,
@@ -461,6 +463,15 @@ mod tests {
             assert!((v[i] - p.eval(l[i])).abs() < 1e-6);
         }
         assert!(p.max_value() >= v.max_element());
+    }
+
+    /// The four-lane evaluation keeps the exact constants 0 and 1 (±∞ polynomials).
+    #[test]
+    fn eval4_keeps_the_constants_exact() {
+        let l = Vec4::new(360.0, 500.0, 700.0, 830.0);
+        assert_eq!(SigmoidPolynomial::constant(0.0).eval4(l), Vec4::ZERO);
+        assert_eq!(SigmoidPolynomial::constant(1.0).eval4(l), Vec4::ONE);
+        assert_eq!(SigmoidPolynomial::constant(0.5).eval4(l), Vec4::splat(0.5));
     }
 
     #[test]

@@ -7,7 +7,7 @@ use glam::{Affine3A, UVec3, Vec3, Vec4};
 use super::cloud::Cloud;
 use super::dense::DenseGrid;
 use super::grid::SparseGrid;
-use super::majorant::{DdaIterator, MajorantGrid, Segment};
+use super::majorant::{Bands, DdaIterator, MajorantGrid, Segment};
 use super::rgbgrid::RgbGridMedium;
 use nimbus_parser::ColorSpace;
 
@@ -249,11 +249,9 @@ impl Medium {
         }
     }
 
-    /// An `rgbgrid` medium (voxels packed for the transport, see [`RgbGridMedium`]); builds its
-    /// 16³ majorant grid from `voxel_max`, the largest value over the channels of a voxel's
-    /// coefficient (the largest RGB component, or for spectral transport the maximum of the
-    /// voxel's spectrum, which can exceed it). `chromatic` says whether any voxel's σ is
-    /// colored.
+    /// An `rgbgrid` medium (voxels packed for the transport, see [`RgbGridMedium`]; `spectral`
+    /// says which); builds its 16³ majorant grid, per RGB channel where a voxel's σ is colored
+    /// (`chromatic`) and the transport is RGB.
     #[allow(clippy::too_many_arguments)] // mirrors pbrt-v4's RGBGridMedium constructor
     pub fn rgb_grid(
         name: String,
@@ -266,11 +264,18 @@ impl Medium {
         space: ColorSpace,
         g: f32,
         chromatic: bool,
-        voxel_max: impl Fn(Vec4) -> f32,
+        spectral: bool,
     ) -> Medium {
-        let majorant = MajorantGrid::new(bounds, UVec3::splat(16), |lo, hi| {
-            sigma_a.as_ref().map_or(1.0, |s| s.max_value_by(lo, hi, &voxel_max))
-                + sigma_s.as_ref().map_or(1.0, |s| s.max_value_by(lo, hi, &voxel_max))
+        // Per channel for RGB transport; spectral keeps one value (see `Bands`).
+        let bands = if chromatic && !spectral { Bands::Rgb } else { Bands::Gray };
+        let majorant = MajorantGrid::banded(bounds, UVec3::splat(16), bands, |lo, hi, out| {
+            for (b, out) in out.iter_mut().enumerate() {
+                let max = |g: &Option<DenseGrid<Vec4>>| {
+                    g.as_ref()
+                        .map_or(1.0, |g| g.max_value_by(lo, hi, |v| super::rgbgrid::band_max(v, spectral, bands, b)))
+                };
+                *out = max(&sigma_a) + max(&sigma_s);
+            }
         });
         let emissive = le.is_some();
         Medium {
@@ -391,8 +396,11 @@ impl Medium {
                 ray,
                 t_max,
                 C::eval(&g.sigma_a, lambda) + C::eval(&g.sigma_s, lambda),
+                lambda,
             ),
-            MediumKind::RgbGrid(g) => grid_segments(&g.medium_from_world, &g.bounds, &g.majorant, ray, t_max, C::ONE),
+            MediumKind::RgbGrid(g) => {
+                grid_segments(&g.medium_from_world, &g.bounds, &g.majorant, ray, t_max, C::ONE, lambda)
+            }
         }
     }
 }
@@ -405,11 +413,12 @@ fn grid_segments<'a, C: Channels>(
     ray: &Ray,
     t_max: f32,
     sigma_t: C,
+    lambda: &C::Lambda,
 ) -> Segments<'a, C> {
     let o = medium_from_world.transform_point3(ray.o);
     let d = medium_from_world.transform_vector3(ray.d);
     match bounds.intersect_ray(o, d, t_max) {
-        Some((t0, t1)) => Segments::Dda(DdaIterator::new(majorant, o, d, t0, t1, sigma_t)),
+        Some((t0, t1)) => Segments::Dda(DdaIterator::new(majorant, o, d, t0, t1, sigma_t, lambda)),
         None => Segments::Single(None),
     }
 }

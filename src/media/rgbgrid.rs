@@ -7,11 +7,11 @@ use glam::{Affine3A, IVec3, Vec3, Vec4};
 use nimbus_parser::ColorSpace;
 
 use super::dense::{DenseGrid, trilinear};
-use super::majorant::MajorantGrid;
+use super::majorant::{Bands, MajorantGrid};
 use super::medium::MediumPoint;
 use crate::color::Channels;
 use crate::geometry::Bounds3;
-use crate::spectra::RgbRole;
+use crate::spectra::{RgbRole, SigmoidPolynomial};
 
 /// Per-voxel RGB coefficients (pbrt-v4's `rgbgrid`). Each voxel's spectrum is four floats:
 /// for RGB transport its film RGB (and a spare lane), for spectral transport the sigmoid
@@ -53,6 +53,19 @@ struct CellMemo {
     lambda: Vec4,
     /// σa, σs and Le at the eight corners, as lanes.
     values: [[Vec4; 8]; 3],
+}
+
+/// The largest value in band `b` of `bands` of a voxel packed for spectral transport or not:
+/// its RGB channel `b`, or its largest value over all channels (for spectral transport, the
+/// maximum of its spectrum, which can exceed every RGB component).
+pub(super) fn band_max(v: Vec4, spectral: bool, bands: Bands, b: usize) -> f32 {
+    match (spectral, bands) {
+        (false, Bands::Rgb) => v[b],
+        (false, Bands::Gray) => v.truncate().max_element(),
+        // An empty voxel's polynomial may be anything; it is zero.
+        (true, _) if v.w == 0.0 => 0.0,
+        (true, _) => SigmoidPolynomial { c0: v.x, c1: v.y, c2: v.z }.max_value() * v.w,
+    }
 }
 
 /// The next [`RgbGridMedium::id`].
@@ -119,27 +132,43 @@ mod tests {
     use crate::spectra::{SampledSpectrum, SampledWavelengths};
     use glam::UVec3;
 
-    /// A 2×2×2 spectral rgbgrid whose voxel RGBs are scaled by `k`.
-    fn medium(k: f32) -> Medium {
+    /// A 40×6×5 rgbgrid (some voxels empty, as in a smoke) of pseudo-random
+    /// colours scaled by `k`, with σa, σs and Le, packed for spectral transport or RGB.
+    fn medium(k: f32, spectral: bool) -> Medium {
         let space = ColorSpace::Srgb;
-        let rgb = |i: usize| Vec3::new(0.1 + 0.1 * i as f32, 0.7 - 0.05 * i as f32, 0.3) * k;
-        let v: Vec<Vec4> = (0..8).map(|i| pack_voxel(rgb(i), RgbRole::Unbounded, space, true)).collect();
-        let le: Vec<Vec4> = (0..8).map(|i| pack_voxel(rgb(7 - i), RgbRole::Illuminant, space, true)).collect();
-        let n = UVec3::splat(2);
+        let n = UVec3::new(40, 6, 5);
+        let count = (n.x * n.y * n.z) as usize;
+        let mut state = 0x2545_f491_u32;
+        let mut rnd = move || {
+            state ^= state << 13;
+            state ^= state >> 17;
+            state ^= state << 5;
+            (state % 10_000) as f32 / 10_000.0
+        };
+        let mut voxels = |role| -> Vec<Vec4> {
+            (0..count)
+                .map(|i| {
+                    // Some empty voxels, as in a smoke.
+                    let rgb = if i % 7 == 3 { Vec3::ZERO } else { Vec3::new(rnd(), rnd(), rnd()) * k };
+                    pack_voxel(rgb, role, space, spectral)
+                })
+                .collect()
+        };
+        let (sa, ss, le) = (voxels(RgbRole::Unbounded), voxels(RgbRole::Unbounded), voxels(RgbRole::Illuminant));
         let grid = |v: Vec<Vec4>| DenseGrid::new(n, v);
         let bounds = Bounds3::new(Vec3::ZERO, Vec3::ONE);
         Medium::rgb_grid(
             "m".into(),
             Affine3A::IDENTITY,
             bounds,
-            grid(v.clone()),
-            None,
+            grid(sa),
+            grid(ss),
             grid(le),
             2.0,
             space,
             0.0,
             true,
-            |v| v.w,
+            spectral,
         )
     }
 
@@ -151,39 +180,95 @@ mod tests {
         };
         MediumPoint {
             sigma_a: look(g.sigma_a.as_ref().unwrap(), RgbRole::Unbounded),
-            sigma_s: SampledSpectrum::ONE,
+            sigma_s: look(g.sigma_s.as_ref().unwrap(), RgbRole::Unbounded),
             le: look(g.le.as_ref().unwrap(), RgbRole::Illuminant) * 2.0,
         }
     }
 
-    /// The memo never returns another cell's, medium's or wavelengths' values: lookups that
-    /// alternate between two media, two wavelength sets and points in one cell and in others
-    /// all equal the direct evaluation.
+    /// The memo never returns another cell's, medium's or wavelengths' values:
+    /// lookups that walk through neighbouring cells, jump, come back, and alternate between
+    /// two media and two wavelength sets all equal the direct evaluation.
     #[test]
     fn memoised_lookups_equal_direct_evaluation() {
-        let media = [medium(1.0), medium(0.5)];
+        let media = [medium(1.0, true), medium(0.5, true)];
         let lambdas = [SampledWavelengths::sample_visible(0.2), SampledWavelengths::sample_visible(0.7)];
-        let points = [Vec3::splat(0.3), Vec3::splat(0.4), Vec3::new(0.3, 0.3, 0.9), Vec3::new(0.8, 0.1, 0.5)];
-        for round in 0..3 {
-            for (i, p) in points.iter().enumerate() {
-                for m in &media {
-                    let lambda = &lambdas[(i + round) % 2];
-                    let got = m.sample_point::<SampledSpectrum>(*p, lambda);
-                    let want = direct(m, *p, lambda);
-                    for (g, w) in [(got.sigma_a, want.sigma_a), (got.sigma_s, want.sigma_s), (got.le, want.le)] {
-                        assert!((g - w).abs().max_element() <= 1e-6 * w.abs().max_element(), "{g} vs {w} at {p}");
-                    }
+        let check = |m: &Medium, p: Vec3, lambda: &SampledWavelengths| {
+            let got = m.sample_point::<SampledSpectrum>(p, lambda);
+            let want = direct(m, p, lambda);
+            for (g, w) in [(got.sigma_a, want.sigma_a), (got.sigma_s, want.sigma_s), (got.le, want.le)] {
+                assert!((g - w).abs().max_element() <= 1e-6 * w.abs().max_element().max(1e-3), "{g} vs {w} at {p}");
+            }
+        };
+        for round in 0..4 {
+            // A ray's tentative collisions: same cell, the next cell, a few cells on, past the
+            // edge; then the same walk with the other medium or wavelengths.
+            let lambda = &lambdas[round % 2];
+            let m = &media[round / 2 % 2];
+            let (o, d) = (Vec3::new(-0.01, 0.13 + 0.1 * round as f32, 0.31), Vec3::new(1.0, 0.37, 0.21).normalize());
+            for t in [0.0, 0.004, 0.01, 0.02, 0.045, 0.046, 0.3, 0.31, 0.305, 0.9, 0.02, 1.2] {
+                check(m, o + d * t, lambda);
+            }
+            // Every voxel of the grid, twice: slots are reused by other voxels in between.
+            for pass in 0..2 {
+                for i in 0..40 * 6 * 5 {
+                    let v = Vec3::new((i % 40) as f32, (i / 40 % 6) as f32, (i / 240) as f32);
+                    let p = (v + 0.3 + 0.2 * pass as f32) / Vec3::new(40.0, 6.0, 5.0);
+                    check(m, p, lambda);
                 }
             }
         }
-        // One medium and cell, new wavelengths (the memo is keyed by them).
-        for lambda in &lambdas {
-            let got = media[0].sample_point::<SampledSpectrum>(points[1], lambda);
-            assert_eq!(got.sigma_a, direct(&media[0], points[1], lambda).sigma_a);
-        }
         // Different media, different values (the memo is keyed by medium).
-        let a = media[0].sample_point::<SampledSpectrum>(points[0], &lambdas[0]);
-        let b = media[1].sample_point::<SampledSpectrum>(points[0], &lambdas[0]);
+        let p = Vec3::splat(0.4);
+        let a = media[0].sample_point::<SampledSpectrum>(p, &lambdas[0]);
+        let b = media[1].sample_point::<SampledSpectrum>(p, &lambdas[0]);
         assert_ne!(a.sigma_a, b.sigma_a);
+    }
+
+    /// The majorant grid bounds σt at every point of every segment, per channel in RGB
+    /// transport and over the spectrum in spectral transport.
+    #[test]
+    fn majorants_bound_sigma_t_in_every_channel() {
+        use crate::color::Rgb;
+        use crate::geometry::Ray;
+        let check = |m: &Medium, lambda_of: &dyn Fn(usize) -> Option<SampledWavelengths>| {
+            let mut tightness = 0.0f32;
+            let mut colored = false;
+            for k in 0..400 {
+                let o = Vec3::new(-0.5, (k % 20) as f32 / 20.0, (k / 20) as f32 / 20.0);
+                let d = Vec3::new(1.0, 0.3 * ((k % 7) as f32 - 3.0) / 3.0, 0.2).normalize();
+                let ray = Ray::new(o, d);
+                match lambda_of(k) {
+                    Some(lambda) => {
+                        for seg in m.segments::<SampledSpectrum>(&ray, 10.0, &lambda) {
+                            for j in 0..16 {
+                                let t = seg.t_min + (seg.t_max - seg.t_min) * (j as f32 + 0.5) / 16.0;
+                                let mp = m.sample_point::<SampledSpectrum>(ray.at(t), &lambda);
+                                let st = mp.sigma_a + mp.sigma_s;
+                                assert!(st.cmple(seg.sigma_maj * 1.0001).all(), "{st} > {}", seg.sigma_maj);
+                                tightness = tightness.max((st / seg.sigma_maj).max_element());
+                            }
+                        }
+                    }
+                    None => {
+                        for seg in m.segments::<Rgb>(&ray, 10.0, &()) {
+                            // One bound per channel.
+                            colored |= seg.sigma_maj.max_element() > 1.2 * seg.sigma_maj.min_element();
+                            for j in 0..16 {
+                                let t = seg.t_min + (seg.t_max - seg.t_min) * (j as f32 + 0.5) / 16.0;
+                                let mp = m.sample_point::<Rgb>(ray.at(t), &());
+                                let st = mp.sigma_a + mp.sigma_s;
+                                assert!(st.cmple(seg.sigma_maj * 1.0001).all(), "{st} > {}", seg.sigma_maj);
+                                tightness = tightness.max((st / seg.sigma_maj).max_element());
+                            }
+                        }
+                    }
+                }
+            }
+            // Not vacuous: somewhere σt comes near its bound.
+            assert!(tightness > 0.8, "σt at most {tightness} of σmaj");
+            colored
+        };
+        check(&medium(1.0, true), &|k| Some(SampledWavelengths::sample_visible((k as f32 * 0.618_034).fract())));
+        assert!(check(&medium(1.0, false), &|_| None), "RGB majorants are per channel");
     }
 }

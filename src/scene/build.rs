@@ -1089,15 +1089,7 @@ fn build_medium(
             // pbrt-v4 does not normalise rgbgrid emission: an RGB illuminant spectrum whose film
             // RGB is ∫ȳ times the voxel's.
             let le_scale = settings.le_scale * crate::spectra::CIE_Y_INTEGRAL as f32;
-            // A voxel's largest value over the channels: of its spectrum for spectral transport.
-            let voxel_max = |v: Vec4| {
-                if spectral {
-                    crate::spectra::SigmoidPolynomial { c0: v.x, c1: v.y, c2: v.z }.max_value() * v.w
-                } else {
-                    v.truncate().max_element()
-                }
-            };
-            Medium::rgb_grid(m.name.clone(), world, b, sa, ss, le_grid, le_scale, cs, g, chromatic, voxel_max)
+            Medium::rgb_grid(m.name.clone(), world, b, sa, ss, le_grid, le_scale, cs, g, chromatic, spectral)
         }
         MediumSpec::Vdb { openvdb, filename, grid_name, temperature_name, temperature } => {
             let loc = e.params.loc("filename").unwrap_or(&e.loc);

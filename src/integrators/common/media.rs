@@ -252,9 +252,19 @@ mod heterogeneous_tests {
             let v = [c0, c1].map(|c| crate::color::pack_voxel(c, crate::spectra::RgbRole::Unbounded, space, spectral));
             let sa = DenseGrid::new(UVec3::new(2, 1, 1), v.to_vec()).unwrap();
             let bounds = Bounds3::new(Vec3::ZERO, Vec3::ONE);
-            Medium::rgb_grid("r".into(), Affine3A::IDENTITY, bounds, Some(sa), None, None, 1.0, space, 0.0, true, |v| {
-                v.truncate().max_element()
-            })
+            Medium::rgb_grid(
+                "r".into(),
+                Affine3A::IDENTITY,
+                bounds,
+                Some(sa),
+                None,
+                None,
+                1.0,
+                space,
+                0.0,
+                true,
+                spectral,
+            )
         };
         let p = Vec3::new(0.75, 0.5, 0.5);
         let mp = grid(false).sample_point::<Rgb>(p, &());

@@ -49,28 +49,22 @@ pub struct MajorantGrid {
 impl MajorantGrid {
     /// Builds a gray grid, asking `max_in(lo, hi)` for each cell's bound, with lo/hi in
     /// [0, 1]³ of `bounds`.
-    pub fn new(bounds: Bounds3, res: UVec3, max_in: impl Fn(Vec3, Vec3) -> f32 + Sync) -> MajorantGrid {
+    pub fn new(bounds: Bounds3, res: UVec3, max_in: impl Fn(Vec3, Vec3) -> f32) -> MajorantGrid {
         MajorantGrid::banded(bounds, res, Bands::Gray, |lo, hi, out| out[0] = max_in(lo, hi))
     }
 
     /// Builds a grid with `bands` values per cell, `max_in(lo, hi, out)` writing a cell's.
-    pub fn banded(
-        bounds: Bounds3,
-        res: UVec3,
-        bands: Bands,
-        max_in: impl Fn(Vec3, Vec3, &mut [f32]) + Sync,
-    ) -> MajorantGrid {
-        use rayon::prelude::*;
+    pub fn banded(bounds: Bounds3, res: UVec3, bands: Bands, max_in: impl Fn(Vec3, Vec3, &mut [f32])) -> MajorantGrid {
         let r = res.as_vec3();
         let mut values = vec![0.0; (res.x * res.y * res.z) as usize * bands.count()];
-        values.par_chunks_mut(bands.count()).enumerate().for_each(|(i, out)| {
+        for (i, out) in values.chunks_mut(bands.count()).enumerate() {
             let i = i as u32;
             let c = UVec3::new(i % res.x, (i / res.x) % res.y, i / (res.x * res.y)).as_vec3();
             max_in(c / r, (c + Vec3::ONE) / r, out);
             for v in out {
                 *v = v.max(0.0);
             }
-        });
+        }
         MajorantGrid { bounds, res, bands, values }
     }
 
@@ -116,15 +110,7 @@ pub struct DdaIterator<'a, C = Rgb> {
 impl<'a, C: Channels> DdaIterator<'a, C> {
     /// Starts at `t_min` on the medium-space ray (o, d), ending at `t_max`; σmaj of a cell is
     /// `sigma_t` × the cell's value (in each channel, the value of that channel's band).
-    pub fn new(
-        grid: &'a MajorantGrid,
-        o: Vec3,
-        d: Vec3,
-        t_min: f32,
-        t_max: f32,
-        sigma_t: C,
-        lambda: &C::Lambda,
-    ) -> DdaIterator<'a, C> {
+    pub fn new(grid: &'a MajorantGrid, o: Vec3, d: Vec3, t_min: f32, t_max: f32, sigma_t: C) -> DdaIterator<'a, C> {
         let diag = grid.bounds.max - grid.bounds.min;
         let o_grid = (o - grid.bounds.min) / diag;
         let d_grid = d / diag;
@@ -136,7 +122,7 @@ impl<'a, C: Channels> DdaIterator<'a, C> {
             per_channel: match grid.bands {
                 Bands::Gray => false,
                 Bands::Rgb => {
-                    assert!(C::wavelengths(lambda).is_none(), "an RGB majorant grid walked in spectral transport");
+                    assert_eq!(C::CHANNELS, 3, "an RGB majorant grid walked in {} transport", C::NAME);
                     true
                 }
             },
@@ -223,7 +209,7 @@ mod tests {
             out.copy_from_slice(&[1.0 + lo.x, 2.0 + lo.x, 3.0 + lo.x]);
         });
         let segs: Vec<Segment> =
-            DdaIterator::new(&grid, Vec3::new(-1.0, 0.5, 0.5), Vec3::X, 1.0, 2.0, Rgb::splat(2.0), &()).collect();
+            DdaIterator::new(&grid, Vec3::new(-1.0, 0.5, 0.5), Vec3::X, 1.0, 2.0, Rgb::splat(2.0)).collect();
         assert_eq!(
             segs.iter().map(|s| s.sigma_maj).collect::<Vec<_>>(),
             [Rgb::new(2.0, 4.0, 6.0), Rgb::new(3.0, 5.0, 7.0)]
@@ -235,7 +221,7 @@ mod tests {
         let bounds = Bounds3::new(Vec3::ZERO, Vec3::ONE);
         let grid = MajorantGrid::new(bounds, UVec3::new(4, 1, 1), |lo, _| (lo.x * 4.0).round() + 1.0);
         let segs: Vec<Segment> =
-            DdaIterator::new(&grid, Vec3::new(-1.0, 0.5, 0.5), Vec3::X, 1.0, 2.0, Rgb::ONE, &()).collect();
+            DdaIterator::new(&grid, Vec3::new(-1.0, 0.5, 0.5), Vec3::X, 1.0, 2.0, Rgb::ONE).collect();
         assert_eq!(segs.len(), 4);
         for (i, s) in segs.iter().enumerate() {
             assert!((s.t_min - (1.0 + i as f32 * 0.25)).abs() < 1e-6);
@@ -244,8 +230,7 @@ mod tests {
         }
         // Backwards along a diagonal: contiguous segments that end at t_max.
         let segs: Vec<Segment> =
-            DdaIterator::new(&grid, Vec3::new(2.0, 0.9, 0.2), Vec3::new(-1.0, -0.2, 0.1), 1.0, 2.0, Rgb::ONE, &())
-                .collect();
+            DdaIterator::new(&grid, Vec3::new(2.0, 0.9, 0.2), Vec3::new(-1.0, -0.2, 0.1), 1.0, 2.0, Rgb::ONE).collect();
         assert!((segs[0].t_min - 1.0).abs() < 1e-6);
         for w in segs.windows(2) {
             assert!((w[0].t_max - w[1].t_min).abs() < 1e-6);

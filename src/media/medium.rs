@@ -396,11 +396,8 @@ impl Medium {
                 ray,
                 t_max,
                 C::eval(&g.sigma_a, lambda) + C::eval(&g.sigma_s, lambda),
-                lambda,
             ),
-            MediumKind::RgbGrid(g) => {
-                grid_segments(&g.medium_from_world, &g.bounds, &g.majorant, ray, t_max, C::ONE, lambda)
-            }
+            MediumKind::RgbGrid(g) => grid_segments(&g.medium_from_world, &g.bounds, &g.majorant, ray, t_max, C::ONE),
         }
     }
 }
@@ -413,12 +410,11 @@ fn grid_segments<'a, C: Channels>(
     ray: &Ray,
     t_max: f32,
     sigma_t: C,
-    lambda: &C::Lambda,
 ) -> Segments<'a, C> {
     let o = medium_from_world.transform_point3(ray.o);
     let d = medium_from_world.transform_vector3(ray.d);
     match bounds.intersect_ray(o, d, t_max) {
-        Some((t0, t1)) => Segments::Dda(DdaIterator::new(majorant, o, d, t0, t1, sigma_t, lambda)),
+        Some((t0, t1)) => Segments::Dda(DdaIterator::new(majorant, o, d, t0, t1, sigma_t)),
         None => Segments::Single(None),
     }
 }

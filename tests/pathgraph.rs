@@ -3,10 +3,13 @@
 
 use crate::common::{channel_stats, load_scene, render_scene, render_with, transport};
 use nimbus::imageio::Image;
+use nimbus::integrators::common::PathConfig;
+use nimbus::integrators::volpath::VolPath;
 use nimbus::scene::BuildOptions;
 
 /// A cube (side 2) of a forward-scattering medium with a `sigma_s` spectrum, over a diffuse
-/// floor, lit by a distant light and a sky, rendered by `integrator` with `params`.
+/// floor, lit by a distant light, a sky and a small emitter seen through the cube, rendered
+/// by `integrator` with `params`.
 fn scene_text(integrator: &str, params: &str, sigma_s: &str) -> String {
     format!(
         r#"LookAt 0 1 6  0 0 0  0 1 0
@@ -22,6 +25,11 @@ MakeNamedMedium "m" "string type" "homogeneous" "rgb sigma_s" [{sigma_s}] "rgb s
 AttributeBegin
   Material "diffuse" "rgb reflectance" [0.5 0.5 0.5]
   Shape "trianglemesh" "point3 P" [-4 -1 -4  4 -1 -4  4 -1 4  -4 -1 4] "integer indices" [0 2 1 0 3 2]
+AttributeEnd
+AttributeBegin
+  AreaLightSource "diffuse" "rgb L" [3 3 3]
+  Material "diffuse" "rgb reflectance" [0 0 0]
+  Shape "trianglemesh" "point3 P" [-0.4 0 -1.5  0.4 0 -1.5  0.4 0.8 -1.5  -0.4 0.8 -1.5] "integer indices" [0 1 2 0 2 3]
 AttributeEnd
 AttributeBegin
   MediumInterface "m" ""
@@ -40,7 +48,9 @@ fn max_abs_diff(a: &Image, b: &Image) -> f32 {
 
 /// K = 1 makes every shading point its own cluster: aggregation then gives back each path's
 /// own estimates, so the image is volpath's at the same seed (to float rounding), in RGB and
-/// in spectral transport, with surfaces (diffuse floor) and media vertices. (In chromatic media
+/// in spectral transport, with surfaces (diffuse floor) and media vertices; volpath here
+/// estimates the light seen through the medium as the graph's paths do
+/// (`PathConfig::camera_line`). (In chromatic media
 /// the graph's paths apply spectral MIS per segment, a different unbiased estimator: see
 /// `chromatic_media_keep_the_mean`.)
 #[test]
@@ -50,7 +60,8 @@ fn cluster_size_one_is_volpath() {
         let graph =
             load_scene(&scene_text("pathgraph", r#""integer clustersize" 1 "integer iterations" 4"#, "2 2 2"), &opts);
         let volpath = load_scene(&scene_text("volpath", "", "2 2 2"), &opts);
-        let (g, v) = (render_scene(&graph), render_scene(&volpath));
+        let line = VolPath::with_config(PathConfig { camera_line: true, ..PathConfig::volpath(20, false) });
+        let (g, v) = (render_scene(&graph), render_with(&volpath, &line));
         let peak = v.pixels.iter().map(|p| p.max_element()).fold(0.0, f32::max);
         let d = max_abs_diff(&g, &v);
         assert!(peak > 0.05 && d <= 1e-4 * peak, "spectral {spectral}: max difference {d} (peak {peak})");

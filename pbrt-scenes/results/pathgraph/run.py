@@ -14,10 +14,11 @@ idle machine (timings are 2 threads):
 2. The paper's Fig. 6: relMSE against spp and time on the cloud over 60 s, and where the
    graph's bias makes path tracing the better choice (the crossing): fig6-*.png.
 3. The paper's Fig. 7: error and mean against iterations at 1 and 16 spp: fig7-iterations.png.
-4. A K study (cluster size): error, mean and time per sample: k-study.png.
+4. A K study (cluster size): error, mean and time per sample, and MSE at equal time over three
+   seeds (what the default K is chosen by): k-study.png.
 5. Where it fails: a direct-light-dominated haze, a surfaces-only scene, a very anisotropic
    cloud (g = 0.95), each at equal time (EQUAL_TIME s): failure-<case>/.
-6. Every pbrt-scenes scene at equal time (EQUAL_TIME s): the table only.
+6. Every pbrt-scenes scene at equal time (EQUAL_TIME s), mean of three seeds: the table only.
 Writes results.md and results.json beside this script.
 """
 
@@ -86,9 +87,9 @@ def with_integrator(src, dst, params):
     return variant(src, dst, [(r'^Integrator "volpath"', f'Integrator "pathgraph" {params}')])
 
 
-def compare(scene, ref, out, time_s, spp=None):
+def compare(scene, ref, out, time_s, spp=None, seed=SEED):
     args = ["compare", scene, "--integrators", "volpath,pathgraph", "--reference", ref,
-            "--time", str(time_s), "--seed", SEED, "--nthreads", THREADS, "--out", out, "--quiet"]
+            "--time", str(time_s), "--seed", seed, "--nthreads", THREADS, "--out", out, "--quiet"]
     if spp:
         args += ["--spp", str(spp)]
     run(args)
@@ -227,28 +228,40 @@ def main():
             md.append(f"| {k} mean | " + " | ".join(f"{p[2]:+.2f}%" for p in pts) + " |")
         md.append("")
 
-        # 4. K study at 16 spp.
-        ks = [1, 4, 16, 64, 256]
+        # 4. K study: 16 spp, and equal time (mean MSE over three seeds, which is what the
+        # default is chosen by).
+        ks = [1, 4, 16, 32, 64, 256]
         kstudy = {}
         for s in ["cloud-sun-sky", "wax-small-light", "fog-emitter"]:
+            ref = os.path.join(REFS, s + ".exr")
             for k in ks:
                 sc = with_integrator(os.path.join(SCENES, s + ".pbrt"), os.path.join(SCENES, f"_pg_{s}.pbrt"),
                                      f'"integer clustersize" {k}')
                 img = os.path.join(work, "k.exr")
                 t, stats = render(sc, img, 16)
+                d = diff(img, ref)
+                mses = []
+                for seed in ["3", "4", "5"]:
+                    out = os.path.join(work, "k-cmp")
+                    run(["compare", sc, "--integrators", "pathgraph", "--reference", ref, "--time", str(EQUAL_TIME),
+                         "--seed", seed, "--nthreads", THREADS, "--out", out, "--quiet"])
+                    f = finals(list(csv.DictReader(open(os.path.join(out, "results.csv")))))
+                    mses.append(float(f[("pathgraph", "equal-time")]["mse"]))
+                    shutil.rmtree(out)
                 os.remove(sc)
-                d = diff(img, os.path.join(REFS, s + ".exr"))
-                kstudy.setdefault(s, []).append((k, d["relMSE"], d["mean_pct"], t / 16))
+                kstudy.setdefault(s, []).append((k, d["relMSE"], d["mean_pct"], t / 16, sum(mses) / len(mses)))
         results["k_study"] = kstudy
-        fig, axes = plt.subplots(1, 3, figsize=(13, 4))
+        fig, axes = plt.subplots(1, 4, figsize=(17, 4))
         for s, pts in kstudy.items():
             axes[0].loglog([p[0] for p in pts], [p[1] for p in pts], "o-", label=s)
             axes[1].semilogx([p[0] for p in pts], [p[2] for p in pts], "o-", label=s)
             axes[2].loglog([p[0] for p in pts], [p[3] for p in pts], "o-", label=s)
+            axes[3].loglog([p[0] for p in pts], [p[4] / pts[0][4] for p in pts], "o-", label=s)
         axes[0].set_ylabel("relMSE at 16 spp")
         axes[1].set_ylabel("image mean vs reference (%)")
         axes[1].axhline(0, color="k", lw=0.5)
         axes[2].set_ylabel("seconds per sample")
+        axes[3].set_ylabel(f"MSE in {EQUAL_TIME} s / MSE at K = 1 (volpath)")
         for ax in axes:
             ax.set_xlabel("cluster size K")
             ax.grid(True, which="both", alpha=0.3)
@@ -258,11 +271,14 @@ def main():
         fig.savefig(os.path.join(HERE, "k-study.png"), dpi=110)
         plt.close(fig)
         md += ["## Cluster size", "", "![K study](k-study.png)", "",
+               f"relMSE and mean at 16 spp (seed {SEED}); MSE at equal time ({EQUAL_TIME} s), the mean of seeds 3, 4 "
+               "and 5, by which the default K is chosen.", "",
                "| scene | " + " | ".join(f"K {k}" for k in ks) + " |", "|---|" + "--:|" * len(ks)]
         for s, pts in kstudy.items():
             md.append(f"| {s} relMSE | " + " | ".join(f"{p[1]:.2e}" for p in pts) + " |")
             md.append(f"| {s} mean | " + " | ".join(f"{p[2]:+.2f}%" for p in pts) + " |")
             md.append(f"| {s} s/sample | " + " | ".join(f"{p[3]:.3f}" for p in pts) + " |")
+            md.append(f"| {s} MSE in {EQUAL_TIME} s | " + " | ".join(f"{p[4]:.2e}" for p in pts) + " |")
         md.append("")
 
         # 5. Failure cases at equal time.
@@ -300,22 +316,33 @@ def main():
                 results.setdefault("failures", {}).setdefault(name, {})[integ] = t
         md.append("")
 
-        # 6. Every pbrt-scenes scene at equal time.
+        # 6. Every pbrt-scenes scene at equal time, three seeds (one seed's MSE ratio varies by
+        # about 10 %).
+        seeds = ["1", "2", "3"]
         md += [f"## Every pbrt-scenes scene at equal time ({EQUAL_TIME} s)", "",
+               f"Means over seeds {', '.join(seeds)}.", "",
                "| scene | volpath spp | volpath MSE | pathgraph spp | pathgraph MSE | MSE ratio volpath : pathgraph | "
                "pathgraph mean vs ref |", "|---|--:|--:|--:|--:|--:|--:|"]
         for f in sorted(os.listdir(SCENES)):
             if not f.endswith(".pbrt") or f.startswith("_") or f == "default.pbrt":
                 continue
             s = f[:-5]
-            rows = compare(os.path.join(SCENES, f), os.path.join(REFS, s + ".exr"), os.path.join(work, "all-" + s),
-                           EQUAL_TIME)
-            fin = finals(rows)
-            v, g = fin[("volpath", "equal-time")], fin[("pathgraph", "equal-time")]
-            mean = 100 * (float(g["mean"]) / float(g["mean_reference"]) - 1)
-            ratio = float(v["mse"]) / float(g["mse"])
+            acc = {"volpath": [], "pathgraph": []}
+            for seed in seeds:
+                out = os.path.join(work, "all-" + s)
+                fin = finals(compare(os.path.join(SCENES, f), os.path.join(REFS, s + ".exr"), out, EQUAL_TIME,
+                                     seed=seed))
+                shutil.rmtree(out)
+                for integ in acc:
+                    acc[integ].append(fin[(integ, "equal-time")])
+            avg = {integ: {key: sum(float(r[key]) for r in rows) / len(rows) for key in ["spp", "mse", "mean",
+                                                                                          "mean_reference"]}
+                   for integ, rows in acc.items()}
+            v, g = avg["volpath"], avg["pathgraph"]
+            mean = 100 * (g["mean"] / g["mean_reference"] - 1)
+            ratio = v["mse"] / g["mse"]
             results.setdefault("all_scenes", {})[s] = {"volpath": v, "pathgraph": g, "mse_ratio": ratio}
-            md.append(f"| {s} | {v['spp']} | {float(v['mse']):.3g} | {g['spp']} | {float(g['mse']):.3g} | "
+            md.append(f"| {s} | {v['spp']:.0f} | {v['mse']:.3g} | {g['spp']:.0f} | {g['mse']:.3g} | "
                       f"{ratio:.2f}× | {mean:+.2f}% |")
         md.append("")
     finally:

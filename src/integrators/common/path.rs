@@ -10,7 +10,7 @@
 use glam::{Vec2, Vec3};
 
 use super::RayStats;
-use super::media::{ShadowEstimate, ratio_tracking, sample_t_maj};
+use super::media::{ShadowEstimate, line_transmittance, ratio_tracking, sample_t_maj};
 use super::observer::{EmissionEvent, NeeEvent, NoObserver, PathObserver, VertexEvent};
 use crate::accel::{Hit, NONE};
 use crate::color::Channels;
@@ -45,12 +45,32 @@ pub struct PathConfig {
     /// factor unbiased on its own, which path graphs need when they splice one path's suffix
     /// onto another's prefix. pbrt-v4's volpath keeps one hero per path.
     pub hero_per_segment: bool,
+    /// Estimate the area lights seen along the camera's straight line through media (through
+    /// `interface` surfaces up to the first opaque one) as Le times the transmittance, added
+    /// whatever the camera segment's delta tracking does, instead of adding Le only when
+    /// delta tracking happens to reach the light (probability T). With S the radiance the
+    /// path brings back when it scatters before the light (mean s̄), the pixel's variance
+    /// falls by Le T (1 − T) (Le − 2 s̄) for an exact T: a gain wherever the light is brighter
+    /// than twice what the medium scatters towards the camera, which holds for area lights
+    /// (a medium scatters a fraction of a light's radiance, at most about half of it for a
+    /// light filling a hemisphere) and fails for an environment seen through a bright
+    /// medium (which scatters about as much as the sky sends), so escaping paths keep
+    /// pbrt-v4's estimate. Path graphs use it (their pixels take first-segment emission
+    /// unaggregated); pbrt-v4's volpath does not.
+    pub camera_line: bool,
 }
 
 impl PathConfig {
     /// pbrt-v4's volpath loop: next-event estimation, no extra samples.
     pub fn volpath(max_depth: u32, regularize: bool) -> PathConfig {
-        PathConfig { max_depth, regularize, next_event: true, extra_direct: 0, hero_per_segment: false }
+        PathConfig {
+            max_depth,
+            regularize,
+            next_event: true,
+            extra_direct: 0,
+            hero_per_segment: false,
+            camera_line: false,
+        }
     }
 }
 
@@ -141,12 +161,25 @@ pub fn trace_path<C: Channels, O: PathObserver<C>>(
     let mut prev_p = ray.o;
     let mut prev_n = Vec3::ZERO;
     let mut extra_done = false;
+    // The camera line's emission has been estimated (`PathConfig::camera_line`): depth-0
+    // emission events are then already counted.
+    let mut line_done = false;
 
     loop {
         stats.bounce += 1;
         // The hero of this segment (one per path unless `hero_per_segment`).
         let hero = st.hero;
         let hit = scene.surfaces.intersect(&ray, f32::INFINITY);
+        if config.camera_line && depth == 0 && medium != NONE && !line_done {
+            line_done = true;
+            let c = line_emission(scene, ray, hit, medium, &st, lambda, stats);
+            if !c.is_zero() {
+                l += c;
+                observer.on_emission(&EmissionEvent { depth, contribution: c, pdf_light: 0.0 });
+            }
+        }
+        // Area lights on the camera line (depth 0) once it has been estimated.
+        let line_counted = line_done && depth == 0;
 
         // Delta tracking through the current medium up to the surface.
         if medium != NONE {
@@ -332,7 +365,7 @@ pub fn trace_path<C: Channels, O: PathObserver<C>>(
         let wo = -ray.d;
 
         // Emission from an area light that was hit.
-        if hit.prim.area_light != NONE {
+        if hit.prim.area_light != NONE && !line_counted {
             let light = &scene.lights[hit.prim.area_light as usize];
             let le = light.emitted::<C>(s, wo, lambda);
             if !le.is_zero() {
@@ -440,6 +473,64 @@ pub fn trace_path<C: Channels, O: PathObserver<C>>(
         }
     }
     l
+}
+
+/// The area-light emission along the straight line `ray` (starting in `medium`, first hitting
+/// `hit`): lights hit through `interface` surfaces and the one opaque surface it ends at,
+/// each times the transmittance up to it ([`line_transmittance`]),
+/// which is the expectation of what delta tracking along the line adds at depth 0
+/// ([`PathConfig::camera_line`]). The estimate is the same for every channel's sampling
+/// technique, so β/mean(r_u) weighs it as any depth-0 emission.
+fn line_emission<C: Channels>(
+    scene: &Scene,
+    mut ray: Ray,
+    mut hit: Option<Hit>,
+    mut medium: u32,
+    st: &PathState<C>,
+    lambda: &C::Lambda,
+    stats: &mut RayStats,
+) -> C {
+    // Most lines reach no light: find out by intersections alone before tracking anything.
+    let (mut probe, mut next) = (ray, hit);
+    loop {
+        let Some(h) = next else { return C::ZERO };
+        if h.prim.area_light != NONE {
+            break;
+        }
+        if !scene.materials[h.prim.material as usize].is_interface() {
+            return C::ZERO;
+        }
+        probe = h.spawn_ray(probe.d);
+        stats.shadow += 1;
+        next = scene.surfaces.intersect(&probe, f32::INFINITY);
+    }
+    // Its own stream: the camera segment's delta tracking keeps its random numbers.
+    let mut rng = Pcg32::new(
+        crate::sampling::rng::hash_vec3(ray.o) ^ 0x5851_f42d_4c95_7f2d,
+        crate::sampling::rng::hash_vec3(ray.d),
+    );
+    let mut weight = st.beta / st.r_u.average();
+    let mut sum = C::ZERO;
+    loop {
+        if medium != NONE {
+            let t_max = hit.as_ref().map_or(f32::INFINITY, |h| h.surface.t);
+            weight *= line_transmittance::<C>(&scene.media[medium as usize], &ray, t_max, &mut rng, lambda);
+            if weight.is_zero() {
+                return sum;
+            }
+        }
+        let Some(h) = hit else { return sum };
+        if h.prim.area_light != NONE {
+            sum += weight * scene.lights[h.prim.area_light as usize].emitted::<C>(&h.surface, -ray.d, lambda);
+        }
+        if !scene.materials[h.prim.material as usize].is_interface() {
+            return sum;
+        }
+        medium = medium_after(scene, &h, ray.d, medium);
+        ray = h.spawn_ray(ray.d);
+        stats.shadow += 1;
+        hit = scene.surfaces.intersect(&ray, f32::INFINITY);
+    }
 }
 
 /// Ends a segment of a path in chromatic media ([`PathConfig::hero_per_segment`]): the spectral

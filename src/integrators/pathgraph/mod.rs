@@ -61,6 +61,7 @@ pub fn create(settings: &PathGraphSettings, _scene: &Scene) -> Result<PathGraph,
         config: PathConfig {
             extra_direct: settings.extra_direct,
             hero_per_segment: true,
+            camera_line: true,
             ..PathConfig::volpath(settings.max_depth, settings.regularize)
         },
         report: Mutex::new(Report::default()),

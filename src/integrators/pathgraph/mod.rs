@@ -34,6 +34,10 @@ use record::{Paths, Recorder, Vertices};
 pub struct PathGraph {
     settings: PathGraphSettings,
     config: PathConfig,
+    /// The scene has no media: surface vertices are clusters of one, so the graph would give
+    /// back each path's own estimate at the cost of recording it. Such scenes are rendered
+    /// per camera ray, as volpath renders them.
+    without_media: bool,
     report: Mutex<Report>,
 }
 
@@ -51,11 +55,10 @@ struct Report {
     record_seconds: f64,
     solve_seconds: f64,
     peak_bytes: usize,
-    without_media: bool,
 }
 
 /// Creates the integrator.
-pub fn create(settings: &PathGraphSettings, _scene: &Scene) -> Result<PathGraph, String> {
+pub fn create(settings: &PathGraphSettings, scene: &Scene) -> Result<PathGraph, String> {
     Ok(PathGraph {
         settings: settings.clone(),
         config: PathConfig {
@@ -64,6 +67,7 @@ pub fn create(settings: &PathGraphSettings, _scene: &Scene) -> Result<PathGraph,
             camera_line: true,
             ..PathConfig::volpath(settings.max_depth, settings.regularize)
         },
+        without_media: scene.media.is_empty(),
         report: Mutex::new(Report::default()),
     })
 }
@@ -99,28 +103,6 @@ impl PathGraph {
     }
 }
 
-impl PathGraph {
-    /// One pass of plain path tracing (what the graph would give back without media).
-    fn path_traced<C: FilmChannels>(&self, scene: &Scene, pass: &ImagePass<'_>) -> (Vec<PixelValue>, RayStats) {
-        let config = PathConfig { extra_direct: 0, ..self.config };
-        let (parts, stats) =
-            pass.trace_pixels::<C, _>(Vec::new, |out: &mut Vec<PixelValue>, px, lambda, sampler, stats| {
-                let l = trace_path::<C, _>(
-                    scene,
-                    px.ray,
-                    scene.camera_medium,
-                    lambda,
-                    sampler,
-                    &config,
-                    &mut NoObserver,
-                    stats,
-                );
-                out.push(PixelValue { index: px.index, weight: px.weight, l: l.to_film(lambda, scene) });
-            });
-        (parts.into_iter().flatten().collect(), stats)
-    }
-}
-
 /// The path-traced L⁺ of every vertex (the iteration's start, Sec. 4): a backward sweep, as
 /// each path's vertices are recorded in order.
 fn path_traced(v: &Vertices) -> Vec<Rgb> {
@@ -138,17 +120,6 @@ fn path_traced(v: &Vertices) -> Vec<Rgb> {
 
 impl ImageIntegrator for PathGraph {
     fn sample_image(&self, scene: &Scene, pass: &ImagePass<'_>) -> (Vec<PixelValue>, RayStats) {
-        if scene.media.is_empty() {
-            // Surface vertices are clusters of one: without media the graph would give back
-            // each path's own estimate at the cost of recording it.
-            if let Ok(mut r) = self.report.lock() {
-                r.without_media = true;
-            }
-            return match scene.transport.transport {
-                Transport::Rgb => self.path_traced::<Rgb>(scene, pass),
-                Transport::Spectral => self.path_traced::<SampledSpectrum>(scene, pass),
-            };
-        }
         let start = Instant::now();
         let (mut v, mut paths, stats) = match scene.transport.transport {
             Transport::Rgb => self.record::<Rgb>(scene, pass),
@@ -264,14 +235,14 @@ impl Integrator for PathGraph {
     }
 
     fn whole_image(&self) -> Option<&dyn ImageIntegrator> {
-        Some(self)
+        (!self.without_media).then_some(self as &dyn ImageIntegrator)
     }
 
     fn report(&self) -> Vec<String> {
-        let Ok(r) = self.report.lock() else { return Vec::new() };
-        if r.without_media {
+        if self.without_media {
             return vec!["pathgraph   the scene has no media: nothing to cluster, rendered by path tracing".into()];
         }
+        let Ok(r) = self.report.lock() else { return Vec::new() };
         if r.samples == 0 {
             return Vec::new();
         }

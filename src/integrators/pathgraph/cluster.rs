@@ -36,20 +36,21 @@ impl Clusters {
 const MAX_RING: i32 = 12;
 
 /// Clusters the points `p` by kind (`kind` 1, 2, ...: points of one kind only share clusters
-/// with each other), about `k` per cluster; points of kind 0 are clusters of their own (after
-/// the others). `seed` picks the centres.
-pub fn cluster(p: &[Vec3], kind: impl Fn(usize) -> u8, k: u32, seed: u64) -> Clusters {
+/// with each other), about `k(kind)` per cluster; points of kind 0 are clusters of their own
+/// (after the others). `seed` picks the centres.
+pub fn cluster(p: &[Vec3], kind: impl Fn(usize) -> u32, k: impl Fn(u32) -> u32, seed: u64) -> Clusters {
     let mut out = Clusters { order: Vec::with_capacity(p.len()), offsets: vec![0] };
-    let kinds = (0..p.len()).map(&kind).max().unwrap_or(0);
-    for kd in 1..=kinds {
-        let idx: Vec<u32> = (0..p.len() as u32).filter(|&i| kind(i as usize) == kd).collect();
-        cluster_kind(p, &idx, k, seed ^ u64::from(kd), &mut out);
+    // Kinds in increasing order, each kind's points in index order.
+    let mut kinds: std::collections::BTreeMap<u32, Vec<u32>> = std::collections::BTreeMap::new();
+    for i in 0..p.len() {
+        kinds.entry(kind(i)).or_default().push(i as u32);
     }
-    for i in 0..p.len() as u32 {
-        if kind(i as usize) == 0 {
-            out.order.push(i);
-            out.offsets.push(out.order.len() as u32);
-        }
+    for (&kd, idx) in kinds.range(1..) {
+        cluster_kind(p, idx, k(kd), seed ^ u64::from(kd), &mut out);
+    }
+    for &i in kinds.get(&0).map_or(&[][..], Vec::as_slice) {
+        out.order.push(i);
+        out.offsets.push(out.order.len() as u32);
     }
     out
 }
@@ -248,7 +249,7 @@ mod tests {
     #[test]
     fn every_point_once_and_clusters_near_k() {
         let p = points(20_000);
-        let c = cluster(&p, |i| u8::from(i % 10 != 0), 16, 3);
+        let c = cluster(&p, |i| u32::from(i % 10 != 0), |_| 16, 3);
         let mut seen = c.order.clone();
         seen.sort_unstable();
         assert_eq!(seen, (0..20_000).collect::<Vec<u32>>());
@@ -282,7 +283,7 @@ mod tests {
     #[test]
     fn k_one_is_one_point_per_cluster() {
         let p = points(100);
-        let c = cluster(&p, |_| 1, 1, 0);
+        let c = cluster(&p, |_| 1, |_| 1, 0);
         assert_eq!(c.len(), 100);
     }
 }

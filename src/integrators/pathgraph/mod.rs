@@ -103,6 +103,29 @@ impl PathGraph {
     }
 }
 
+/// Each vertex's place along its path among the graph vertices (0: the pixel's first).
+fn path_positions(v: &Vertices, paths: &Paths) -> Vec<u32> {
+    let mut depth = vec![0u32; v.len()];
+    for &f in &paths.first {
+        let (mut i, mut d) = (f, 0);
+        while i != NONE {
+            depth[i as usize] = d;
+            d += 1;
+            i = v.next[i as usize];
+        }
+    }
+    depth
+}
+
+/// Whether `maxdepth` cuts enough paths that a vertex's estimate depends on how deep it is:
+/// at least 1 % of the paths that have a graph vertex reach `max_depth` graph vertices (a
+/// lower bound on the paths the limit ended, as specular events are not graph vertices).
+fn truncation_binds(depth: &[u32], max_depth: u32) -> bool {
+    let first = depth.iter().filter(|&&d| d == 0).count();
+    let last = depth.iter().filter(|&&d| d + 1 >= max_depth).count();
+    last * 100 >= first
+}
+
 /// The path-traced L⁺ of every vertex (the iteration's start, Sec. 4): a backward sweep, as
 /// each path's vertices are recorded in order.
 fn path_traced(v: &Vertices) -> Vec<Rgb> {
@@ -129,17 +152,32 @@ impl ImageIntegrator for PathGraph {
 
         let seed = (scene.sampler.seed as u32 as u64) << 32 | pass.sample_index() as u64;
         // Medium vertices cluster with medium vertices, Lambertian surface vertices with
-        // Lambertian ones; other surface vertices are clusters of one.
+        // Lambertian ones; other surface vertices are clusters of one. Within a class,
+        // vertices cluster by their place along the path (README: depth classes).
+        let depth = path_positions(&v, &paths);
+        let iterations = self.settings.iterations;
+        let binding = truncation_binds(&depth, self.settings.max_depth);
         let kind = |i: usize| {
-            if !v.g[i].is_nan() {
+            let class = if !v.g[i].is_nan() {
                 1
             } else if v.n[i] != glam::Vec3::ZERO {
                 2
             } else {
-                0
-            }
+                return 0;
+            };
+            let level = match depth[i] {
+                0 => 0,
+                _ if !binding => 1,
+                // Aggregates deeper than the iterations reach never reach a pixel.
+                d if d <= iterations => d,
+                _ => return 0,
+            };
+            class + 2 * level
         };
-        let mut clusters = cluster::cluster(&v.p, kind, self.settings.cluster_size, seed);
+        let k = self.settings.cluster_size;
+        let first_k = (k / 2).max(1);
+        let mut clusters = cluster::cluster(&v.p, kind, |kd| if kd <= 2 { first_k } else { k }, seed);
+        drop(depth);
         let mut rank = vec![0u32; clusters.order.len()];
         for (new, &old) in clusters.order.iter().enumerate() {
             rank[old as usize] = new as u32;

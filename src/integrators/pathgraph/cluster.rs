@@ -1,15 +1,15 @@
 //! Neighbour edges: nearest-centre clustering of the shading points (Sec. 3.1, Sec. 4).
 //!
 //! About N/K points are chosen as centres by hashing their index with the sample's seed (so
-//! the choice does not depend on the thread count), a hash grid over the centres answers
-//! nearest-centre queries, and clusters larger than 2K are halved at the median of their
+//! the choice does not depend on the thread count), a k-d tree over the centres (kiddo's
+//! immutable tree) answers nearest-centre queries, and clusters larger than 2K are halved at the median of their
 //! longest axis until they are not ("repeated for large clusters until the number of shading
 //! points per cluster is relatively even").
 
-use glam::{IVec3, Vec3};
+use glam::Vec3;
+use kiddo::SquaredEuclidean;
+use kiddo::immutable::float::kdtree::ImmutableKdTree;
 use rayon::prelude::*;
-
-use crate::math::cell_map::CellMap;
 
 /// Clusters as ranges of a permutation of the points.
 #[derive(Debug, Default)]
@@ -31,9 +31,6 @@ impl Clusters {
         self.offsets[c] as usize..self.offsets[c + 1] as usize
     }
 }
-
-/// Rings of the hash grid searched before falling back to scanning every centre.
-const MAX_RING: i32 = 12;
 
 /// Clusters the points `p` by kind (`kind` 1, 2, ...: points of one kind only share clusters
 /// with each other), about `k(kind)` per cluster; points of kind 0 are clusters of their own
@@ -72,8 +69,8 @@ fn cluster_kind(p: &[Vec3], idx: &[u32], k: u32, seed: u64, out: &mut Clusters) 
     if centres.is_empty() {
         centres.push(idx[0]);
     }
-    let grid = CentreGrid::new(p, idx, &centres);
-    let nearest: Vec<u32> = idx.par_iter().map(|&i| grid.nearest(p, p[i as usize])).collect();
+    let tree = CentreTree::new(p, &centres);
+    let nearest: Vec<u32> = idx.par_iter().map(|&i| tree.nearest(p[i as usize])).collect();
     // Counting sort by centre: members stay in index order within a cluster.
     let mut count = vec![0u32; centres.len() + 1];
     for &c in &nearest {
@@ -128,108 +125,22 @@ fn mix(seed: u64, i: u64) -> u64 {
     z ^ (z >> 31)
 }
 
-/// A uniform hash grid over the cluster centres.
-struct CentreGrid<'a> {
-    cell: f32,
-    origin: Vec3,
-    /// Centre ranks sorted by cell.
-    sorted: Vec<u32>,
-    /// Their positions, in the same order (the search reads them contiguously).
-    sorted_p: Vec<Vec3>,
-    cells: CellMap<(u32, u32)>,
-    centres: &'a [u32],
-}
+/// A k-d tree over the cluster centres. Points gather where paths scatter most (near a
+/// camera, an emitter, a dense core), which a uniform hash grid handled with crowded or empty
+/// cells: its nearest-centre search was 22 % of a fog-emitter render, the tree's takes 20 %
+/// less solve time there.
+struct CentreTree(ImmutableKdTree<f32, u32, 3, 32>);
 
-impl<'a> CentreGrid<'a> {
-    fn new(p: &[Vec3], points: &[u32], centres: &'a [u32]) -> CentreGrid<'a> {
-        let (lo, hi) = points
-            .iter()
-            .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), &i| (lo.min(p[i as usize]), hi.max(p[i as usize])));
-        let extent = (hi - lo).max(Vec3::splat((hi - lo).max_element() * 1e-3 + 1e-6));
-        // One centre per cell if they were spread evenly; finer while cells are crowded
-        // (points, and so centres, gather where paths scatter most).
-        let mut cell = (extent.x * extent.y * extent.z / centres.len() as f32).cbrt();
-        loop {
-            let mut grid = CentreGrid {
-                cell,
-                origin: lo,
-                sorted: Vec::new(),
-                sorted_p: Vec::new(),
-                cells: CellMap::default(),
-                centres,
-            };
-            grid.fill(p);
-            let crowded = centres.len() as f32 / grid.cells.len() as f32 > 4.0;
-            if !crowded || cell < extent.max_element() * 1e-4 {
-                return grid;
-            }
-            cell *= 0.5;
-        }
+impl CentreTree {
+    fn new(p: &[Vec3], centres: &[u32]) -> CentreTree {
+        let raw: Vec<[f32; 3]> = centres.iter().map(|&c| p[c as usize].to_array()).collect();
+        CentreTree(ImmutableKdTree::new_from_slice(&raw))
     }
 
-    fn fill(&mut self, p: &[Vec3]) {
-        let mut keyed: Vec<(IVec3, u32)> =
-            (0..self.centres.len() as u32).map(|c| (self.cell_of(p[self.centres[c as usize] as usize]), c)).collect();
-        keyed.sort_unstable_by_key(|&(k, c)| (k.x, k.y, k.z, c));
-        self.sorted = keyed.iter().map(|&(_, c)| c).collect();
-        self.sorted_p = self.sorted.iter().map(|&c| p[self.centres[c as usize] as usize]).collect();
-        let mut start = 0;
-        while start < keyed.len() {
-            let key = keyed[start].0;
-            let mut end = start;
-            while end < keyed.len() && keyed[end].0 == key {
-                end += 1;
-            }
-            self.cells.insert(key, (start as u32, end as u32));
-            start = end;
-        }
-    }
-
+    /// Rank of a centre nearest to `q`.
     #[inline]
-    fn cell_of(&self, q: Vec3) -> IVec3 {
-        ((q - self.origin) / self.cell).floor().as_ivec3()
-    }
-
-    /// Rank of the centre nearest to `q` (the lowest rank among equally near ones).
-    fn nearest(&self, p: &[Vec3], q: Vec3) -> u32 {
-        let c = self.cell_of(q);
-        // How far q is from the faces of its own cell: every unsearched cell is at least this
-        // plus the searched rings away.
-        let local = (q - self.origin) / self.cell - c.as_vec3();
-        let margin = local.min(Vec3::ONE - local).min_element().max(0.0) * self.cell;
-        let mut best = (f32::INFINITY, u32::MAX);
-        let consider = |d: f32, rank: u32, best: &mut (f32, u32)| {
-            if d < best.0 || (d == best.0 && rank < best.1) {
-                *best = (d, rank);
-            }
-        };
-        for r in 0..=MAX_RING {
-            for dz in -r..=r {
-                for dy in -r..=r {
-                    let on_face = dz.abs() == r || dy.abs() == r;
-                    let step = if on_face { 1 } else { (2 * r).max(1) };
-                    let mut dx = -r;
-                    while dx <= r {
-                        if let Some(&(s, e)) = self.cells.get(&(c + IVec3::new(dx, dy, dz))) {
-                            let (s, e) = (s as usize, e as usize);
-                            for (&rank, &cp) in self.sorted[s..e].iter().zip(&self.sorted_p[s..e]) {
-                                consider(cp.distance_squared(q), rank, &mut best);
-                            }
-                        }
-                        dx += step;
-                    }
-                }
-            }
-            let reach = r as f32 * self.cell + margin;
-            if best.0 <= reach * reach {
-                return best.1;
-            }
-        }
-        // Not proven nearest within the rings searched (a sparse region): scan every centre.
-        for rank in 0..self.centres.len() as u32 {
-            consider(p[self.centres[rank as usize] as usize].distance_squared(q), rank, &mut best);
-        }
-        best.1
+    fn nearest(&self, q: Vec3) -> u32 {
+        self.0.nearest_one::<SquaredEuclidean>(&q.to_array()).item
     }
 }
 
@@ -265,18 +176,11 @@ mod tests {
     fn members_are_assigned_to_their_nearest_centre() {
         let p = points(3_000);
         let centres: Vec<u32> = (0..3_000u32).filter(|&i| mix(5, i as u64) < u64::MAX / 30).collect();
-        let idx: Vec<u32> = (0..3_000).collect();
-        let grid = CentreGrid::new(&p, &idx, &centres);
+        let tree = CentreTree::new(&p, &centres);
         for (i, &q) in p.iter().enumerate() {
-            let brute = (0..centres.len() as u32)
-                .min_by(|&a, &b| {
-                    p[centres[a as usize] as usize]
-                        .distance_squared(q)
-                        .total_cmp(&p[centres[b as usize] as usize].distance_squared(q))
-                        .then(a.cmp(&b))
-                })
-                .unwrap();
-            assert_eq!(grid.nearest(&p, q), brute, "point {i}");
+            let dist = |rank: u32| p[centres[rank as usize] as usize].distance_squared(q);
+            let brute = (0..centres.len() as u32).map(dist).fold(f32::INFINITY, f32::min);
+            assert_eq!(dist(tree.nearest(q)), brute, "point {i}");
         }
     }
 

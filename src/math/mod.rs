@@ -5,6 +5,7 @@ pub mod fnv;
 mod frame;
 mod lanes;
 pub mod noise;
+pub mod trig;
 
 pub use frame::Frame;
 pub use lanes::{exp4, ln4};

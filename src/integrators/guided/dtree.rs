@@ -15,7 +15,7 @@ const MAX_DEPTH: u32 = 20;
 #[inline]
 pub fn sphere_to_square(d: Vec3) -> Vec2 {
     let cos_theta = d.z.clamp(-1.0, 1.0);
-    let mut phi = d.y.atan2(d.x);
+    let mut phi = crate::math::trig::atan2(d.y, d.x);
     if phi < 0.0 {
         phi += 2.0 * PI;
     }
@@ -285,7 +285,9 @@ mod tests {
     fn density_integrates_to_one() {
         let t = cone_tree();
         assert!(t.node_count() > 20, "{}", t.node_count());
-        let n = 400;
+        // Fine enough for the tree's small cells (at 400² the midpoint rule was off by 0.5 %
+        // for some trees).
+        let n = 1600;
         let mut integral = 0.0f64;
         for i in 0..n {
             for j in 0..n {
@@ -293,7 +295,7 @@ mod tests {
                 integral += t.pdf(square_to_sphere(p)) as f64 * 4.0 * std::f64::consts::PI / (n * n) as f64;
             }
         }
-        assert!((integral - 1.0).abs() < 1e-3, "{integral}");
+        assert!((integral - 1.0).abs() < 1e-4, "{integral}");
         let axis = Vec3::new(0.3, -0.5, 0.8).normalize();
         assert!(t.pdf(axis) > 10.0 * t.pdf(-axis));
     }

@@ -93,7 +93,11 @@ impl PathGraph {
                 rec.finish(px.index, px.weight, |x: C| x.to_film(&lambda, scene), v, p);
             },
         );
+        // Sized once: growing by doubling copied the vertex store again and faulted in fresh
+        // pages for every copy.
         let (mut vertices, mut paths) = (Vertices::default(), Paths::default());
+        vertices.reserve(parts.iter().map(|(_, v, _)| v.len()).sum());
+        paths.reserve(parts.iter().map(|(_, _, p)| p.len()).sum());
         for (_, mut v, mut p) in parts {
             let path_base = paths.len() as u32;
             paths.append(&mut p, vertices.len() as u32);

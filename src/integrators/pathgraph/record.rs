@@ -71,6 +71,26 @@ impl Vertices {
     /// Bytes per vertex of these arrays.
     pub const BYTES_PER_VERTEX: usize = 3 * 12 + 4 + 12 + 12 + 12 + 12 + 4 + 4 + 12 + 4 + 12 + 12 + 4 + 4;
 
+    /// Room for `n` more vertices in every array.
+    pub fn reserve(&mut self, n: usize) {
+        self.p.reserve_exact(n);
+        self.wo.reserve_exact(n);
+        self.wi.reserve_exact(n);
+        self.g.reserve_exact(n);
+        self.n.reserve_exact(n);
+        self.w.reserve_exact(n);
+        self.direct_light.reserve_exact(n);
+        self.light_wi.reserve_exact(n);
+        self.light_pdf.reserve_exact(n);
+        self.light_pdf_scatter.reserve_exact(n);
+        self.direct_scatter.reserve_exact(n);
+        self.scatter_pdf_light.reserve_exact(n);
+        self.edge_const.reserve_exact(n);
+        self.edge.reserve_exact(n);
+        self.next.reserve_exact(n);
+        self.path.reserve_exact(n);
+    }
+
     /// Appends `o`, whose `next` indices are relative to its own start and whose paths are
     /// numbered from `path_base` in the combined paths.
     pub fn append(&mut self, o: &mut Vertices, path_base: u32) {
@@ -148,6 +168,16 @@ pub struct Paths {
 impl Paths {
     /// Bytes per path of these arrays.
     pub const BYTES_PER_PATH: usize = 4 + 4 + 12 + 4 + 12 + 12;
+
+    /// Room for `n` more paths in every array.
+    pub fn reserve(&mut self, n: usize) {
+        self.pixel.reserve_exact(n);
+        self.weight.reserve_exact(n);
+        self.before.reserve_exact(n);
+        self.first.reserve_exact(n);
+        self.beta.reserve_exact(n);
+        self.extra.reserve_exact(n);
+    }
 
     /// Appends `o`, whose vertex indices start at `vertex_base` in the combined vertices.
     pub fn append(&mut self, o: &mut Paths, vertex_base: u32) {
@@ -240,16 +270,24 @@ pub(super) fn div<C: Channels>(a: C, b: C) -> C {
 /// The RGB factor that maps `to_rgb(x)` to `to_rgb(f ∘ x)`, channel by channel: exact for the
 /// path's own values (so a cluster of one reproduces the path-traced pixel in any
 /// representation), and f's own RGB where x has no signal in a channel. In RGB it is f.
+/// `one` is `to_rgb(C::ONE)` (the same for every vertex of a path); f's own RGB is converted
+/// only where it is needed (each conversion is a sensor's 3×4 at the path's wavelengths).
 #[inline]
-fn rgb_factor<C: Channels>(f: C, x: C, to_rgb: &impl Fn(C) -> Rgb) -> Rgb {
+fn rgb_factor<C: Channels>(f: C, x: C, to_rgb: &impl Fn(C) -> Rgb, one: Rgb) -> Rgb {
     let (num, den) = (to_rgb(f * x), to_rgb(x));
-    let (fr, one) = (to_rgb(f), to_rgb(C::ONE));
-    let fallback = |k: usize| if one[k].abs() > 1e-12 { fr[k] / one[k] } else { f.average() };
+    let floor = 1e-12 * (den.abs().max_element() + 1e-30);
+    let has_signal = |k: usize| den[k].abs() > floor && den[k] != 0.0;
+    if (0..3).all(has_signal) {
+        return num / den;
+    }
+    let fr = to_rgb(f);
     Rgb::from_array(std::array::from_fn(|k| {
-        if den[k].abs() > 1e-12 * (den.abs().max_element() + 1e-30) && den[k] != 0.0 {
+        if has_signal(k) {
             num[k] / den[k]
+        } else if one[k].abs() > 1e-12 {
+            fr[k] / one[k]
         } else {
-            fallback(k)
+            f.average()
         }
     }))
 }
@@ -357,6 +395,7 @@ impl<C: Channels> Recorder<C> {
             self.l_plus[k] = self.c[k] + next;
             self.scattered[k] = self.e[k] + self.r[k] + self.w[k] * self.l_plus[k];
         }
+        let one = if n > 0 { to_rgb(C::ONE) } else { Rgb::ZERO };
         let base = vertices.len() as u32;
         for k in 0..n {
             let v = &vs[self.depth[k]];
@@ -365,7 +404,7 @@ impl<C: Channels> Recorder<C> {
             vertices.wi.push(v.wi);
             vertices.g.push(if v.in_medium { v.g } else { f32::NAN });
             vertices.n.push(if v.lambertian { if v.n.dot(v.wo) < 0.0 { -v.n } else { v.n } } else { Vec3::ZERO });
-            vertices.w.push(rgb_factor(self.w[k], self.l_plus[k], &to_rgb));
+            vertices.w.push(rgb_factor(self.w[k], self.l_plus[k], &to_rgb, one));
             vertices.direct_light.push(to_rgb(self.e[k]));
             let (light_wi, light_pdf, light_pdf_scatter) = self.light[k];
             vertices.light_wi.push(light_wi);
@@ -377,7 +416,7 @@ impl<C: Channels> Recorder<C> {
             vertices.edge_const.push(to_rgb(self.c[k]));
             vertices.path.push(paths.len() as u32);
             if k + 1 < n {
-                vertices.edge.push(rgb_factor(self.edge[k], self.scattered[k + 1], &to_rgb));
+                vertices.edge.push(rgb_factor(self.edge[k], self.scattered[k + 1], &to_rgb, one));
                 vertices.next.push(base + k as u32 + 1);
             } else {
                 vertices.edge.push(Rgb::ZERO);
@@ -394,7 +433,7 @@ impl<C: Channels> Recorder<C> {
         } else {
             let beta = vs[self.depth[0]].beta;
             paths.first.push(base);
-            paths.beta.push(rgb_factor(beta, self.scattered[0], &to_rgb));
+            paths.beta.push(rgb_factor(beta, self.scattered[0], &to_rgb, one));
             paths.extra.push(match self.extra {
                 Some((depth, c)) if depth as usize == self.depth[0] => to_rgb(div(c, beta)),
                 _ => Rgb::NAN,

@@ -161,8 +161,8 @@ pub fn trace_path<C: Channels, O: PathObserver<C>>(
     let mut prev_p = ray.o;
     let mut prev_n = Vec3::ZERO;
     let mut extra_done = false;
-    // The camera line's emission has been estimated (`PathConfig::camera_line`): depth-0
-    // emission events are then already counted.
+    // The camera line's area lights have been estimated (`PathConfig::camera_line`): the
+    // area lights the path reaches at depth 0 are then already counted.
     let mut line_done = false;
 
     loop {

@@ -134,17 +134,19 @@ pub fn line_transmittance<C: Channels>(
     rng: &mut Pcg32,
     lambda: &C::Lambda,
 ) -> C {
+    if let MediumKind::Homogeneous { .. } = medium.kind {
+        // One segment, σmaj = σt: e^{-σt d}, and no light through an infinite one.
+        return medium.segments::<C>(ray, t_max, lambda).next().map_or(C::ONE, |seg| {
+            let dt = seg.t_max - seg.t_min;
+            if dt.is_infinite() {
+                seg.sigma_maj.map(|s| if s > 0.0 { 0.0 } else { 1.0 })
+            } else {
+                (seg.sigma_maj * dt).exp_neg()
+            }
+        });
+    }
     let mut tr = C::ONE;
     for seg in medium.segments::<C>(ray, t_max, lambda) {
-        let dt = seg.t_max - seg.t_min;
-        if let MediumKind::Homogeneous { .. } = medium.kind {
-            let tau = seg.sigma_maj * dt;
-            return if dt.is_infinite() {
-                tau.zip_map(C::ZERO, |t, _| if t > 0.0 { 0.0 } else { 1.0 })
-            } else {
-                tau.exp_neg()
-            };
-        }
         let sigma = 2.0 * seg.sigma_maj.max_element();
         if sigma <= 0.0 {
             continue;

@@ -2,9 +2,9 @@
 //!
 //! About N/K points are chosen as centres by hashing their index with the sample's seed (so
 //! the choice does not depend on the thread count), a k-d tree over the centres (kiddo's
-//! immutable tree) answers nearest-centre queries, and clusters larger than 2K are halved at the median of their
-//! longest axis until they are not ("repeated for large clusters until the number of shading
-//! points per cluster is relatively even").
+//! immutable tree) answers nearest-centre queries, and clusters larger than 2K are halved at
+//! the median of their longest axis until they are not ("repeated for large clusters until the
+//! number of shading points per cluster is relatively even").
 
 use glam::Vec3;
 use kiddo::SquaredEuclidean;

@@ -82,6 +82,22 @@ fn same_image_at_any_thread_count() {
     assert_eq!(one.pixels, two.pixels);
 }
 
+/// The recording arrays a sample leaves behind are reused by the next (README: memory):
+/// an integrator rendering the image a second time, on stores full of the first render's
+/// vertices, gives it again bit for bit.
+#[test]
+fn reused_stores_leave_no_trace() {
+    let scene = load_scene(
+        &scene_text("pathgraph", "", "2 2 2"),
+        &BuildOptions { spp: Some(3), seed: Some(2), ..Default::default() },
+    );
+    let method = scene.integrator.create(&scene).unwrap();
+    let first = render_with(&scene, method.as_ref());
+    let again = render_with(&scene, method.as_ref());
+    assert!(first.pixels.iter().any(|p| p.max_element() > 0.0));
+    assert_eq!(first.pixels, again.pixels);
+}
+
 /// Against volpath at 64 spp: the image means agree within four standard errors of the
 /// difference plus the method's bias allowance (the 1 %), and the graph's per-pixel
 /// noise is lower. Returns the relative mean difference (the bias measured).

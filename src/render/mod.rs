@@ -170,21 +170,23 @@ impl ImagePass<'_> {
     }
 
     /// Traces every pixel's camera ray with `f`, in parallel over tiles. Each tile starts a
-    /// `T` with `init` and the results come in tile order, pixels in scanline order within a
+    /// `T` with `init(tile index)` (so a caller can hand each tile storage kept from an
+    /// earlier pass) and the results come in tile order, pixels in scanline order within a
     /// tile, whatever the thread count. `f` gets the pixel's sampler positioned after the
     /// camera sample's dimensions, as a per-ray integrator's `li` does.
     pub fn trace_pixels<C: FilmChannels, T: Send>(
         &self,
-        init: impl Fn() -> T + Sync,
+        init: impl Fn(usize) -> T + Sync,
         f: impl Fn(&mut T, PixelRay, &mut C::Lambda, &mut Sampler, &mut RayStats) + Sync,
     ) -> (Vec<T>, RayStats) {
         let results: Vec<(T, RayStats)> = self
             .tiles
             .par_iter()
-            .map(|tile| {
+            .enumerate()
+            .map(|(i, tile)| {
                 let mut sampler = self.sampler.clone();
                 let mut stats = RayStats::default();
-                let mut t = init();
+                let mut t = init(i);
                 for y in tile[1]..tile[3] {
                     for x in tile[0]..tile[2] {
                         let pixel = UVec2::new(x, y);

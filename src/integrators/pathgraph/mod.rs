@@ -39,6 +39,19 @@ pub struct PathGraph {
     /// per camera ray, as volpath renders them.
     without_media: bool,
     report: Mutex<Report>,
+    /// The recording arrays, kept from one graph sample to the next: allocating them afresh
+    /// faulted in every page again (a tenth of a sample's time on fog-emitter at 512×384).
+    stores: Mutex<Stores>,
+}
+
+/// Arrays a graph sample fills and the next one reuses.
+#[derive(Default)]
+struct Stores {
+    /// Each tile's recording, emptied into the merged store but not freed.
+    tiles: Vec<Mutex<(Vertices, Paths)>>,
+    vertices: Vertices,
+    paths: Paths,
+    spare: record::Spare,
 }
 
 /// Bytes per vertex the solve adds to the recorded arrays: L⁺, L̄, the marginal, the aggregated
@@ -69,15 +82,20 @@ pub fn create(settings: &PathGraphSettings, scene: &Scene) -> Result<PathGraph, 
         },
         without_media: scene.media.is_empty(),
         report: Mutex::new(Report::default()),
+        stores: Mutex::new(Stores::default()),
     })
 }
 
 impl PathGraph {
-    /// Records one 1-spp pass in the channels `C`: graph vertices (in film RGB) and one path
-    /// per pixel.
-    fn record<C: FilmChannels>(&self, scene: &Scene, pass: &ImagePass<'_>) -> (Vertices, Paths, RayStats) {
+    /// Records one 1-spp pass in the channels `C` into `stores`: graph vertices (in film RGB)
+    /// and one path per pixel.
+    fn record<C: FilmChannels>(&self, scene: &Scene, pass: &ImagePass<'_>, stores: &mut Stores) -> RayStats {
+        let tiles = std::mem::take(&mut stores.tiles);
         let (parts, stats) = pass.trace_pixels::<C, _>(
-            || (Recorder::<C>::default(), Vertices::default(), Paths::default()),
+            |i| {
+                let (v, p) = tiles.get(i).map(|t| std::mem::take(&mut *lock(t))).unwrap_or_default();
+                (Recorder::<C>::default(), v, p)
+            },
             |(rec, v, p), px, lambda, sampler, stats| {
                 trace_path::<C, Recorder<C>>(
                     scene,
@@ -95,16 +113,28 @@ impl PathGraph {
         );
         // Sized once: growing by doubling copied the vertex store again and faulted in fresh
         // pages for every copy.
-        let (mut vertices, mut paths) = (Vertices::default(), Paths::default());
+        let Stores { vertices, paths, .. } = stores;
+        vertices.clear();
+        paths.clear();
         vertices.reserve(parts.iter().map(|(_, v, _)| v.len()).sum());
         paths.reserve(parts.iter().map(|(_, _, p)| p.len()).sum());
-        for (_, mut v, mut p) in parts {
-            let path_base = paths.len() as u32;
-            paths.append(&mut p, vertices.len() as u32);
-            vertices.append(&mut v, path_base);
-        }
-        (vertices, paths, stats)
+        stores.tiles = parts
+            .into_iter()
+            .map(|(_, mut v, mut p)| {
+                let path_base = paths.len() as u32;
+                paths.append(&mut p, vertices.len() as u32);
+                vertices.append(&mut v, path_base);
+                Mutex::new((v, p))
+            })
+            .collect();
+        stats
     }
+}
+
+/// `m` locked, whether or not a thread panicked while holding it (the stores hold no
+/// invariant a panic could break: they are emptied before use).
+fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(|e| e.into_inner())
 }
 
 /// Each vertex's place along its path among the graph vertices (0: the pixel's first).
@@ -148,17 +178,20 @@ fn path_traced(v: &Vertices) -> Vec<Rgb> {
 impl ImageIntegrator for PathGraph {
     fn sample_image(&self, scene: &Scene, pass: &ImagePass<'_>) -> (Vec<PixelValue>, RayStats) {
         let start = Instant::now();
-        let (mut v, mut paths, stats) = match scene.transport.transport {
-            Transport::Rgb => self.record::<Rgb>(scene, pass),
-            Transport::Spectral => self.record::<SampledSpectrum>(scene, pass),
+        // Taken, not held: a concurrent sample (none today) would record into fresh arrays.
+        let mut stores = std::mem::take(&mut *lock(&self.stores));
+        let stats = match scene.transport.transport {
+            Transport::Rgb => self.record::<Rgb>(scene, pass, &mut stores),
+            Transport::Spectral => self.record::<SampledSpectrum>(scene, pass, &mut stores),
         };
+        let (v, paths) = (&mut stores.vertices, &mut stores.paths);
         let recorded = Instant::now();
 
         let seed = (scene.sampler.seed as u32 as u64) << 32 | pass.sample_index() as u64;
         // Medium vertices cluster with medium vertices, Lambertian surface vertices with
         // Lambertian ones; other surface vertices are clusters of one. Within a class,
         // vertices cluster by their place along the path (README: depth classes).
-        let depth = path_positions(&v, &paths);
+        let depth = path_positions(v, paths);
         let iterations = self.settings.iterations;
         let binding = truncation_binds(&depth, self.settings.max_depth);
         let kind = |i: usize| {
@@ -186,10 +219,10 @@ impl ImageIntegrator for PathGraph {
         for (new, &old) in clusters.order.iter().enumerate() {
             rank[old as usize] = new as u32;
         }
-        let l_plus_recorded = path_traced(&v);
+        let l_plus_recorded = path_traced(v);
         let mut l_plus: Vec<Rgb> = clusters.order.iter().map(|&i| l_plus_recorded[i as usize]).collect();
         drop(l_plus_recorded);
-        v.permute(&clusters.order, &rank);
+        v.permute(&clusters.order, &rank, &mut stores.spare);
         for f in paths.first.iter_mut() {
             if *f != NONE {
                 *f = rank[*f as usize];
@@ -207,7 +240,7 @@ impl ImageIntegrator for PathGraph {
             + Paths::BYTES_PER_PATH * paths.len()
             + 4 * clusters.offsets.len();
 
-        let solver = solve::Solver::new(&v, &clusters.offsets);
+        let solver = solve::Solver::new(v, &clusters.offsets);
         let mut scattered = vec![Rgb::ZERO; v.len()];
         for _ in 0..self.settings.iterations {
             solver.aggregate(&l_plus, &mut scattered);
@@ -231,11 +264,13 @@ impl ImageIntegrator for PathGraph {
             })
             .collect();
         let solved = Instant::now();
+        let (vertices, npaths) = (v.len(), paths.len());
+        *lock(&self.stores) = stores;
         if let Ok(mut r) = self.report.lock() {
             r.samples += 1;
-            r.vertices += v.len() as u64;
+            r.vertices += vertices as u64;
             r.clusters += clusters.len() as u64;
-            r.paths += paths.len() as u64;
+            r.paths += npaths as u64;
             r.record_seconds += (recorded - start).as_secs_f64();
             r.solve_seconds += (solved - recorded).as_secs_f64();
             r.peak_bytes = r.peak_bytes.max(peak);

@@ -91,8 +91,28 @@ impl Vertices {
         self.path.reserve_exact(n);
     }
 
+    /// Removes every vertex, keeping the arrays' memory for the next sample.
+    pub fn clear(&mut self) {
+        self.p.clear();
+        self.wo.clear();
+        self.wi.clear();
+        self.g.clear();
+        self.n.clear();
+        self.w.clear();
+        self.direct_light.clear();
+        self.light_wi.clear();
+        self.light_pdf.clear();
+        self.light_pdf_scatter.clear();
+        self.direct_scatter.clear();
+        self.scatter_pdf_light.clear();
+        self.edge_const.clear();
+        self.edge.clear();
+        self.next.clear();
+        self.path.clear();
+    }
+
     /// Appends `o`, whose `next` indices are relative to its own start and whose paths are
-    /// numbered from `path_base` in the combined paths.
+    /// numbered from `path_base` in the combined paths. `o` is left empty with its memory.
     pub fn append(&mut self, o: &mut Vertices, path_base: u32) {
         let base = self.len() as u32;
         self.p.append(&mut o.p);
@@ -114,35 +134,46 @@ impl Vertices {
     }
 
     /// Reorders the vertices to `order` (a permutation; `rank` its inverse), renumbering
-    /// `next`. One array at a time, so the reordering needs one array's worth of memory extra.
-    pub fn permute(&mut self, order: &[u32], rank: &[u32]) {
-        fn gather<T: Copy + Send + Sync>(v: &mut Vec<T>, order: &[u32]) {
-            *v = order.par_iter().with_min_len(4096).map(|&i| v[i as usize]).collect();
+    /// `next`. One array at a time through `spare`, which ends holding the arrays' old
+    /// memory, so the reordering needs one array's worth of memory extra and, from the
+    /// second sample on, allocates none.
+    pub fn permute(&mut self, order: &[u32], rank: &[u32], spare: &mut Spare) {
+        fn gather<T: Copy + Send + Sync>(v: &mut Vec<T>, spare: &mut Vec<T>, order: &[u32]) {
+            spare.clear();
+            spare.par_extend(order.par_iter().with_min_len(4096).map(|&i| v[i as usize]));
+            std::mem::swap(v, spare);
         }
-        gather(&mut self.p, order);
-        gather(&mut self.wo, order);
-        gather(&mut self.wi, order);
-        gather(&mut self.g, order);
-        gather(&mut self.n, order);
-        gather(&mut self.w, order);
-        gather(&mut self.direct_light, order);
-        gather(&mut self.light_wi, order);
-        gather(&mut self.light_pdf, order);
-        gather(&mut self.light_pdf_scatter, order);
-        gather(&mut self.direct_scatter, order);
-        gather(&mut self.scatter_pdf_light, order);
-        gather(&mut self.edge_const, order);
-        gather(&mut self.edge, order);
-        gather(&mut self.path, order);
-        self.next = order
-            .par_iter()
-            .with_min_len(4096)
-            .map(|&i| {
-                let n = self.next[i as usize];
-                if n == NONE { NONE } else { rank[n as usize] }
-            })
-            .collect();
+        let Spare { v3, f, u } = spare;
+        gather(&mut self.p, v3, order);
+        gather(&mut self.wo, v3, order);
+        gather(&mut self.wi, v3, order);
+        gather(&mut self.g, f, order);
+        gather(&mut self.n, v3, order);
+        gather(&mut self.w, v3, order);
+        gather(&mut self.direct_light, v3, order);
+        gather(&mut self.light_wi, v3, order);
+        gather(&mut self.light_pdf, f, order);
+        gather(&mut self.light_pdf_scatter, f, order);
+        gather(&mut self.direct_scatter, v3, order);
+        gather(&mut self.scatter_pdf_light, f, order);
+        gather(&mut self.edge_const, v3, order);
+        gather(&mut self.edge, v3, order);
+        gather(&mut self.path, u, order);
+        u.clear();
+        u.par_extend(order.par_iter().with_min_len(4096).map(|&i| {
+            let n = self.next[i as usize];
+            if n == NONE { NONE } else { rank[n as usize] }
+        }));
+        std::mem::swap(&mut self.next, u);
     }
+}
+
+/// One spare array per element type, for [`Vertices::permute`].
+#[derive(Debug, Default)]
+pub struct Spare {
+    v3: Vec<Vec3>,
+    f: Vec<f32>,
+    u: Vec<u32>,
 }
 
 /// Recorded paths, one per camera ray, struct of arrays.
@@ -179,7 +210,18 @@ impl Paths {
         self.extra.reserve_exact(n);
     }
 
+    /// Removes every path, keeping the arrays' memory.
+    pub fn clear(&mut self) {
+        self.pixel.clear();
+        self.weight.clear();
+        self.before.clear();
+        self.first.clear();
+        self.beta.clear();
+        self.extra.clear();
+    }
+
     /// Appends `o`, whose vertex indices start at `vertex_base` in the combined vertices.
+    /// `o` is left empty with its memory.
     pub fn append(&mut self, o: &mut Paths, vertex_base: u32) {
         self.pixel.append(&mut o.pixel);
         self.weight.append(&mut o.weight);

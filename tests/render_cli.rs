@@ -131,3 +131,39 @@ fn output_format_errors_are_clear() {
     assert_eq!(out.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&out.stderr).contains("unsupported output format"));
 }
+
+/// `--maxdepth` (the radiance-graph thesis's pbrt-v4 flag for its VolPath references)
+/// overrides the scene's `maxdepth`: the image equals the one rendered with that depth in the
+/// file, not the one with the file's own depth; the radiance graph, which has no such
+/// parameter, refuses it naming the integrator directive.
+#[test]
+fn maxdepth_flag_overrides_the_scene() {
+    let dir = scratch_dir("render-maxdepth");
+    let scene = |depth: u32, integrator: &str| {
+        let path = dir.join(format!("{integrator}-{depth}.pbrt"));
+        let text = SMALL
+            .replace("WorldBegin", &format!("Integrator \"{integrator}\" \"integer maxdepth\" {depth}\nWorldBegin"));
+        std::fs::write(&path, text).unwrap();
+        path
+    };
+    let render = |scene: &std::path::Path, extra: &[&str], out: &str| {
+        let exr = dir.join(out);
+        let mut args = vec!["render", scene.to_str().unwrap(), "--quiet", "--seed", "3", "--outfile"];
+        args.push(exr.to_str().unwrap());
+        args.extend_from_slice(extra);
+        let out = nimbus(&args);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        nimbus::imageio::read_exr(&exr).unwrap().pixels
+    };
+    // Depth 0 sees only the sky (the sphere is black); depth 5 lights the sphere.
+    let flagged = render(&scene(5, "volpathcustom"), &["--maxdepth", "0"], "flag.exr");
+    let written = render(&scene(0, "volpath"), &[], "file.exr");
+    let own = render(&scene(5, "volpath"), &[], "own.exr");
+    assert!(flagged == written, "--maxdepth 0 differs from maxdepth 0 in the file");
+    assert!(flagged != own, "--maxdepth 0 rendered the file's maxdepth 5");
+    let graph = scene(5, "graph");
+    let out = nimbus(&["render", graph.to_str().unwrap(), "--quiet", "--maxdepth", "10"]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(stderr.contains("graph-5.pbrt:5:1") && stderr.contains("radiancegraph has no maxdepth"), "{stderr}");
+}

@@ -52,6 +52,10 @@ pub struct RenderArgs {
     /// lights), else trained and saved there for later renders and other cameras.
     #[arg(long, value_name = "FILE")]
     guide_cache: Option<PathBuf>,
+    /// Longest light path, overriding the integrator's `maxdepth` (the radiance-graph
+    /// thesis's pbrt-v4 has this flag; its VolPath references are rendered with it).
+    #[arg(long, value_name = "N")]
+    maxdepth: Option<u32>,
     /// Render progressively for this many seconds instead of to the scene's spp.
     #[arg(long)]
     time: Option<f64>,
@@ -121,6 +125,7 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
         scene_file: (args.scene.as_os_str() != "-").then(|| args.scene.clone()),
         graph_data: args.graph_data.clone(),
         guide_cache: args.guide_cache.clone(),
+        max_depth: args.maxdepth,
         spp: args.spp,
         seed: args.seed,
         quick: args.quick,

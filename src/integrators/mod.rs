@@ -117,6 +117,24 @@ impl IntegratorSettings {
         }
     }
 
+    /// Sets the longest path (`--maxdepth`, the radiance-graph thesis's pbrt-v4 flag, which
+    /// overrides the scene's `maxdepth`). The radiance graph has no such parameter: its light
+    /// paths' depth is the graph config's, and saying so beats ignoring the flag.
+    pub fn set_max_depth(&mut self, depth: u32) -> Result<(), String> {
+        match self {
+            IntegratorSettings::VolPath(s) => s.max_depth = depth,
+            IntegratorSettings::SimpleVolPath(s) => s.max_depth = depth,
+            IntegratorSettings::PathGraph(s) => s.max_depth = depth,
+            IntegratorSettings::Guided(s) => s.max_depth = depth,
+            IntegratorSettings::RadianceGraph(_) => {
+                return Err("--maxdepth: radiancegraph has no maxdepth; its light paths' depth is the graph \
+                            config's graphBuilder.maxDepth"
+                    .into());
+            }
+        }
+        Ok(())
+    }
+
     /// The method's name.
     pub fn name(&self) -> &'static str {
         match self {

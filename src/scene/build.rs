@@ -57,6 +57,8 @@ pub struct BuildOptions {
     /// `--guide-cache`: trained trees for the guided method (loaded if they match the scene,
     /// else trained and saved there).
     pub guide_cache: Option<std::path::PathBuf>,
+    /// `--maxdepth`: the longest path, overriding the integrator's `maxdepth`.
+    pub max_depth: Option<u32>,
     /// `--spp`
     pub spp: Option<u32>,
     /// `--seed`
@@ -1202,6 +1204,9 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions) -> Result<Scene
     }
     if let IntegratorSettings::Guided(s) = &mut integrator {
         s.cache = opts.guide_cache.clone();
+    }
+    if let Some(depth) = opts.max_depth {
+        integrator.set_max_depth(depth).map_err(|m| err(&desc.integrator.loc, m))?;
     }
 
     // The film's sensor (pbrt-v4's imaging ratio: exposure time × ISO / 100).

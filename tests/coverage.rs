@@ -33,7 +33,10 @@ fn scene(kind: &str, name: &str) -> (String, &'static str) {
             };
             format!("{header}{world}Shape \"{name}\" {params}\n")
         }
-        "camera" => format!("LookAt 0 0 5  0 0 0  0 1 0\nCamera \"{name}\"\n{world}{sphere}\n"),
+        "camera" => {
+            let params = if name == "realistic" { r#""string lensfile" "lens.dat""# } else { "" };
+            format!("LookAt 0 0 5  0 0 0  0 1 0\nCamera \"{name}\" {params}\n{world}{sphere}\n")
+        }
         "light" => {
             let params = match name {
                 "goniometric" | "projection" => r#""string filename" "light.exr""#,
@@ -115,7 +118,7 @@ const ENTITIES: &[(&str, &str, Outcome)] = &[
     ("shape", "curve", Rendered),
     ("camera", "perspective", Rendered),
     ("camera", "orthographic", Rendered),
-    ("camera", "realistic", Refused),
+    ("camera", "realistic", Rendered),
     ("camera", "spherical", Rendered),
     ("light", "point", Rendered),
     ("light", "spot", Rendered),
@@ -196,8 +199,12 @@ fn every_pbrt_v4_entity_type_is_rendered_refused_or_replaced_by_name() {
     let mut img = nimbus::imageio::Image::new(4, 4);
     img.pixels.iter_mut().for_each(|p| *p = glam::Vec3::ONE);
     nimbus::imageio::write_image(&map, &img).unwrap();
+    // A realistic camera needs a lens file: a single thin glass element and a stop.
+    let lens = dir.as_ref().join("lens.dat");
+    std::fs::write(&lens, "50 3 1.5 20\n-50 5 1 20\n0 40 0 10\n").unwrap();
     for &(kind, name, expected) in ENTITIES {
         let (text, directive) = scene(kind, name);
+        let text = text.replace("\"lens.dat\"", &format!("\"{}\"", lens.display()));
         let text = text.replace("\"brdf.bsdf\"", &format!("\"{}\"", bsdf.display()));
         let text = text.replace("\"light.exr\"", &format!("\"{}\"", map.display()));
         let line = text.lines().position(|l| l.starts_with(directive)).expect("the directive") + 1;

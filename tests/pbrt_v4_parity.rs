@@ -78,9 +78,19 @@ pub fn judge(images: &[Image], spp: u32, reference: &Image) -> (f64, f64) {
 
 #[test]
 fn own_parity_scenes_match_pbrt_v4() {
-    for name in
-        ["materials", "bump-alpha", "shapes", "motion", "hair", "measured", "spherical", "goniometric", "projection"]
-    {
+    for name in [
+        "materials",
+        "bump-alpha",
+        "shapes",
+        "motion",
+        "hair",
+        "measured",
+        "spherical",
+        "goniometric",
+        "projection",
+        "realistic",
+        "realistic-wide",
+    ] {
         let reference = nimbus::imageio::read_exr(&dir().join(format!("references/{name}.exr"))).unwrap();
         let images = renders(&dir().join(format!("{name}.pbrt")), 32, 1..9);
         let (mean_rel, excess) = judge(&images, 32, &reference);

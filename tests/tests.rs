@@ -1,6 +1,7 @@
 //! End-to-end tests of the `nimbus` binary and library.
 
 mod bench;
+mod camera;
 mod check;
 mod cluster;
 mod common;

@@ -57,6 +57,31 @@ pub fn refract(wi: Vec3, mut n: Vec3, mut eta: f32) -> Option<(Vec3, f32)> {
     Some((-wi / eta + (cos_i / eta - cos_t) * n, eta))
 }
 
+/// Real roots of a x² + b x + c, smaller first (pbrt-v4's `Quadratic`, with its linear case).
+pub fn quadratic(a: f32, b: f32, c: f32) -> Option<(f32, f32)> {
+    if a == 0.0 {
+        if b == 0.0 {
+            return None;
+        }
+        let t = -c / b;
+        return Some((t, t));
+    }
+    let discrim = (b as f64) * (b as f64) - 4.0 * (a as f64) * (c as f64);
+    if discrim < 0.0 {
+        return None;
+    }
+    let root = discrim.sqrt();
+    let q = if b < 0.0 { -0.5 * (b as f64 - root) } else { -0.5 * (b as f64 + root) };
+    let (mut t0, mut t1) = ((q / a as f64) as f32, (c as f64 / q) as f32);
+    if q == 0.0 {
+        t1 = t0;
+    }
+    if t0 > t1 {
+        std::mem::swap(&mut t0, &mut t1);
+    }
+    Some((t0, t1))
+}
+
 /// Squares its argument.
 #[inline]
 pub fn sqr(x: f32) -> f32 {

@@ -187,13 +187,17 @@ pub(super) fn channels(
                         let cs = camera_sample(scene, &mut sampler, pixel, s);
                         let camera = &scene.camera;
                         let time = camera.time(cs.time);
-                        let ray = camera.generate_ray(cs.p_film, cs.p_lens, time);
-                        let dx = camera.generate_ray(cs.p_film + Vec2::X, cs.p_lens, time);
-                        let dy = camera.generate_ray(cs.p_film + Vec2::Y, cs.p_lens, time);
-                        let output_from_world =
-                            if world { Affine3A::IDENTITY } else { camera.world_from_camera_at(time).inverse() };
                         let w = cs.filter_weight as f64;
                         sums.weight += w;
+                        // A sample a realistic camera's lens stops sees nothing; a neighbour it
+                        // stops gives no differential (zero, as for the sample itself).
+                        let Some(ray) = camera.generate_ray(cs.p_film, cs.p_lens, time).map(|c| c.ray) else {
+                            continue;
+                        };
+                        let dx = camera.generate_ray(cs.p_film + Vec2::X, cs.p_lens, time).map_or(ray, |c| c.ray);
+                        let dy = camera.generate_ray(cs.p_film + Vec2::Y, cs.p_lens, time).map_or(ray, |c| c.ray);
+                        let output_from_world =
+                            if world { Affine3A::IDENTITY } else { camera.world_from_camera_at(time).inverse() };
                         let Some((v, t)) = visible_surface(scene, ray, (dx, dy, diff_scale), &output_from_world) else {
                             continue;
                         };

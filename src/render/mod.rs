@@ -10,6 +10,7 @@ use std::time::Instant;
 use glam::UVec2;
 use rayon::prelude::*;
 
+use crate::camera::CameraRay;
 use crate::color::{Channels, Rgb};
 use crate::geometry::Ray;
 use crate::imageio::Image;
@@ -108,10 +109,15 @@ impl PixelSum {
     }
 }
 
-/// The camera ray of sample `s` of `pixel`, its wavelengths and its filter weight, drawn in
-/// pbrt-v4's order.
+/// The camera ray of sample `s` of `pixel` (`None` when a realistic camera's lens stops it),
+/// its wavelengths and its filter weight, drawn in pbrt-v4's order.
 #[inline]
-fn camera_ray<C: Channels>(scene: &Scene, sampler: &mut Sampler, pixel: UVec2, s: u32) -> (Ray, C::Lambda, f32) {
+fn camera_ray<C: Channels>(
+    scene: &Scene,
+    sampler: &mut Sampler,
+    pixel: UVec2,
+    s: u32,
+) -> (Option<CameraRay>, C::Lambda, f32) {
     sampler.start_pixel_sample(pixel, s, 0);
     // pbrt-v4 draws the wavelengths first; RGB draws the same dimension so the two
     // representations see the same samples afterwards.
@@ -159,8 +165,9 @@ pub struct PixelRay {
     pub index: u32,
     /// The filter weight of the camera sample.
     pub weight: f32,
-    /// The ray.
-    pub ray: Ray,
+    /// The camera ray, or `None` when a realistic camera's lens stopped it: the sample then
+    /// brings back nothing, but its filter weight still counts (as in pbrt-v4).
+    pub ray: Option<CameraRay>,
 }
 
 impl ImagePass<'_> {
@@ -234,7 +241,7 @@ fn image_sample(
             let counted = !gbuffer || {
                 let pixel = acc.origin + UVec2::new(index % acc.width, index / acc.width);
                 let (ray, _, _) = camera_ray::<Rgb>(scene, &mut replay, pixel, sample);
-                gbuffer::sees_surface(scene, ray)
+                ray.is_some_and(|c| gbuffer::sees_surface(scene, c.ray))
             };
             sum.add(l, weight, max, counted);
             (index, sum)
@@ -453,8 +460,11 @@ fn render_tile<C: FilmChannels>(
             for s in first..first + count {
                 let (ray, mut lambda, weight) = camera_ray::<C>(scene, sampler, pixel, s);
                 stats.camera += 1;
-                let counted = !gbuffer || gbuffer::sees_surface(scene, ray);
-                let l = C::li(integrator, scene, ray, &mut lambda, sampler, stats);
+                let counted = !gbuffer || ray.is_some_and(|c| gbuffer::sees_surface(scene, c.ray));
+                let l = match ray {
+                    Some(c) => C::li(integrator, scene, c.ray, &mut lambda, sampler, stats) * c.weight,
+                    None => C::ZERO,
+                };
                 if let Some(b) = bands {
                     l.add_to_bands(&lambda, weight, max, b, &mut bands_out[band_start..]);
                 }

@@ -102,7 +102,7 @@ pub struct HaltonSampler {
 }
 
 /// The radical inverse of `a` in base `primes[base_index]` (pbrt-v4's `RadicalInverse`).
-fn radical_inverse(base: u32, mut a: u64) -> f32 {
+pub(crate) fn radical_inverse(base: u32, mut a: u64) -> f32 {
     let base = u64::from(base);
     let limit = u64::MAX / base - base;
     let inv_base = 1.0 / base as f32;

@@ -24,6 +24,7 @@ use glam::{UVec2, Vec2};
 use crate::scene::sampler::{SamplerKind, SamplerSettings};
 
 pub use camera_sample::{CameraSample, get_camera_sample};
+pub(crate) use halton::radical_inverse;
 pub use halton::{HaltonRandomization, HaltonSampler};
 pub use independent::IndependentSampler;
 pub use padded_sobol::PaddedSobolSampler;

@@ -1,6 +1,9 @@
 //! Camera settings with pbrt-v4's parameter names and defaults.
 
-use nimbus_parser::{CameraEntity, Error};
+use std::path::PathBuf;
+
+use nimbus_parser::loc_shown as shown;
+use nimbus_parser::{CameraEntity, Error, FileLoc};
 
 use super::values::checked_float;
 
@@ -20,6 +23,132 @@ pub enum Projection {
         /// `"equirectangular"`.
         equal_area: bool,
     },
+    /// `realistic`: a lens system from a lens file.
+    Realistic(RealisticSettings),
+}
+
+/// A realistic camera's lens, as its entity and lens file give it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RealisticSettings {
+    /// The lens file's rows, scene side first: curvature radius (mm; 0 for the aperture
+    /// stop), thickness (mm), index of refraction (0 for air), aperture diameter (mm).
+    pub elements: Vec<[f32; 4]>,
+    /// `aperturediameter` (mm): the stop's opening, at most the lens file's.
+    pub aperture_diameter: f32,
+    /// `focusdistance`: the distance brought into focus.
+    pub focus_distance: f32,
+    /// `aperture`: the stop's shape, if not round.
+    pub aperture: Option<Aperture>,
+}
+
+/// A realistic camera's aperture shape (pbrt-v4's built-in ones or an image).
+#[derive(Clone, Debug, PartialEq)]
+pub enum Aperture {
+    /// `"gaussian"`
+    Gaussian,
+    /// `"square"`
+    Square,
+    /// `"pentagon"`
+    Pentagon,
+    /// `"star"`
+    Star,
+    /// An image file (its mean of R, G and B).
+    Image(PathBuf),
+}
+
+impl RealisticSettings {
+    /// The aperture stop's diameter in the lens file (mm), if the lens has a stop.
+    pub fn stop_diameter(&self) -> Option<f32> {
+        self.elements.iter().find(|e| e[0] == 0.0).map(|e| e[3])
+    }
+
+    /// Reads the realistic camera's parameters and its lens file.
+    fn from_entity(camera: &CameraEntity) -> Result<RealisticSettings, Error> {
+        let e = &camera.entity;
+        let p = &e.params;
+        let Some(name) = p.get_opt_string("lensfile")? else {
+            return Err(Error::new(&e.loc, "realistic camera: no \"lensfile\" (the lens description) given"));
+        };
+        let loc = p.loc("lensfile").unwrap_or(&e.loc);
+        let elements = read_lens_file(loc, name)?;
+        let aperture_diameter =
+            checked_float(p, "aperturediameter", 1.0, |d| d > 0.0, "the aperture diameter must be positive")?;
+        let focus_distance =
+            checked_float(p, "focusdistance", 10.0, |d| d > 0.0, "the focus distance must be positive")?;
+        let aperture = match p.get_opt_string("aperture")? {
+            None | Some("") => None,
+            Some("gaussian") => Some(Aperture::Gaussian),
+            Some("square") => Some(Aperture::Square),
+            Some("pentagon") => Some(Aperture::Pentagon),
+            Some("star") => Some(Aperture::Star),
+            Some(file) => {
+                let loc = p.loc("aperture").unwrap_or(&e.loc);
+                let path = loc.resolve(file);
+                if !path.is_file() {
+                    return Err(Error::new(
+                        loc,
+                        format!(
+                            "realistic camera: aperture \"{file}\" is not a built-in shape (gaussian, square, \
+                             pentagon, star) nor an image (tried {})",
+                            shown(&path)
+                        ),
+                    ));
+                }
+                Some(Aperture::Image(path))
+            }
+        };
+        Ok(RealisticSettings { elements, aperture_diameter, focus_distance, aperture })
+    }
+}
+
+/// A lens description file (pbrt-v4's `ReadFloatFile`: numbers separated by white space, `#`
+/// to the end of a line a comment), four numbers per element, checked.
+fn read_lens_file(loc: &FileLoc, name: &str) -> Result<Vec<[f32; 4]>, Error> {
+    let path = loc.resolve(name);
+    let text = std::fs::read_to_string(&path).map_err(|err| {
+        Error::new(loc, format!("realistic camera: cannot read lens file \"{name}\" (tried {}): {err}", shown(&path)))
+    })?;
+    let mut values = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        let line = line.split('#').next().unwrap_or("");
+        for token in line.split_whitespace() {
+            let v: f32 = token.parse().map_err(|_| {
+                Error::new(loc, format!("lens file {}:{}: \"{token}\" is not a number", shown(&path), i + 1))
+            })?;
+            if !v.is_finite() {
+                return Err(Error::new(
+                    loc,
+                    format!("lens file {}:{}: \"{token}\" is not finite", shown(&path), i + 1),
+                ));
+            }
+            values.push(v);
+        }
+    }
+    if values.is_empty() || values.len() % 4 != 0 {
+        return Err(Error::new(
+            loc,
+            format!(
+                "lens file {}: {} numbers; a lens is rows of four (curvature radius, thickness, index of \
+                 refraction, aperture diameter)",
+                shown(&path),
+                values.len()
+            ),
+        ));
+    }
+    let elements: Vec<[f32; 4]> = values.chunks_exact(4).map(|c| [c[0], c[1], c[2], c[3]]).collect();
+    for (i, e) in elements.iter().enumerate() {
+        if e[1] < 0.0 || e[2] < 0.0 || e[3] <= 0.0 {
+            return Err(Error::new(
+                loc,
+                format!(
+                    "lens file {}: element {} has a negative thickness or index of refraction, or no aperture",
+                    shown(&path),
+                    i + 1
+                ),
+            ));
+        }
+    }
+    Ok(elements)
 }
 
 /// Everything a camera entity specifies.
@@ -84,11 +213,13 @@ impl CameraSettings {
                     }
                 },
             },
+            "realistic" => Projection::Realistic(RealisticSettings::from_entity(camera)?),
             other => {
                 return Err(Error::new(
                     &e.loc,
                     format!(
-                        "camera \"{other}\" is not supported by nimbus (it has perspective, orthographic and spherical)"
+                        "camera \"{other}\" is not supported by nimbus (it has perspective, orthographic, spherical \
+                         and realistic)"
                     ),
                 ));
             }

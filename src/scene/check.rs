@@ -207,12 +207,19 @@ pub fn check_scene(scene: &SceneDescription) -> Result<SceneCheck, Error> {
         *media.entry(m.entity.name.clone()).or_insert(0) += 1;
     }
 
-    let camera_text = match camera.projection {
+    let camera_text = match &camera.projection {
         Projection::Perspective { fov } => format!("{}, fov {fov}°", scene.camera.entity.name),
         Projection::Orthographic => scene.camera.entity.name.clone(),
         Projection::Spherical { equal_area } => {
-            format!("{}, {}", scene.camera.entity.name, if equal_area { "equal-area" } else { "equirectangular" })
+            format!("{}, {}", scene.camera.entity.name, if *equal_area { "equal-area" } else { "equirectangular" })
         }
+        Projection::Realistic(r) => format!(
+            "{}, {} lens interfaces, aperture {} mm, focus at {}",
+            scene.camera.entity.name,
+            r.elements.len(),
+            r.aperture_diameter,
+            r.focus_distance
+        ),
     };
     let camera_text = match &scene.camera.medium {
         Some(m) => format!("{camera_text}, inside medium \"{m}\""),

@@ -7,6 +7,7 @@ use glam::{Affine3A, Vec2, Vec3};
 
 use super::{ShapeSample, SurfaceDerivatives, SurfaceHit, WorldVertices};
 use crate::geometry::{Bounds3, Ray};
+use crate::math::quadratic;
 
 /// Vertex data shared by a mesh's patches.
 #[derive(Clone, Debug, Default)]
@@ -315,31 +316,6 @@ impl BilinearMesh {
         let ts = if self.normals.is_empty() { dpdv } else { ns.cross(ss) };
         SurfaceDerivatives { dpdu: ss, dpdv: ts, dndu, dndv }
     }
-}
-
-/// Real roots of a x² + b x + c, smaller first (pbrt-v4's `Quadratic`, with its linear case).
-fn quadratic(a: f32, b: f32, c: f32) -> Option<(f32, f32)> {
-    if a == 0.0 {
-        if b == 0.0 {
-            return None;
-        }
-        let t = -c / b;
-        return Some((t, t));
-    }
-    let discrim = (b as f64) * (b as f64) - 4.0 * (a as f64) * (c as f64);
-    if discrim < 0.0 {
-        return None;
-    }
-    let root = discrim.sqrt();
-    let q = if b < 0.0 { -0.5 * (b as f64 - root) } else { -0.5 * (b as f64 + root) };
-    let (mut t0, mut t1) = ((q / a as f64) as f32, (c as f64 / q) as f32);
-    if q == 0.0 {
-        t1 = t0;
-    }
-    if t0 > t1 {
-        std::mem::swap(&mut t0, &mut t1);
-    }
-    Some((t0, t1))
 }
 
 #[cfg(test)]

@@ -97,18 +97,27 @@ impl PathGraph {
                 (Recorder::<C>::default(), v, p)
             },
             |(rec, v, p), px, lambda, sampler, stats| {
-                trace_path::<C, Recorder<C>>(
-                    scene,
-                    px.ray,
-                    scene.camera_medium,
-                    lambda,
-                    sampler,
-                    &self.config,
-                    rec,
-                    stats,
-                );
+                // A ray a realistic camera's lens stopped records an empty path: the pixel
+                // still counts the sample, with nothing found.
+                if let Some(c) = px.ray {
+                    trace_path::<C, Recorder<C>>(
+                        scene,
+                        c.ray,
+                        scene.camera_medium,
+                        lambda,
+                        sampler,
+                        &self.config,
+                        rec,
+                        stats,
+                    );
+                }
                 let lambda = *lambda;
                 rec.finish(px.index, px.weight, |x: C| x.to_film(&lambda, scene), v, p);
+                if let Some(c) = px.ray
+                    && c.weight != 1.0
+                {
+                    p.scale_last(c.weight);
+                }
             },
         );
         // Sized once: growing by doubling copied the vertex store again and faulted in fresh

@@ -235,6 +235,16 @@ impl Paths {
     pub fn len(&self) -> usize {
         self.pixel.len()
     }
+
+    /// Scales the last path's radiance by `w` (a realistic camera's ray weight): what it found
+    /// before its first graph vertex and the throughput arriving there, which every other
+    /// quantity of the path is relative to.
+    pub fn scale_last(&mut self, w: f32) {
+        if let (Some(before), Some(beta)) = (self.before.last_mut(), self.beta.last_mut()) {
+            *before *= w;
+            *beta *= w;
+        }
+    }
 }
 
 /// The path loop's observer: collects one path's events (per-thread scratch, reused), in the

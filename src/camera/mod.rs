@@ -2,7 +2,13 @@
 //! the field of view spans the shorter image axis, and camera space looks down +z with +y
 //! up in a left-handed frame (so LookAt scenes come out exactly as pbrt-v4 frames them).
 
+mod realistic;
+
+use std::sync::Arc;
+
 use glam::{Affine3A, DMat4, Vec2, Vec3};
+
+pub use realistic::RealisticLens;
 
 use crate::geometry::{MotionTransform, Ray};
 use crate::sampling::warp::concentric_disk;
@@ -28,11 +34,30 @@ pub struct Camera {
     tan_half_fov: f32,
     lens_radius: f32,
     focal_distance: f32,
+    /// A realistic camera's lens system (its rays replace the projection above).
+    realistic: Option<Arc<RealisticLens>>,
+}
+
+/// A camera ray and its weight (pbrt-v4's `CameraRay`): 1 but through a realistic camera's
+/// lens, whose weight carries the cos⁴ falloff and the exit-pupil sampling density.
+#[derive(Clone, Copy, Debug)]
+pub struct CameraRay {
+    /// The ray, in world space.
+    pub ray: Ray,
+    /// The factor on the radiance it brings back.
+    pub weight: f32,
 }
 
 impl Camera {
-    /// A camera for a film of `full_resolution` pixels.
-    pub fn new(settings: &CameraSettings, world_from_camera: &DMat4, full_resolution: [u32; 2]) -> Camera {
+    /// A camera for a film of `full_resolution` pixels whose diagonal is `diagonal_mm` (the
+    /// film's `diagonal`, used by realistic cameras). Fails only for a realistic camera's lens
+    /// that cannot be focused or lets no light through.
+    pub fn new(
+        settings: &CameraSettings,
+        world_from_camera: &DMat4,
+        full_resolution: [u32; 2],
+        diagonal_mm: f32,
+    ) -> Result<Camera, String> {
         let res = Vec2::new(full_resolution[0] as f32, full_resolution[1] as f32);
         let frame = settings.frame_aspect_ratio.unwrap_or(res.x / res.y);
         let (screen_min, screen_max) = match settings.screen_window {
@@ -42,13 +67,17 @@ impl Camera {
         };
         let (perspective, tan_half_fov) = match settings.projection {
             Projection::Perspective { fov } => (true, (fov.to_radians() / 2.0).tan()),
-            Projection::Orthographic | Projection::Spherical { .. } => (false, 1.0),
+            Projection::Orthographic | Projection::Spherical { .. } | Projection::Realistic(_) => (false, 1.0),
+        };
+        let realistic = match &settings.projection {
+            Projection::Realistic(r) => Some(RealisticLens::shared(r, full_resolution, diagonal_mm)?),
+            _ => None,
         };
         let spherical = match settings.projection {
             Projection::Spherical { equal_area } => Some(equal_area),
             _ => None,
         };
-        Camera {
+        Ok(Camera {
             world_from_camera: Affine3A::from_mat4(world_from_camera.as_mat4()),
             motion: None,
             shutter_open: settings.shutter_open,
@@ -61,7 +90,8 @@ impl Camera {
             tan_half_fov,
             lens_radius: settings.lens_radius,
             focal_distance: settings.focal_distance,
-        }
+            realistic,
+        })
     }
 
     /// The camera moving with `motion` (its transform at each ray's time).
@@ -97,11 +127,25 @@ impl Camera {
     }
 
     /// The ray through continuous raster position `p_film` (pixel (x, y) covers
-    /// [x, x+1)×[y, y+1)), with `u_lens` sampling the thin lens, at time `time`.
-    pub fn generate_ray(&self, p_film: Vec2, u_lens: Vec2, time: f32) -> Ray {
-        if let Some(equal_area) = self.spherical {
-            return self.spherical_ray(p_film, equal_area, time);
+    /// [x, x+1)×[y, y+1)), with `u_lens` sampling the lens, at time `time`; `None` when a
+    /// realistic camera's lens stops it (the sample then brings back nothing, as in pbrt-v4).
+    pub fn generate_ray(&self, p_film: Vec2, u_lens: Vec2, time: f32) -> Option<CameraRay> {
+        if let Some(lens) = &self.realistic {
+            let (o, d, weight) = lens.generate(p_film, self.resolution, u_lens)?;
+            let w = self.world_from_camera_at(time);
+            let ray = Ray::timed(w.transform_point3(o), w.transform_vector3(d).normalize(), time);
+            return Some(CameraRay { ray, weight });
         }
+        let ray = if let Some(equal_area) = self.spherical {
+            self.spherical_ray(p_film, equal_area, time)
+        } else {
+            self.projective_ray(p_film, u_lens, time)
+        };
+        Some(CameraRay { ray, weight: 1.0 })
+    }
+
+    /// A perspective or orthographic camera's ray, through its thin lens if it has one.
+    fn projective_ray(&self, p_film: Vec2, u_lens: Vec2, time: f32) -> Ray {
         // Raster → screen: x grows right, y grows down in raster space but up on screen.
         let sx = self.screen_min.x + p_film.x / self.resolution.x * (self.screen_max.x - self.screen_min.x);
         let sy = self.screen_max.y - p_film.y / self.resolution.y * (self.screen_max.y - self.screen_min.y);
@@ -179,15 +223,15 @@ mod tests {
             |equal_area| CameraSettings { projection: Projection::Spherical { equal_area }, ..settings(90.0) };
         // Equirectangular: the top row looks up (camera +y), the bottom down, the centre along
         // camera −x (φ = π), a quarter across along camera +z (φ = π/2).
-        let cam = Camera::new(&spherical(false), &look, [64, 32]);
-        let d = |x: f32, y: f32| cam.generate_ray(Vec2::new(x, y), Vec2::ZERO, 0.0).d;
+        let cam = Camera::new(&spherical(false), &look, [64, 32], 35.0).unwrap();
+        let d = |x: f32, y: f32| cam.generate_ray(Vec2::new(x, y), Vec2::ZERO, 0.0).unwrap().ray.d;
         assert!((d(32.0, 0.0) - Vec3::Y).length() < 1e-5, "{:?}", d(32.0, 0.0));
         assert!((d(32.0, 32.0) + Vec3::Y).length() < 1e-5);
         assert!((d(32.0, 16.0) + Vec3::X).length() < 1e-5, "{:?}", d(32.0, 16.0));
         assert!((d(16.0, 16.0) - Vec3::Z).length() < 1e-5, "{:?}", d(16.0, 16.0));
         // Equal-area: the centre of the square is the pole (up), its corners the other pole.
-        let cam = Camera::new(&spherical(true), &look, [32, 32]);
-        let d = |x: f32, y: f32| cam.generate_ray(Vec2::new(x, y), Vec2::ZERO, 0.0).d;
+        let cam = Camera::new(&spherical(true), &look, [32, 32], 35.0).unwrap();
+        let d = |x: f32, y: f32| cam.generate_ray(Vec2::new(x, y), Vec2::ZERO, 0.0).unwrap().ray.d;
         assert!((d(16.0, 16.0) - Vec3::Y).length() < 1e-5, "{:?}", d(16.0, 16.0));
         assert!((d(0.0, 0.0) + Vec3::Y).length() < 1e-5, "{:?}", d(0.0, 0.0));
         // A filter's reach past the edge wraps back onto the sphere continuously.
@@ -197,15 +241,15 @@ mod tests {
     #[test]
     fn center_ray_looks_at_the_target_and_fov_spans_the_short_axis() {
         let cam_from_world = look_at([0.0, 1.0, 3.4], [0.0, 1.0, 0.0], [0.0, 1.0, 0.0]).unwrap();
-        let cam = Camera::new(&settings(90.0), &cam_from_world.inverse(), [200, 100]);
-        let r = cam.generate_ray(Vec2::new(100.0, 50.0), Vec2::ZERO, 0.0);
+        let cam = Camera::new(&settings(90.0), &cam_from_world.inverse(), [200, 100], 35.0).unwrap();
+        let r = cam.generate_ray(Vec2::new(100.0, 50.0), Vec2::ZERO, 0.0).unwrap().ray;
         assert!((r.o - Vec3::new(0.0, 1.0, 3.4)).length() < 1e-5);
         assert!((r.d - Vec3::new(0.0, 0.0, -1.0)).length() < 1e-5);
         // Top edge at the centre column: 45° up (fov 90 on the shorter, vertical axis).
-        let top = cam.generate_ray(Vec2::new(100.0, 0.0), Vec2::ZERO, 0.0);
+        let top = cam.generate_ray(Vec2::new(100.0, 0.0), Vec2::ZERO, 0.0).unwrap().ray;
         assert!((top.d.y - (0.5f32).sqrt()).abs() < 1e-4, "{:?}", top.d);
         // pbrt-v4's left-handed camera: raster +x goes towards world -x for this LookAt.
-        let right = cam.generate_ray(Vec2::new(200.0, 50.0), Vec2::ZERO, 0.0);
+        let right = cam.generate_ray(Vec2::new(200.0, 50.0), Vec2::ZERO, 0.0).unwrap().ray;
         assert!(right.d.x < -0.5, "{:?}", right.d);
     }
 }

@@ -246,7 +246,10 @@ pub fn light_bounds(light: &Light, shapes: &ShapeStore) -> Option<LightBounds> {
             cos_theta_e: (cos_falloff_end.clamp(-1.0, 1.0).acos() - cos_falloff_start.clamp(-1.0, 1.0).acos()).cos(),
             two_sided: false,
         },
-        LightKind::Distant { .. } | LightKind::UniformInfinite { .. } | LightKind::ImageInfinite(_) => {
+        LightKind::Distant { .. }
+        | LightKind::UniformInfinite { .. }
+        | LightKind::ImageInfinite(_)
+        | LightKind::PortalInfinite(_) => {
             return None;
         }
         LightKind::Area { geometry, l, two_sided, area, .. } => {

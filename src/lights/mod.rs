@@ -1,14 +1,17 @@
-//! Light sources with pbrt-v4's radiometry: point, spot, distant, uniform and image
-//! infinite lights, and diffuse area lights (one per emitting primitive, as in pbrt-v4).
+//! Light sources with pbrt-v4's radiometry: point, spot, goniometric, projection, distant,
+//! uniform and image infinite lights (also through a portal), and diffuse area lights (one per
+//! emitting primitive, as in pbrt-v4).
 
 mod bvh;
 mod envmap;
 pub mod goniometric;
+mod portal;
 pub mod projection;
 mod sampler;
 
 pub use bvh::{LightBounds, LightBvh, light_bounds};
 pub use envmap::EnvironmentMap;
+pub use portal::PortalMap;
 pub use sampler::{LightSampler, LightSamplerKind};
 
 use std::f32::consts::PI;
@@ -77,6 +80,8 @@ pub enum LightKind {
     },
     /// Radiance from an equal-area octahedral image.
     ImageInfinite(Box<EnvironmentMap>),
+    /// An environment (image or constant) seen only through a rectangular portal.
+    PortalInfinite(Box<PortalMap>),
     /// A diffuse emitter on one primitive.
     Area {
         /// The emitting geometry (never an instance).
@@ -151,7 +156,10 @@ impl Light {
 
     /// True for lights at infinity that escaped rays see.
     pub fn is_infinite(&self) -> bool {
-        matches!(self.kind, LightKind::UniformInfinite { .. } | LightKind::ImageInfinite(_))
+        matches!(
+            self.kind,
+            LightKind::UniformInfinite { .. } | LightKind::ImageInfinite(_) | LightKind::PortalInfinite(_)
+        )
     }
 
     /// Whether next-event estimation samples this light. A uniform environment is left to
@@ -172,6 +180,7 @@ impl Light {
             LightKind::Distant { l, .. } => PI * scene.radius * scene.radius * average(l.rgb),
             LightKind::UniformInfinite { l } => 4.0 * PI * PI * scene.radius * scene.radius * average(l.rgb),
             LightKind::ImageInfinite(map) => 4.0 * PI * PI * scene.radius * scene.radius * map.average_radiance(),
+            LightKind::PortalInfinite(map) => map.power(),
             LightKind::Area { l, two_sided, area, .. } => {
                 PI * if *two_sided { 2.0 } else { 1.0 } * area * average(l.rgb)
             }
@@ -235,6 +244,18 @@ impl Light {
                     infinite: true,
                 })
             }
+            LightKind::PortalInfinite(map) => {
+                let (wi, pdf, l) = map.sample::<C>(ctx.p, u, lambda)?;
+                Some(LightSample {
+                    l,
+                    wi,
+                    pdf,
+                    p: ctx.p + wi * (2.0 * scene.radius),
+                    n: Vec3::ZERO,
+                    delta: false,
+                    infinite: true,
+                })
+            }
             LightKind::Area { geometry, l, two_sided, .. } => {
                 let s = match *geometry {
                     Geometry::Triangle { mesh, tri } => triangle_sample(&shapes.meshes[mesh as usize], tri, u),
@@ -284,6 +305,7 @@ impl Light {
             | LightKind::Distant { .. } => 0.0,
             LightKind::UniformInfinite { .. } => warp::UNIFORM_SPHERE_PDF,
             LightKind::ImageInfinite(map) => map.pdf(wi),
+            LightKind::PortalInfinite(map) => map.pdf(ctx.p, wi),
             LightKind::Area { geometry, area, .. } => {
                 let Some(hit) = hit else { return 0.0 };
                 match *geometry {
@@ -324,12 +346,14 @@ impl Light {
         matches!(&self.kind, LightKind::Area { l, two_sided, .. } if (*two_sided || hit.n.dot(w) > 0.0) && !l.is_zero())
     }
 
-    /// Radiance an infinite light sends along a ray leaving the scene in direction `d`.
+    /// Radiance an infinite light sends along a ray from `o` leaving the scene in direction
+    /// `d` (a portal light sends it only through its portal).
     #[inline]
-    pub fn le<C: Channels>(&self, d: Vec3, lambda: &C::Lambda) -> C {
+    pub fn le<C: Channels>(&self, o: Vec3, d: Vec3, lambda: &C::Lambda) -> C {
         match &self.kind {
             LightKind::UniformInfinite { l } => C::eval(l, lambda),
             LightKind::ImageInfinite(map) => map.lookup(d, lambda),
+            LightKind::PortalInfinite(map) => map.le(o, d, lambda),
             _ => C::ZERO,
         }
     }

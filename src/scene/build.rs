@@ -33,7 +33,7 @@ use crate::film::filter::Filter;
 use crate::geometry::ply::read_ply;
 use crate::geometry::{Bounds3, MotionTransform};
 use crate::integrators::IntegratorSettings;
-use crate::lights::{EnvironmentMap, Light, LightKind, LightSampler, LightSamplerKind, SceneSphere};
+use crate::lights::{EnvironmentMap, Light, LightKind, LightSampler, LightSamplerKind, PortalMap, SceneSphere};
 use crate::materials::{ConductorInput, HairAbsorption, Material, RoughnessTex, ShadingPerturbation, resolve};
 use crate::math::Frame;
 use crate::media::dense::DenseGrid;
@@ -964,11 +964,49 @@ fn light(
             let scale = settings.scale * illuminance.unwrap_or(1.0);
             LightKind::Distant { w, l: rgb(radiance)?.scaled(scale) }
         }
+        LightSpec::Infinite { radiance, filename, illuminance, portal: Some(corners) } => {
+            // pbrt-v4 renders `L` with a portal as a 1×1 image of its RGB.
+            let cs = e.color_space;
+            let image = match (radiance, filename) {
+                (_, Some(path)) => crate::imageio::read_image(path).map_err(|m| err(&e.loc, m))?,
+                (Some(SpectrumSpec::Rgb(c)), None) => {
+                    let mut image = crate::imageio::Image::new(1, 1);
+                    image.pixels[0] = Rgb::from(*c);
+                    image
+                }
+                (Some(_), None) => {
+                    return Err(err(
+                        &e.loc,
+                        "infinite light with a portal: give \"rgb L\" or an image (nimbus does not turn other spectra \
+                         into the RGB image pbrt-v4 makes of them)",
+                    ));
+                }
+                (None, None) => return Err(err(&e.loc, "infinite light without radiance or image")),
+            };
+            let mut scale = settings.scale;
+            if let Some(ev) = illuminance {
+                let k_e = EnvironmentMap::new(&image, cs, world, 1.0)
+                    .map_err(|m| err(&e.loc, m))?
+                    .upper_hemisphere_illuminance();
+                if k_e > 0.0 {
+                    scale *= ev / k_e;
+                }
+            }
+            // The corners are world-space points (pbrt-v4 does not apply the light's transform
+            // to them), the image is oriented by the light's transform.
+            let loc = e.params.loc("portal").unwrap_or(&e.loc);
+            let mut map = PortalMap::new(&image, cs, world, scale, corners.map(Vec3::from))
+                .map_err(|m| err(loc, format!("infinite light: {m}")))?;
+            if transport == Transport::Rgb && !spectra.sensor.is_passthrough() {
+                map.map_pixels(|p| spectra.emitted_texel(p, cs));
+            }
+            LightKind::PortalInfinite(Box::new(map))
+        }
         LightSpec::Infinite { radiance: Some(r), illuminance, .. } => {
             let scale = settings.scale * illuminance.map_or(1.0, |ev| ev / std::f32::consts::PI);
             LightKind::UniformInfinite { l: rgb(r)?.scaled(scale) }
         }
-        LightSpec::Infinite { radiance: None, filename: Some(path), illuminance } => {
+        LightSpec::Infinite { radiance: None, filename: Some(path), illuminance, .. } => {
             let cs = e.color_space;
             let mut map = EnvironmentMap::load(path, cs, world, settings.scale).map_err(|m| err(&e.loc, m))?;
             if let Some(ev) = illuminance {

@@ -74,6 +74,8 @@ pub enum LightKind {
         filename: Option<PathBuf>,
         /// Illuminance at an upward-facing surface, if given.
         illuminance: Option<f32>,
+        /// The four corners (world space) of a rectangle the light is seen through, if given.
+        portal: Option<[[f32; 3]; 4]>,
     },
 }
 
@@ -174,14 +176,18 @@ impl LightSettings {
                 if radiance.is_some() && filename.is_some() {
                     return Err(Error::new(&e.loc, "infinite light: give either \"L\" or \"filename\", not both"));
                 }
-                if !p.get_point3s("portal")?.is_empty() {
-                    return Err(Error::new(
-                        p.loc("portal").unwrap_or(&e.loc),
-                        "infinite light portals (\"portal\") are not supported by nimbus",
-                    ));
-                }
+                let portal = match p.get_point3s("portal")? {
+                    [] => None,
+                    [a, b, c, d] => Some([*a, *b, *c, *d]),
+                    other => {
+                        return Err(Error::new(
+                            p.loc("portal").unwrap_or(&e.loc),
+                            format!("infinite light: a \"portal\" has 4 corners, not {}", other.len()),
+                        ));
+                    }
+                };
                 let radiance = if filename.is_none() { Some(radiance.unwrap_or_else(white)) } else { None };
-                LightKind::Infinite { radiance, filename, illuminance: positive_opt(e, "illuminance")? }
+                LightKind::Infinite { radiance, filename, illuminance: positive_opt(e, "illuminance")?, portal }
             }
             other => {
                 return Err(Error::new(

@@ -345,7 +345,7 @@ pub fn trace_path<C: Channels, O: PathObserver<C>>(
             // Escaped: environment emission.
             for &i in &scene.infinite_lights {
                 let light = &scene.lights[i as usize];
-                let le = light.le::<C>(ray.d, lambda);
+                let le = light.le::<C>(ray.o, ray.d, lambda);
                 if le.is_zero() {
                     continue;
                 }

@@ -164,6 +164,13 @@ impl Emitter {
                 let (ray, area) = from_infinity(w, u);
                 (ray, l * (area / pdf))
             }
+            // From the whole environment, as pbrt-v4's `SampleLe` (not only through the
+            // portal): the walls around it stop the rest.
+            LightKind::PortalInfinite(map) => {
+                let (w, pdf, l) = map.sample_emission::<C>(u2, lambda)?;
+                let (ray, area) = from_infinity(w, u);
+                (ray, l * (area / pdf))
+            }
             LightKind::Area { geometry, l, two_sided, interface, .. } => {
                 let shapes = &scene.surfaces.shapes;
                 let s = match *geometry {

@@ -294,6 +294,7 @@ fn light_kind_name(k: &LightKind) -> &'static str {
         LightKind::Distant { .. } => "distant",
         LightKind::UniformInfinite { .. } => "uniform infinite",
         LightKind::ImageInfinite(_) => "image infinite",
+        LightKind::PortalInfinite(_) => "infinite through a portal",
         LightKind::Area { .. } => "area",
     }
 }

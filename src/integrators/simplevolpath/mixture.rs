@@ -222,7 +222,9 @@ impl Mixture {
             scene.lights.iter().map(|l| if keep(&l.kind) { l.power(&scene.sphere) } else { 0.0 }).collect()
         };
         let lights = table(&power(|k| matches!(k, LightKind::Area { .. })));
-        let envs = table(&power(|k| matches!(k, LightKind::UniformInfinite { .. } | LightKind::ImageInfinite(_))));
+        let envs = table(&power(|k| {
+            matches!(k, LightKind::UniformInfinite { .. } | LightKind::ImageInfinite(_) | LightKind::PortalInfinite(_))
+        }));
         let light = if lights.is_some() { s.light_fraction } else { 0.0 };
         let env = if envs.is_some() { s.env_fraction } else { 0.0 };
         let sum = s.bsdf_fraction + light + env;

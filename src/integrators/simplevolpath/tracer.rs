@@ -89,8 +89,8 @@ fn ratio<C: Channels>(x: C, y: C) -> C {
 
 /// Radiance the infinite lights send along an escaping ray.
 #[inline]
-fn escaped<C: Channels>(scene: &Scene, d: Vec3, lambda: &C::Lambda) -> C {
-    scene.infinite_lights.iter().fold(C::ZERO, |sum, &i| sum + scene.lights[i as usize].le(d, lambda))
+fn escaped<C: Channels>(scene: &Scene, o: Vec3, d: Vec3, lambda: &C::Lambda) -> C {
+    scene.infinite_lights.iter().fold(C::ZERO, |sum, &i| sum + scene.lights[i as usize].le(o, d, lambda))
 }
 
 /// Point, spot and distant lights, chosen in proportion to power for the one deterministic
@@ -202,7 +202,7 @@ pub fn trace<C: Channels>(
         let bxdf;
         let (x, hit, sc) = match isect.event {
             Event::Escape => {
-                l += path.weigh(escaped(scene, isect.ray.d, lambda));
+                l += path.weigh(escaped(scene, isect.ray.o, isect.ray.d, lambda));
                 break;
             }
             Event::Surface(mut hit) => {

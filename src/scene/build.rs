@@ -335,6 +335,11 @@ impl TextureBuilder<'_> {
                 b: self.input(tex2, cs, &e.loc)?,
                 mapping: mapping(m),
             },
+            TextureKind::Checkerboard3D { tex1, tex2 } => TexNode::Checkerboard3D {
+                a: self.input(tex1, cs, &e.loc)?,
+                b: self.input(tex2, cs, &e.loc)?,
+                texture_from_world,
+            },
             TextureKind::Bilerp { v, mapping: m } => TexNode::Bilerp {
                 v: [
                     self.input(&v[0], cs, &e.loc)?,

@@ -78,6 +78,13 @@ pub enum TextureKind {
         /// Mapping.
         mapping: Mapping,
     },
+    /// `checkerboard` with `"integer dimension" 3`: cubes of the texture-space point.
+    Checkerboard3D {
+        /// Value on even cubes.
+        tex1: TexInput,
+        /// Value on odd cubes.
+        tex2: TexInput,
+    },
     /// `bilerp`: bilinear interpolation of four corner values over (s, t).
     Bilerp {
         /// Values at (0, 0), (0, 1), (1, 0), (1, 1): `v00`, `v01`, `v10`, `v11`.
@@ -217,20 +224,20 @@ impl TextureSettings {
                 tex2: input(t, "tex2", 1.0)?,
                 amount: float_input(p, "amount")?.unwrap_or(FloatInput::Value(0.5)),
             },
-            "checkerboard" => {
-                let dim = p.get_one_int("dimension", 2)?;
-                if dim != 2 {
-                    return Err(Error::new(
-                        p.loc("dimension").unwrap_or(&e.loc),
-                        format!("checkerboard dimension {dim} is not supported by nimbus (it has 2)"),
-                    ));
-                }
-                TextureKind::Checkerboard {
+            "checkerboard" => match p.get_one_int("dimension", 2)? {
+                2 => TextureKind::Checkerboard {
                     tex1: input(t, "tex1", 1.0)?,
                     tex2: input(t, "tex2", 0.0)?,
                     mapping: mapping(t)?,
+                },
+                3 => TextureKind::Checkerboard3D { tex1: input(t, "tex1", 1.0)?, tex2: input(t, "tex2", 0.0)? },
+                dim => {
+                    return Err(Error::new(
+                        p.loc("dimension").unwrap_or(&e.loc),
+                        format!("checkerboard dimension {dim}: pbrt-v4's checkerboards have 2 or 3"),
+                    ));
                 }
-            }
+            },
             "bilerp" => TextureKind::Bilerp {
                 v: [input(t, "v00", 0.0)?, input(t, "v01", 1.0)?, input(t, "v10", 0.0)?, input(t, "v11", 1.0)?],
                 mapping: mapping(t)?,

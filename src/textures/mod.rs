@@ -1,5 +1,5 @@
 //! Textures as pbrt-v4 evaluates them (without ray-differential filtering): constants,
-//! scale, mix, 2D checkerboards and image maps, over uv, spherical, cylindrical or planar
+//! scale, mix, 2D and 3D checkerboards, image maps and noise, over uv, spherical, cylindrical or planar
 //! mappings. Float textures evaluate to gray RGB and are read from the first channel.
 //! Spectrum textures evaluate in the path's channels: constants are scene spectra, and image
 //! texels become spectra (for spectral transport) only after filtering, as in pbrt-v4's
@@ -135,6 +135,16 @@ pub enum TexNode {
         /// Mapping.
         mapping: TexMapping,
     },
+    /// Alternating cubes of `a` (even) and `b` (odd) in texture space (pbrt-v4's 3D
+    /// checkerboard, point mapping).
+    Checkerboard3D {
+        /// Even cubes.
+        a: Tex,
+        /// Odd cubes.
+        b: Tex,
+        /// Texture space from world space (the inverse of the texture's transform).
+        texture_from_world: Affine3A,
+    },
     /// pbrt-v4's `bilerp`: (1−s)(1−t)·v00 + (1−s)t·v01 + s(1−t)·v10 + st·v11.
     Bilerp {
         /// v00, v01, v10, v11.
@@ -256,7 +266,9 @@ impl Textures {
                 TexNode::Mix { a, b, amount } => {
                     self.is_chromatic(*a) || self.is_chromatic(*b) || self.is_chromatic(*amount)
                 }
-                TexNode::Checkerboard { a, b, .. } => self.is_chromatic(*a) || self.is_chromatic(*b),
+                TexNode::Checkerboard { a, b, .. } | TexNode::Checkerboard3D { a, b, .. } => {
+                    self.is_chromatic(*a) || self.is_chromatic(*b)
+                }
                 TexNode::Bilerp { v, .. } => v.iter().any(|t| self.is_chromatic(*t)),
                 TexNode::Fbm { .. } | TexNode::Wrinkled { .. } | TexNode::Windy { .. } => false,
                 TexNode::Marble { .. } => true,
@@ -283,6 +295,15 @@ impl Textures {
             TexNode::Checkerboard { a, b, mapping } => {
                 let st = mapping.map(ctx);
                 if (st.x.floor() as i64 + st.y.floor() as i64) % 2 == 0 {
+                    self.eval(*a, ctx, lambda, role)
+                } else {
+                    self.eval(*b, ctx, lambda, role)
+                }
+            }
+            TexNode::Checkerboard3D { a, b, texture_from_world } => {
+                // Unfiltered, as nimbus's other textures (no ray differentials).
+                let p = texture_from_world.transform_point3(ctx.p).floor();
+                if (p.x as i64 + p.y as i64 + p.z as i64) % 2 == 0 {
                     self.eval(*a, ctx, lambda, role)
                 } else {
                     self.eval(*b, ctx, lambda, role)
@@ -423,6 +444,28 @@ mod tests {
         assert_eq!(t.eval_rgb(Tex::Node(0), &at(0.25, 0.25)), Rgb::ONE);
         assert_eq!(t.eval_rgb(Tex::Node(0), &at(0.75, 0.25)), Rgb::ZERO);
         assert_eq!(t.eval_rgb(Tex::Node(1), &at(0.25, 0.25)), Rgb::splat(0.75));
+    }
+
+    /// pbrt-v4's 3D checkerboard: the parity of ⌊x⌋ + ⌊y⌋ + ⌊z⌋ of the texture-space point
+    /// (here world space scaled by 4), negative coordinates included.
+    #[test]
+    fn checkerboard_in_three_dimensions() {
+        let mut t = Textures::default();
+        t.nodes.push(TexNode::Checkerboard3D {
+            a: Tex::Const(SpectrumValue::constant(1.0)),
+            b: Tex::Const(SpectrumValue::constant(0.0)),
+            texture_from_world: Affine3A::from_scale(Vec3::splat(4.0)),
+        });
+        let at = |x: f32, y: f32, z: f32| {
+            t.eval_rgb(Tex::Node(0), &TexContext { p: Vec3::new(x, y, z), uv: Vec2::ZERO, n: Vec3::Z }).x
+        };
+        assert_eq!(at(0.1, 0.1, 0.1), 1.0);
+        assert_eq!(at(0.3, 0.1, 0.1), 0.0);
+        assert_eq!(at(0.3, 0.3, 0.1), 1.0);
+        assert_eq!(at(0.3, 0.3, 0.3), 0.0);
+        assert_eq!(at(-0.1, 0.1, 0.1), 0.0);
+        assert_eq!(at(-0.1, -0.1, 0.1), 1.0);
+        assert_eq!(at(-0.3, -0.1, -0.1), 1.0);
     }
 
     #[test]

@@ -2,7 +2,7 @@
 //! line, vignetting, and every integrator path (per camera ray and whole-image) applying the
 //! lens's ray weights and stopped rays alike.
 
-use crate::common::{load_scene, render_scene, render_with, scratch_dir};
+use crate::common::{load_scene, medium_cube, render_scene, render_with, scratch_dir};
 use nimbus::integrators::common::PathConfig;
 use nimbus::integrators::volpath::VolPath;
 use nimbus::scene::BuildOptions;
@@ -30,21 +30,15 @@ fn scene(lens: &std::path::Path, camera_params: &str, integrator: &str, params: 
     let world = if sky_only {
         String::new()
     } else {
-        r#"LightSource "distant" "point3 from" [0.3 1 0.2] "point3 to" [0 0 0] "rgb L" [2 2 2]
+        format!(
+            r#"LightSource "distant" "point3 from" [0.3 1 0.2] "point3 to" [0 0 0] "rgb L" [2 2 2]
 MakeNamedMedium "m" "string type" "homogeneous" "rgb sigma_s" [1 1 1] "rgb sigma_a" [0.05 0.05 0.05]
-AttributeBegin
-  Material "diffuse" "rgb reflectance" [0.5 0.5 0.5]
-  Shape "trianglemesh" "point3 P" [-4 -1 -4  4 -1 -4  4 -1 4  -4 -1 4] "integer indices" [0 2 1 0 3 2]
-AttributeEnd
-AttributeBegin
-  MediumInterface "m" ""
-  Material "interface"
-  Shape "trianglemesh"
-    "point3 P" [-1 -1 -1  1 -1 -1  1 1 -1  -1 1 -1  -1 -1 1  1 -1 1  1 1 1  -1 1 1]
-    "integer indices" [0 2 1 0 3 2  4 5 6 4 6 7  0 1 5 0 5 4  3 7 6 3 6 2  0 4 7 0 7 3  1 2 6 1 6 5]
-AttributeEnd
-"#
-        .to_string()
+Material "diffuse" "rgb reflectance" [0.5 0.5 0.5]
+Shape "trianglemesh" "point3 P" [-4 -1 -4  4 -1 -4  4 -1 4  -4 -1 4] "integer indices" [0 2 1 0 3 2]
+{}
+"#,
+            medium_cube("m")
+        )
     };
     format!(
         r#"LookAt 0 1 6  0 0 0  0 1 0

@@ -230,15 +230,7 @@ impl RealisticLens {
             let e = self.interfaces[i];
             z -= e.thickness;
             let stop = e.curvature_radius == 0.0;
-            let (t, n) = if stop {
-                let t = (z - r.o.z) / r.d.z;
-                if t < 0.0 || t.is_nan() {
-                    return None;
-                }
-                (t, Vec3::ZERO)
-            } else {
-                intersect_element(e.curvature_radius, z + e.curvature_radius, &r)?
-            };
+            let (t, n) = meet_interface(&e, z, &r)?;
             let hit = r.at(t);
             match (&self.aperture, stop) {
                 (Some(image), true) => {
@@ -271,15 +263,7 @@ impl RealisticLens {
         let mut r = r.mirrored();
         for (i, e) in self.interfaces.iter().enumerate() {
             let stop = e.curvature_radius == 0.0;
-            let (t, n) = if stop {
-                let t = (z - r.o.z) / r.d.z;
-                if t < 0.0 || t.is_nan() {
-                    return None;
-                }
-                (t, Vec3::ZERO)
-            } else {
-                intersect_element(e.curvature_radius, z + e.curvature_radius, &r)?
-            };
+            let (t, n) = meet_interface(e, z, &r)?;
             let hit = r.at(t);
             if sqr(hit.x) + sqr(hit.y) > sqr(e.aperture_radius) {
                 return None;
@@ -349,6 +333,17 @@ impl RealisticLens {
         // Expanded by twice the samples' spacing: the pupil's edge lies between samples.
         let pad = 2.0 * (hi_rear - lo_rear).length() / (samples as f32).sqrt();
         bounds.map(|[lo, hi]| [lo - Vec2::splat(pad), hi + Vec2::splat(pad)])
+    }
+}
+
+/// Where a lens-space ray meets interface `e` whose vertex is at `z`: the plane of the
+/// aperture stop (normal unused) or the element's sphere.
+fn meet_interface(e: &Interface, z: f32, r: &LensRay) -> Option<(f32, Vec3)> {
+    if e.curvature_radius == 0.0 {
+        let t = (z - r.o.z) / r.d.z;
+        (t >= 0.0).then_some((t, Vec3::ZERO))
+    } else {
+        intersect_element(e.curvature_radius, z + e.curvature_radius, r)
     }
 }
 

@@ -222,39 +222,15 @@ impl Light {
             }),
             LightKind::UniformInfinite { l } => {
                 let wi = warp::uniform_sphere(u);
-                Some(LightSample {
-                    l: C::eval(l, lambda),
-                    wi,
-                    pdf: warp::UNIFORM_SPHERE_PDF,
-                    p: ctx.p + wi * (2.0 * scene.radius),
-                    n: Vec3::ZERO,
-                    delta: false,
-                    infinite: true,
-                })
+                Some(infinite_sample(ctx, scene, wi, warp::UNIFORM_SPHERE_PDF, C::eval(l, lambda)))
             }
             LightKind::ImageInfinite(map) => {
                 let (wi, pdf, l) = map.sample::<C>(u, lambda)?;
-                Some(LightSample {
-                    l,
-                    wi,
-                    pdf,
-                    p: ctx.p + wi * (2.0 * scene.radius),
-                    n: Vec3::ZERO,
-                    delta: false,
-                    infinite: true,
-                })
+                Some(infinite_sample(ctx, scene, wi, pdf, l))
             }
             LightKind::PortalInfinite(map) => {
                 let (wi, pdf, l) = map.sample::<C>(ctx.p, u, lambda)?;
-                Some(LightSample {
-                    l,
-                    wi,
-                    pdf,
-                    p: ctx.p + wi * (2.0 * scene.radius),
-                    n: Vec3::ZERO,
-                    delta: false,
-                    infinite: true,
-                })
+                Some(infinite_sample(ctx, scene, wi, pdf, l))
             }
             LightKind::Area { geometry, l, two_sided, .. } => {
                 let s = match *geometry {
@@ -357,6 +333,13 @@ impl Light {
             _ => C::ZERO,
         }
     }
+}
+
+/// A sample of an infinite light from `ctx`: radiance `l` arriving along `wi` with density
+/// `pdf`, from a point beyond the scene.
+#[inline]
+fn infinite_sample<C>(ctx: &LightContext, scene: &SceneSphere, wi: Vec3, pdf: f32, l: C) -> LightSample<C> {
+    LightSample { l, wi, pdf, p: ctx.p + wi * (2.0 * scene.radius), n: Vec3::ZERO, delta: false, infinite: true }
 }
 
 /// pbrt-v4's SmoothStep: 0 below `a`, 1 above `b`, cubic between.

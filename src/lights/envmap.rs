@@ -91,10 +91,7 @@ impl EnvironmentMap {
     /// as pbrt-v4's `ImageLe`).
     #[inline]
     fn radiance<C: Channels>(&self, uv: Vec2, lambda: &C::Lambda) -> C {
-        let n = self.size as f32;
-        let x = ((uv.x * n) as usize).min(self.size - 1);
-        let y = ((uv.y * n) as usize).min(self.size - 1);
-        C::from_rgb(self.pixels[y * self.size + x], RgbRole::Illuminant, self.space, lambda)
+        nearest_radiance(&self.pixels, self.size, self.space, uv, lambda)
     }
 
     /// Samples a direction in proportion to luminance: (direction, pdf per solid angle,
@@ -132,6 +129,22 @@ impl EnvironmentMap {
         }
         (sum * 4.0 * PI as f64 / (n * n) as f64) as f32
     }
+}
+
+/// The texel of a square `size`² image holding `uv`, as emitted radiance in the path's
+/// channels (an illuminant spectrum for spectral transport, as pbrt-v4's image lights).
+#[inline]
+pub(super) fn nearest_radiance<C: Channels>(
+    pixels: &[Rgb],
+    size: usize,
+    space: ColorSpace,
+    uv: Vec2,
+    lambda: &C::Lambda,
+) -> C {
+    let n = size as f32;
+    let x = ((uv.x * n) as usize).min(size - 1);
+    let y = ((uv.y * n) as usize).min(size - 1);
+    C::from_rgb(pixels[y * size + x], RgbRole::Illuminant, space, lambda)
 }
 
 #[cfg(test)]

@@ -10,11 +10,11 @@ use std::f32::consts::PI;
 use glam::{Affine3A, Vec2, Vec3};
 use nimbus_parser::ColorSpace;
 
+use super::envmap::nearest_radiance;
 use crate::color::{Channels, Rgb, average};
 use crate::imageio::Image;
 use crate::math::Frame;
 use crate::sampling::warp::equal_area_sphere_to_square;
-use crate::spectra::RgbRole;
 
 /// An environment behind a rectangular portal, rectified, with its windowed sampling table.
 #[derive(Clone, Debug)]
@@ -138,10 +138,7 @@ impl PortalMap {
 
     /// The pixel at `uv` as emitted radiance (nearest, as pbrt-v4 looks it up).
     fn lookup<C: Channels>(&self, uv: Vec2, lambda: &C::Lambda) -> C {
-        let n = self.size as f32;
-        let x = ((uv.x * n) as usize).min(self.size - 1);
-        let y = ((uv.y * n) as usize).min(self.size - 1);
-        C::from_rgb(self.pixels[y * self.size + x], RgbRole::Illuminant, self.space, lambda)
+        nearest_radiance(&self.pixels, self.size, self.space, uv, lambda)
     }
 
     /// Radiance along a ray from `o` leaving the scene in direction `d`: the environment if

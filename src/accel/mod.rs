@@ -91,6 +91,38 @@ pub struct ShapeStore {
 }
 
 impl ShapeStore {
+    /// Texture coordinates of the point `p` of primitive `g` (a point on it, e.g. a light
+    /// sample), with `from` a point it is seen from (for bilinear patches, whose parameters
+    /// are found along the ray between them); `None` where they cannot be found.
+    pub fn uv_at(&self, g: Geometry, p: Vec3, from: Vec3) -> Option<Vec2> {
+        Some(match g {
+            Geometry::Sphere(i) => self.spheres[i as usize].uv_at(p),
+            Geometry::Disk(i) => self.disks[i as usize].uv_at(p),
+            Geometry::Cylinder(i) => self.cylinders[i as usize].uv_at(p),
+            Geometry::Triangle { mesh, tri } => {
+                let m = &self.meshes[mesh as usize];
+                let [v0, v1, v2] = m.vertices(tri);
+                let (e1, e2, w) = (v1 - v0, v2 - v0, p - v0);
+                let (d00, d01, d11) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
+                let (d20, d21) = (w.dot(e1), w.dot(e2));
+                let det = d00 * d11 - d01 * d01;
+                if det == 0.0 {
+                    return None;
+                }
+                let b1 = (d11 * d20 - d01 * d21) / det;
+                let b2 = (d00 * d21 - d01 * d20) / det;
+                triangle_hit(m, tri, 0.0, b1, b2).uv
+            }
+            Geometry::Bilinear { mesh, patch } => {
+                let m = &self.bilinear_meshes[mesh as usize];
+                let d = p - from;
+                let (u, v) = m.param(patch, &Ray::new(from, d.normalize_or_zero()))?;
+                m.hit(patch, 0.0, u, v).uv
+            }
+            Geometry::Curve(_) | Geometry::Instance(_) => return None,
+        })
+    }
+
     // Kept out of line: curves are rare and their intersection is long, and inlining it would
     // keep the triangle test out of the traversal loop.
     #[inline(never)]

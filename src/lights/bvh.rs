@@ -534,6 +534,7 @@ mod tests {
                         two_sided: k % 4 == 3,
                         area,
                         interface: NONE,
+                        alpha: NONE,
                     }
                 }
             };
@@ -598,6 +599,7 @@ mod tests {
                 two_sided,
                 area: 0.5,
                 interface: NONE,
+                alpha: NONE,
             },
             medium: NONE,
         };

@@ -18,7 +18,7 @@ use std::f32::consts::PI;
 
 use glam::{Vec2, Vec3};
 
-use crate::accel::{Geometry, ShapeStore};
+use crate::accel::{Geometry, NONE, ShapeStore, Surfaces};
 use crate::color::{Channels, Rgb, average};
 use crate::math::Frame;
 use crate::sampling::warp;
@@ -95,6 +95,9 @@ pub enum LightKind {
         /// The emitting shape's medium interface index, or [`crate::accel::NONE`]: the media on
         /// its two sides (light tracing starts in the one it leaves towards).
         interface: u32,
+        /// The shape's alpha texture (index into [`Surfaces::alphas`]), or
+        /// [`crate::accel::NONE`]: pbrt-v4 masks the emission where the alpha test fails.
+        alpha: u32,
     },
 }
 
@@ -193,10 +196,11 @@ impl Light {
         &self,
         ctx: &LightContext,
         u: Vec2,
-        shapes: &ShapeStore,
+        surfaces: &Surfaces,
         scene: &SceneSphere,
         lambda: &C::Lambda,
     ) -> Option<LightSample<C>> {
+        let shapes = &surfaces.shapes;
         match &self.kind {
             LightKind::Point { p, i } => point_sample(*p, ctx.p, |_| Some(C::eval(i, lambda))),
             LightKind::Goniometric { p, i, image } => point_sample(*p, ctx.p, |wi| {
@@ -232,7 +236,7 @@ impl Light {
                 let (wi, pdf, l) = map.sample::<C>(ctx.p, u, lambda)?;
                 Some(infinite_sample(ctx, scene, wi, pdf, l))
             }
-            LightKind::Area { geometry, l, two_sided, .. } => {
+            LightKind::Area { geometry, l, two_sided, alpha, .. } => {
                 let s = match *geometry {
                     Geometry::Triangle { mesh, tri } => triangle_sample(&shapes.meshes[mesh as usize], tri, u),
                     Geometry::Sphere(i) => shapes.spheres[i as usize].sample(ctx.p, u)?,
@@ -263,6 +267,12 @@ impl Light {
                 }
                 if !(*two_sided || cos_light > 0.0) || l.is_zero() {
                     return None;
+                }
+                if *alpha != NONE {
+                    let uv = shapes.uv_at(*geometry, s.p, ctx.p)?;
+                    if alpha_masked(surfaces, *alpha, s.p, uv, s.n) {
+                        return None;
+                    }
                 }
                 let le = C::eval(l, lambda);
                 Some(LightSample { l: le, wi, pdf, p: s.p, n: s.n, delta: false, infinite: false })
@@ -309,17 +319,26 @@ impl Light {
 
     /// Radiance an area light emits from `hit` in direction `w` (pointing away from it).
     #[inline]
-    pub fn emitted<C: Channels>(&self, hit: &SurfaceHit, w: Vec3, lambda: &C::Lambda) -> C {
-        match &self.kind {
-            LightKind::Area { l, two_sided, .. } if *two_sided || hit.n.dot(w) > 0.0 => C::eval(l, lambda),
-            _ => C::ZERO,
+    pub fn emitted<C: Channels>(&self, hit: &SurfaceHit, w: Vec3, lambda: &C::Lambda, surfaces: &Surfaces) -> C {
+        if self.emits(hit, w, surfaces) {
+            let LightKind::Area { l, .. } = &self.kind else { unreachable!("only area lights emit from surfaces") };
+            C::eval(l, lambda)
+        } else {
+            C::ZERO
         }
     }
 
     /// Whether an area light emits from `hit` in direction `w` at all.
     #[inline]
-    pub fn emits(&self, hit: &SurfaceHit, w: Vec3) -> bool {
-        matches!(&self.kind, LightKind::Area { l, two_sided, .. } if (*two_sided || hit.n.dot(w) > 0.0) && !l.is_zero())
+    pub fn emits(&self, hit: &SurfaceHit, w: Vec3, surfaces: &Surfaces) -> bool {
+        match &self.kind {
+            LightKind::Area { l, two_sided, alpha, .. } => {
+                (*two_sided || hit.n.dot(w) > 0.0)
+                    && !l.is_zero()
+                    && (*alpha == NONE || !alpha_masked(surfaces, *alpha, hit.p, hit.uv, hit.n))
+            }
+            _ => false,
+        }
     }
 
     /// Radiance an infinite light sends along a ray from `o` leaving the scene in direction
@@ -340,6 +359,24 @@ impl Light {
 #[inline]
 fn infinite_sample<C>(ctx: &LightContext, scene: &SceneSphere, wi: Vec3, pdf: f32, l: C) -> LightSample<C> {
     LightSample { l, wi, pdf, p: ctx.p + wi * (2.0 * scene.radius), n: Vec3::ZERO, delta: false, infinite: true }
+}
+
+/// pbrt-v4's `DiffuseAreaLight::AlphaMasked`: no emission where the shape's alpha is 0, none
+/// where a number hashed from the point exceeds a fractional alpha (a fixed pattern over the
+/// surface, apart from the alpha test rays get when they hit it).
+pub(crate) fn alpha_masked(surfaces: &Surfaces, alpha: u32, p: Vec3, uv: Vec2, n: Vec3) -> bool {
+    let a = surfaces.textures.eval_float(surfaces.alphas[alpha as usize], &crate::textures::TexContext { p, uv, n });
+    if a >= 1.0 {
+        return false;
+    }
+    if a <= 0.0 {
+        return true;
+    }
+    let mut bytes = [0u8; 12];
+    for (i, v) in [p.x, p.y, p.z].iter().enumerate() {
+        bytes[4 * i..4 * i + 4].copy_from_slice(&v.to_le_bytes());
+    }
+    (crate::sampling::rng::murmur_hash64a(&bytes, 0) as u32) as f32 * (1.0 / 4_294_967_296.0) > a
 }
 
 /// pbrt-v4's SmoothStep: 0 below `a`, 1 above `b`, cubic between.

@@ -722,12 +722,6 @@ impl ShapeBuilder<'_> {
         let alpha = match &settings.alpha {
             FloatInput::Value(a) if *a >= 1.0 => NONE,
             a => {
-                if shape.area_light.is_some() {
-                    return Err(err(
-                        e.params.loc("alpha").unwrap_or(&e.loc),
-                        "alpha-tested area lights are not supported by nimbus",
-                    ));
-                }
                 self.alphas.push(self.textures.float(a, &e.loc)?);
                 self.alphas.len() as u32 - 1
             }
@@ -837,6 +831,7 @@ impl ShapeBuilder<'_> {
                         two_sided: settings.two_sided,
                         area,
                         interface: prim.interface,
+                        alpha: prim.alpha,
                     },
                     medium: NONE,
                 });

@@ -96,6 +96,12 @@ impl Cylinder {
         None
     }
 
+    /// Texture coordinates of world point `p` on the surface (an area light's alpha test at a
+    /// sampled point).
+    pub fn uv_at(&self, p: Vec3) -> Vec2 {
+        self.hit(0.0, self.object_from_world.transform_point3(p)).uv
+    }
+
     /// Surface details of a hit.
     pub fn hit(&self, t: f32, p_obj: Vec3) -> SurfaceHit {
         let phi = phi_of(p_obj.x, p_obj.y);

@@ -119,6 +119,12 @@ impl Sphere {
         self.phi_max < 2.0 * PI && phi_of(p.x as f32, p.y as f32) > self.phi_max
     }
 
+    /// Texture coordinates of world point `p` on the surface (an area light's alpha test at a
+    /// sampled point).
+    pub fn uv_at(&self, p: Vec3) -> Vec2 {
+        self.hit(0.0, self.object_from_world.transform_point3(p)).uv
+    }
+
     /// Surface details of a hit found by [`Sphere::intersect`].
     pub fn hit(&self, t: f32, p_obj: Vec3) -> SurfaceHit {
         let phi = phi_of(p_obj.x, p_obj.y);

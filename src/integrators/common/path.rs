@@ -367,7 +367,7 @@ pub fn trace_path<C: Channels, O: PathObserver<C>>(
         // Emission from an area light that was hit.
         if hit.prim.area_light != NONE && !line_counted {
             let light = &scene.lights[hit.prim.area_light as usize];
-            let le = light.emitted::<C>(s, wo, lambda);
+            let le = light.emitted::<C>(s, wo, lambda, &scene.surfaces);
             if !le.is_zero() {
                 let (c, pdf_light) = if depth == 0 || specular_bounce || !config.next_event {
                     (st.beta * le / st.r_u.average(), 0.0)
@@ -521,7 +521,8 @@ fn line_emission<C: Channels>(
         }
         let Some(h) = hit else { return sum };
         if h.prim.area_light != NONE {
-            sum += weight * scene.lights[h.prim.area_light as usize].emitted::<C>(&h.surface, -ray.d, lambda);
+            sum += weight
+                * scene.lights[h.prim.area_light as usize].emitted::<C>(&h.surface, -ray.d, lambda, &scene.surfaces);
         }
         if !scene.materials[h.prim.material as usize].is_interface() {
             return sum;
@@ -622,7 +623,7 @@ fn sample_direct<C: Channels, O: PathObserver<C>>(
     let n_ctx = hit.map_or(Vec3::ZERO, |h| h.surface.ns);
     let (index, pmf) = scene.light_sampler.sample(p, n_ctx, u_pick)?;
     let light = &scene.lights[index];
-    let ls = light.sample_li::<C>(&LightContext { p }, u_light, &scene.surfaces.shapes, &scene.sphere, lambda)?;
+    let ls = light.sample_li::<C>(&LightContext { p }, u_light, &scene.surfaces, &scene.sphere, lambda)?;
     if ls.pdf == 0.0 || ls.l.is_zero() {
         return None;
     }

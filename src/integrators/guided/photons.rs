@@ -171,7 +171,7 @@ impl Emitter {
                 let (ray, area) = from_infinity(w, u);
                 (ray, l * (area / pdf))
             }
-            LightKind::Area { geometry, l, two_sided, interface, .. } => {
+            LightKind::Area { geometry, l, two_sided, interface, alpha, .. } => {
                 let shapes = &scene.surfaces.shapes;
                 let s = match *geometry {
                     Geometry::Triangle { mesh, tri } => triangle_sample(&shapes.meshes[mesh as usize], tri, u),
@@ -183,6 +183,13 @@ impl Emitter {
                     }
                     Geometry::Curve(_) | Geometry::Instance(_) => return None,
                 };
+                // pbrt-v4's `SampleLe` checks the point against the alpha texture.
+                if *alpha != NONE {
+                    let uv = shapes.uv_at(*geometry, s.p, s.p + s.n)?;
+                    if crate::lights::alpha_masked(&scene.surfaces, *alpha, s.p, uv, s.n) {
+                        return None;
+                    }
+                }
                 // Natively cosine-weighted about the normal (either side for two-sided
                 // emitters); the power is L·|cos| over the densities.
                 let n = s.n;

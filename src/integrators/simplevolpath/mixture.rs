@@ -278,11 +278,11 @@ impl Mixture {
         let ctx = LightContext { p: x };
         let (component, wi) = if w.env == 0.0 || (w.light > 0.0 && u_comp < w.scatter + w.light) {
             let pick = self.lights.as_ref()?.sample(rescale(w.scatter, w.light))?;
-            let ls = scene.lights[pick.index].sample_li::<C>(&ctx, u, &scene.surfaces.shapes, &scene.sphere, lambda)?;
+            let ls = scene.lights[pick.index].sample_li::<C>(&ctx, u, &scene.surfaces, &scene.sphere, lambda)?;
             (Component::Light { light: pick.index as u32, p: ls.p }, ls.wi)
         } else {
             let pick = self.envs.as_ref()?.sample(rescale(w.scatter + w.light, w.env))?;
-            let ls = scene.lights[pick.index].sample_li::<C>(&ctx, u, &scene.surfaces.shapes, &scene.sphere, lambda)?;
+            let ls = scene.lights[pick.index].sample_li::<C>(&ctx, u, &scene.surfaces, &scene.sphere, lambda)?;
             (Component::Environment, ls.wi)
         };
         let (f, scatter_pdf) = sc.eval(wi);
@@ -322,7 +322,7 @@ impl Mixture {
         let i = h.prim.area_light as usize;
         let pmf = t.pmf(i);
         let light = &scene.lights[i];
-        if pmf == 0.0 || !light.emits(&h.surface, -wi) {
+        if pmf == 0.0 || !light.emits(&h.surface, -wi, &scene.surfaces) {
             return 0.0;
         }
         pmf * light.pdf_li(&LightContext { p: x }, wi, Some(&h.surface), &scene.surfaces.shapes)

@@ -135,7 +135,7 @@ impl DeltaLights {
         let Some(pick) = table.sample(u_pick) else { return C::ZERO };
         let light = &scene.lights[pick.index];
         let ctx = LightContext { p: x };
-        let Some(ls) = light.sample_li::<C>(&ctx, Vec2::ZERO, &scene.surfaces.shapes, &scene.sphere, lambda) else {
+        let Some(ls) = light.sample_li::<C>(&ctx, Vec2::ZERO, &scene.surfaces, &scene.sphere, lambda) else {
             return C::ZERO;
         };
         let (f, _) = sc.eval(ls.wi);
@@ -207,7 +207,12 @@ pub fn trace<C: Channels>(
             }
             Event::Surface(mut hit) => {
                 if hit.prim.area_light != NONE {
-                    l += path.weigh(scene.lights[hit.prim.area_light as usize].emitted(&hit.surface, wo, lambda));
+                    l += path.weigh(scene.lights[hit.prim.area_light as usize].emitted(
+                        &hit.surface,
+                        wo,
+                        lambda,
+                        &scene.surfaces,
+                    ));
                 }
                 let material = scene.surface_material(&mut hit, wo);
                 let s = &hit.surface;

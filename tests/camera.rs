@@ -91,9 +91,9 @@ fn pathgraph_sees_through_the_lens_as_volpath_does() {
     assert!(peak > 0.0 && d <= 1e-4 * peak, "max difference {d} (peak {peak})");
 }
 
-/// What is wrong with a lens is said with the file and the line: no lens file given, one
-/// that does not exist, a word where a number belongs, rows that are not of four, a focus
-/// closer than the lens can focus.
+/// What is wrong with a lens is said with the file and the line, by `check` as by rendering:
+/// no lens file given, one that does not exist, a word where a number belongs, rows that are
+/// not of four, a focus closer than the lens can focus.
 #[test]
 fn lens_errors_name_the_file_and_line() {
     let dir = scratch_dir("realistic-errors");
@@ -120,5 +120,8 @@ fn lens_errors_name_the_file_and_line() {
         let err = nimbus::scene::build_scene(&desc, &BuildOptions::default()).err().map(|e| e.to_string());
         let err = err.unwrap_or_else(|| panic!("no error for {expected}"));
         assert!(err.contains(expected) && err.contains("s.pbrt:2:"), "{err}");
+        // `check` refuses what rendering refuses, with the same message.
+        let check = nimbus::scene::check_scene(&desc).err().map(|e| e.to_string());
+        assert_eq!(check.as_deref(), Some(err.as_str()));
     }
 }

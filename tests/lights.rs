@@ -143,7 +143,7 @@ Shape "trianglemesh" "integer indices" [0 1 2 0 2 3] "point3 P" [-0.8 1.8 2  0.8
 }
 
 /// A portal is four corners of a rectangle: another count, or corners that are not at right
-/// angles, is refused at the `portal` parameter.
+/// angles, is refused at the `portal` parameter, by `check` as by rendering.
 #[test]
 fn portals_must_be_rectangles() {
     let text = |portal: &str| {
@@ -158,6 +158,8 @@ fn portals_must_be_rectangles() {
         let desc = nimbus::parser::load_str(&text(portal), "s.pbrt").unwrap();
         let e = nimbus::scene::build_scene(&desc, &BuildOptions::default()).err().expect("refused");
         assert!(e.to_string().contains(expected) && e.to_string().contains("s.pbrt:5:"), "{e}");
+        let c = nimbus::scene::check_scene(&desc).expect_err("check refuses it too");
+        assert_eq!(c.to_string(), e.to_string());
     }
 }
 

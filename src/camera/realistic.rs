@@ -136,8 +136,15 @@ impl RealisticLens {
         Self::with_pupil_samples(settings, resolution, diagonal_mm, PUPIL_SAMPLES)
     }
 
+    /// Whether a lens can be built (it lets light through and focuses at its distance),
+    /// without finding its exit pupil: what `nimbus check` asks.
+    pub fn validate(settings: &RealisticSettings, resolution: [u32; 2], diagonal_mm: f32) -> Result<(), String> {
+        Self::with_pupil_samples(settings, resolution, diagonal_mm, 0).map(|_| ())
+    }
+
     /// [`RealisticLens::new`] with `samples` points per ring for the exit-pupil bounds (unit
-    /// tests use fewer: any bounds that hold the pupil give the same expected value).
+    /// tests use fewer: any bounds that hold the pupil give the same expected value; none
+    /// leaves them empty, for [`RealisticLens::validate`]).
     fn with_pupil_samples(
         settings: &RealisticSettings,
         resolution: [u32; 2],
@@ -167,6 +174,9 @@ impl RealisticLens {
         let mut lens = RealisticLens { interfaces, half_extent, diagonal, pupil_bounds: Vec::new(), aperture };
         let last = lens.interfaces.len() - 1;
         lens.interfaces[last].thickness = lens.focus_thick_lens(settings.focus_distance)?;
+        if samples == 0 {
+            return Ok(lens);
+        }
         lens.pupil_bounds = (0..PUPIL_RINGS)
             .into_par_iter()
             .map(|i| {

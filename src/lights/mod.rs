@@ -11,7 +11,7 @@ mod sampler;
 
 pub use bvh::{LightBounds, LightBvh, light_bounds};
 pub use envmap::EnvironmentMap;
-pub use portal::PortalMap;
+pub use portal::{PortalMap, portal_frame};
 pub use sampler::{LightSampler, LightSamplerKind};
 
 use std::f32::consts::PI;

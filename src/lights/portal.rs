@@ -50,14 +50,7 @@ impl PortalMap {
                 image.width, image.height
             ));
         }
-        let edge = |a: usize, b: usize| (portal[b] - portal[a]).normalize_or_zero();
-        let (p01, p12, p32, p03) = (edge(0, 1), edge(1, 2), edge(3, 2), edge(0, 3));
-        let planar = (p01.dot(p32) - 1.0).abs() <= 1e-3 && (p12.dot(p03) - 1.0).abs() <= 1e-3;
-        let square = [p01.dot(p12), p12.dot(p32), p32.dot(p03), p03.dot(p01)].iter().all(|d| d.abs() <= 1e-3);
-        if !planar || !square {
-            return Err("the portal is not a rectangle (pbrt-v4 needs its 4 corners in order, at right angles)".into());
-        }
-        let frame = Frame { x: p03, y: p01, z: p03.cross(p01) };
+        let frame = portal_frame(&portal)?;
         let n = image.width;
         let light_from_world = world_from_light.inverse();
         let mut map = PortalMap {
@@ -246,6 +239,20 @@ impl PortalMap {
         let p = Vec2::new(x, y);
         Some((p, (f64::from(self.eval(p)) / total) as f32))
     }
+}
+
+/// The portal's frame (x along corner 0 → 3, y along 0 → 1, z out of the scene through it),
+/// or why the corners are not a rectangle (pbrt-v4's checks: opposite edges parallel, corners
+/// at right angles).
+pub fn portal_frame(portal: &[Vec3; 4]) -> Result<Frame, String> {
+    let edge = |a: usize, b: usize| (portal[b] - portal[a]).normalize_or_zero();
+    let (p01, p12, p32, p03) = (edge(0, 1), edge(1, 2), edge(3, 2), edge(0, 3));
+    let planar = (p01.dot(p32) - 1.0).abs() <= 1e-3 && (p12.dot(p03) - 1.0).abs() <= 1e-3;
+    let square = [p01.dot(p12), p12.dot(p32), p32.dot(p03), p03.dot(p01)].iter().all(|d| d.abs() <= 1e-3);
+    if !planar || !square {
+        return Err("the portal is not a rectangle (pbrt-v4 needs its 4 corners in order, at right angles)".into());
+    }
+    Ok(Frame { x: p03, y: p01, z: p03.cross(p01) })
 }
 
 /// The x in [lo, hi] where the increasing, piecewise-linear (between multiples of 1/n)

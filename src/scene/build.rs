@@ -12,7 +12,7 @@ use nimbus_parser::{
     AnimatedTransform, ColorSpace, Error, FileLoc, MaterialRef, SceneDescription, ShapeEntity, TextureValue, Warning,
 };
 
-use super::camera::{CameraSettings, Projection};
+use super::camera::CameraSettings;
 use super::film::{FilmKind, FilmSettings};
 use super::filter::FilterSettings;
 use super::lights::{AreaLightSettings, LightKind as LightSpec, LightSettings};
@@ -1215,20 +1215,7 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions) -> Result<Scene
     let film_cs = film.color_space;
     let camera_settings = CameraSettings::from_entity(&desc.camera)?;
     let world_from_camera = &desc.camera.world_from_camera;
-    if let Projection::Realistic(r) = &camera_settings.projection
-        && let Some(stop) = r.stop_diameter()
-        && r.aperture_diameter > stop
-    {
-        // pbrt-v4's warning: the stop opens no wider than the lens file allows.
-        let p = &desc.camera.entity.params;
-        warnings.push(Warning::new(
-            p.loc("aperturediameter").unwrap_or(&desc.camera.entity.loc),
-            format!(
-                "realistic camera: aperture diameter {} mm is greater than the lens's largest, {stop} mm; clamping it",
-                r.aperture_diameter
-            ),
-        ));
-    }
+    warnings.extend(camera_settings.aperture_warning(&desc.camera));
     let mut camera = Camera::new(&camera_settings, &world_from_camera.start, film.resolution, film.diagonal)
         .map_err(|m| err(&desc.camera.entity.loc, format!("realistic camera: {m}")))?;
     if world_from_camera.is_animated() {

@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 
 use nimbus_parser::loc_shown as shown;
-use nimbus_parser::{CameraEntity, Error, FileLoc};
+use nimbus_parser::{CameraEntity, Error, FileLoc, Warning};
 
 use super::values::checked_float;
 
@@ -171,6 +171,23 @@ pub struct CameraSettings {
 }
 
 impl CameraSettings {
+    /// pbrt-v4's warning for a realistic camera whose `aperturediameter` is wider than its
+    /// lens's stop (which then opens only that far).
+    pub fn aperture_warning(&self, camera: &CameraEntity) -> Option<Warning> {
+        let Projection::Realistic(r) = &self.projection else { return None };
+        let stop = r.stop_diameter()?;
+        (r.aperture_diameter > stop).then(|| {
+            let e = &camera.entity;
+            Warning::new(
+                e.params.loc("aperturediameter").unwrap_or(&e.loc),
+                format!(
+                    "realistic camera: aperture diameter {} mm is greater than the lens's largest, {stop} mm; clamping it",
+                    r.aperture_diameter
+                ),
+            )
+        })
+    }
+
     /// Reads a camera entity. Camera types other than perspective and orthographic are
     /// reported by name.
     pub fn from_entity(camera: &CameraEntity) -> Result<CameraSettings, Error> {

@@ -123,8 +123,14 @@ pub fn check_scene(scene: &SceneDescription) -> Result<SceneCheck, Error> {
 
     let camera = CameraSettings::from_entity(&scene.camera)?;
     unused(&scene.camera.entity.params, &mut warnings);
+    warnings.extend(camera.aperture_warning(&scene.camera));
     let film = FilmSettings::from_entity(&scene.film)?;
     unused(&scene.film.params, &mut warnings);
+    // A lens that cannot focus or lets no light through is refused here as rendering refuses it.
+    if let Projection::Realistic(r) = &camera.projection {
+        crate::camera::RealisticLens::validate(r, film.resolution, film.diagonal)
+            .map_err(|m| Error::new(&scene.camera.entity.loc, format!("realistic camera: {m}")))?;
+    }
     FilterSettings::from_entity(&scene.filter)?;
     unused(&scene.filter.params, &mut warnings);
     let sampler = SamplerSettings::from_entity(&scene.sampler, scene.options.seed, &mut warnings)?;

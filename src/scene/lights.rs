@@ -178,7 +178,14 @@ impl LightSettings {
                 }
                 let portal = match p.get_point3s("portal")? {
                     [] => None,
-                    [a, b, c, d] => Some([*a, *b, *c, *d]),
+                    [a, b, c, d] => {
+                        // Checked here so that `check` refuses what rendering would.
+                        let corners = [*a, *b, *c, *d];
+                        crate::lights::portal_frame(&corners.map(glam::Vec3::from)).map_err(|m| {
+                            Error::new(p.loc("portal").unwrap_or(&e.loc), format!("infinite light: {m}"))
+                        })?;
+                        Some(corners)
+                    }
                     other => {
                         return Err(Error::new(
                             p.loc("portal").unwrap_or(&e.loc),

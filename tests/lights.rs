@@ -119,26 +119,11 @@ Shape "trianglemesh" "integer indices" [0 1 2 0 2 3] "point3 P" [-0.8 1.8 2  0.8
     };
     let with = room(r#""point3 portal" [-0.8 0.8 2  -0.8 1.8 2  0.8 1.8 2  0.8 0.8 2]"#);
     let without = room("");
-    // Per seed: the image mean (over all pixels and channels) and the pixels.
-    let renders = |text: &str| -> Vec<(f64, Vec<f32>)> {
-        (1..5)
-            .map(|seed| {
-                let img = render_scene(&load_scene(text, &BuildOptions { seed: Some(seed), ..Default::default() }));
-                let px: Vec<f32> = img.pixels.iter().map(|p| p.x + p.y + p.z).collect();
-                (px.iter().map(|&v| f64::from(v)).sum::<f64>() / px.len() as f64, px)
-            })
-            .collect()
-    };
-    let (a, b) = (renders(&with), renders(&without));
-    let stats = |r: &[(f64, Vec<f32>)]| {
-        let m = r.iter().map(|x| x.0).sum::<f64>() / r.len() as f64;
-        let var = r.iter().map(|x| (x.0 - m).powi(2)).sum::<f64>() / (r.len() - 1) as f64;
-        (m, var / r.len() as f64)
-    };
-    let ((ma, va), (mb, vb)) = (stats(&a), stats(&b));
+    let (a, b) = (seed_renders(&with), seed_renders(&without));
+    let ((ma, va), (mb, vb)) = (mean_and_variance(&a), mean_and_variance(&b));
     assert!(ma > 0.0 && (ma - mb).abs() <= 4.0 * (va + vb).sqrt() + 1e-3 * mb, "portal {ma} ± {va}, sky {mb} ± {vb}");
     // Per-pixel noise: the spread between two seeds' images.
-    let spread = |r: &[(f64, Vec<f32>)]| r[0].1.iter().zip(&r[1].1).map(|(x, y)| f64::from(x - y).powi(2)).sum::<f64>();
+    let spread = |r: &[Vec<f32>]| r[0].iter().zip(&r[1]).map(|(x, y)| f64::from(x - y).powi(2)).sum::<f64>();
     assert!(spread(&a) < spread(&b), "portal {} vs sky {}", spread(&a), spread(&b));
 }
 
@@ -199,16 +184,26 @@ AttributeEnd
         r#"  Shape "trianglemesh" "integer indices" [0 1 2 0 2 3] "point3 P" [-1 1.5 -1  0 1.5 -1  0 1.5 0  -1 1.5 0]
   Shape "trianglemesh" "integer indices" [0 1 2 0 2 3] "point3 P" [0 1.5 0  1 1.5 0  1 1.5 1  0 1.5 1]"#,
     );
-    let means = |text: &str| -> (f64, f64) {
-        let m: Vec<f64> = (1..5)
-            .map(|seed| {
-                let img = render_scene(&load_scene(text, &BuildOptions { seed: Some(seed), ..Default::default() }));
-                img.pixels.iter().map(|p| f64::from(p.x + p.y + p.z)).sum::<f64>() / img.pixels.len() as f64
-            })
-            .collect();
-        let mean = m.iter().sum::<f64>() / 4.0;
-        (mean, m.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / 3.0 / 4.0)
-    };
-    let ((a, va), (b, vb)) = (means(&cut), means(&squares));
+    let ((a, va), (b, vb)) = (mean_and_variance(&seed_renders(&cut)), mean_and_variance(&seed_renders(&squares)));
     assert!(a > 0.0 && (a - b).abs() <= 4.0 * (va + vb).sqrt() + 1e-3 * b, "cut {a} ± {va}, squares {b} ± {vb}");
+}
+
+/// `text` rendered at seeds 1–4: each image's pixels as R + G + B.
+fn seed_renders(text: &str) -> Vec<Vec<f32>> {
+    (1..5)
+        .map(|seed| {
+            let img = render_scene(&load_scene(text, &BuildOptions { seed: Some(seed), ..Default::default() }));
+            img.pixels.iter().map(|p| p.x + p.y + p.z).collect()
+        })
+        .collect()
+}
+
+/// The mean over renders of their image means, and that mean's variance estimated from their
+/// spread.
+fn mean_and_variance(renders: &[Vec<f32>]) -> (f64, f64) {
+    let means: Vec<f64> =
+        renders.iter().map(|px| px.iter().map(|&v| f64::from(v)).sum::<f64>() / px.len() as f64).collect();
+    let k = means.len() as f64;
+    let m = means.iter().sum::<f64>() / k;
+    (m, means.iter().map(|v| (v - m).powi(2)).sum::<f64>() / (k - 1.0) / k)
 }

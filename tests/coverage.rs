@@ -161,7 +161,7 @@ const ENTITIES: &[(&str, &str, Outcome)] = &[
     ("sampler", "zsobol", Rendered),
     ("sampler", "halton", Rendered),
     ("sampler", "paddedsobol", Rendered),
-    ("sampler", "pmj02bn", Replaced),
+    ("sampler", "pmj02bn", Rendered),
     ("film", "rgb", Rendered),
     ("film", "gbuffer", Rendered),
     ("film", "spectral", Rendered),

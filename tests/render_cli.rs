@@ -84,6 +84,27 @@ fn time_budget_renders_progressively() {
     assert!(spp >= 1);
 }
 
+/// pmj02bn draws from sequences of 65,536 points: a time budget stops there, and an `--spp`
+/// beyond it is refused at the sampler directive, as pbrt-v4 refuses it.
+#[test]
+fn pmj02bn_sample_counts_stay_within_its_sequences() {
+    let dir = scratch_dir("render-pmj02bn");
+    let scene = dir.join("s.pbrt");
+    std::fs::write(&scene, SMALL.replace(r#"Sampler "independent""#, r#"Sampler "pmj02bn""#)).unwrap();
+    let exr = dir.join("t.exr");
+    let out =
+        nimbus(&["render", scene.to_str().unwrap(), "--quiet", "--time", "0.3", "--outfile", exr.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let img = nimbus::imageio::read_exr(&exr).unwrap();
+    let spp: u32 = img.metadata["nimbus:spp"].parse().unwrap();
+    assert!((1..=65536).contains(&spp), "{spp}");
+    assert!(img.pixels.iter().all(|p| p.is_finite()));
+    let out = nimbus(&["render", scene.to_str().unwrap(), "--quiet", "--spp", "65537"]);
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("s.pbrt:3:1: error: pmj02bn takes at most 65536 samples per pixel"), "{stderr}");
+}
+
 #[test]
 fn unknown_integrator_lists_the_available_ones() {
     let dir = scratch_dir("render-integrator");

@@ -538,8 +538,9 @@ pub fn render_with_passes(
     let full = UVec2::new(scene.film.resolution[0], scene.film.resolution[1]);
     let base_sampler = match options.time_budget {
         // A budget may take more samples than the scene asks for. ZSobol's sample index shares
-        // its bits with the pixel's Morton code, so it gets room for PROGRESSIVE_SPP samples
-        // (the render stops there); the other samplers continue their sequences.
+        // its bits with the pixel's Morton code and pmj02bn's points come from sequences of
+        // 2^16, so they get room for PROGRESSIVE_SPP samples (the render stops there); the
+        // other samplers continue their sequences.
         Some(_) => {
             let pixel_samples = scene.sampler.pixel_samples.max(PROGRESSIVE_SPP);
             Sampler::new(&SamplerSettings { pixel_samples, ..scene.sampler.clone() }, full)
@@ -548,7 +549,7 @@ pub fn render_with_passes(
     };
     let target_spp = base_sampler.samples_per_pixel();
     let max_spp = match (&base_sampler, options.time_budget) {
-        (Sampler::ZSobol(_), _) | (_, None) => target_spp,
+        (Sampler::ZSobol(_) | Sampler::Pmj02bn(_), _) | (_, None) => target_spp,
         (_, Some(_)) => u32::MAX,
     };
     let rays = AtomicU64::new(0);

@@ -79,6 +79,18 @@ pub(crate) fn unit_from_bits(h: u64) -> f32 {
     ((h >> 40) as f32 * (1.0 / (1u64 << 24) as f32)).min(ONE_MINUS_EPSILON)
 }
 
+/// pbrt-v4's `Hash(pixel, dimension, seed)` (MurmurHash64A of the four 32-bit integers), the
+/// key of the per-pixel, per-dimension shuffles of the padded samplers.
+#[inline]
+pub(crate) fn pixel_dimension_hash(pixel: UVec2, dimension: u32, seed: i32) -> u64 {
+    let mut bytes = [0u8; 16];
+    bytes[0..4].copy_from_slice(&(pixel.x as i32).to_le_bytes());
+    bytes[4..8].copy_from_slice(&(pixel.y as i32).to_le_bytes());
+    bytes[8..12].copy_from_slice(&(dimension as i32).to_le_bytes());
+    bytes[12..16].copy_from_slice(&seed.to_le_bytes());
+    crate::sampling::rng::murmur_hash64a(&bytes, 0)
+}
+
 /// Golden-ratio increment of SplitMix64 (Steele, Lea and Flood, OOPSLA 2014).
 const GOLDEN: u64 = 0x9e37_79b9_7f4a_7c15;
 

@@ -15,6 +15,7 @@ mod halton;
 mod hash;
 mod independent;
 mod padded_sobol;
+mod pmj02bn;
 mod sobol;
 mod stratified;
 mod zsobol;
@@ -28,6 +29,7 @@ pub(crate) use halton::radical_inverse;
 pub use halton::{HaltonRandomization, HaltonSampler};
 pub use independent::IndependentSampler;
 pub use padded_sobol::PaddedSobolSampler;
+pub use pmj02bn::{MAX_SAMPLES as PMJ02BN_MAX_SAMPLES, Pmj02bnSampler};
 pub use sobol::SobolSampler;
 pub use stratified::StratifiedSampler;
 pub use zsobol::ZSobolSampler;
@@ -48,6 +50,8 @@ pub enum Sampler {
     Halton(HaltonSampler),
     /// Independently scrambled 2D Sobol' sets per dimension pair.
     PaddedSobol(PaddedSobolSampler),
+    /// Progressive multi-jittered (0,2) blue-noise points.
+    Pmj02bn(Pmj02bnSampler),
 }
 
 impl Sampler {
@@ -67,6 +71,7 @@ impl Sampler {
             SamplerKind::PaddedSobol => {
                 Sampler::PaddedSobol(PaddedSobolSampler::new(spp, settings.randomization, seed))
             }
+            SamplerKind::Pmj02bn => Sampler::Pmj02bn(Pmj02bnSampler::new(spp, seed)),
         }
     }
 
@@ -80,6 +85,7 @@ impl Sampler {
             Sampler::ZSobol(s) => s.samples_per_pixel(),
             Sampler::Halton(s) => s.samples_per_pixel(),
             Sampler::PaddedSobol(s) => s.samples_per_pixel(),
+            Sampler::Pmj02bn(s) => s.samples_per_pixel(),
         }
     }
 
@@ -93,6 +99,7 @@ impl Sampler {
             Sampler::ZSobol(s) => s.start_pixel_sample(pixel, sample_index, dimension),
             Sampler::Halton(s) => s.start_pixel_sample(pixel, sample_index, dimension),
             Sampler::PaddedSobol(s) => s.start_pixel_sample(pixel, sample_index, dimension),
+            Sampler::Pmj02bn(s) => s.start_pixel_sample(pixel, sample_index, dimension),
         }
     }
 
@@ -106,6 +113,7 @@ impl Sampler {
             Sampler::ZSobol(s) => s.get_1d(),
             Sampler::Halton(s) => s.get_1d(),
             Sampler::PaddedSobol(s) => s.get_1d(),
+            Sampler::Pmj02bn(s) => s.get_1d(),
         }
     }
 
@@ -119,15 +127,18 @@ impl Sampler {
             Sampler::ZSobol(s) => s.get_2d(),
             Sampler::Halton(s) => s.get_2d(),
             Sampler::PaddedSobol(s) => s.get_2d(),
+            Sampler::Pmj02bn(s) => s.get_2d(),
         }
     }
 
     /// The film-position sample within the pixel: the next two dimensions, except for Halton,
-    /// whose first two dimensions are scaled over the image (as in pbrt-v4).
+    /// whose first two dimensions are scaled over the image, and pmj02bn, whose film
+    /// positions tile the image (as in pbrt-v4).
     #[inline]
     pub fn get_pixel_2d(&mut self) -> Vec2 {
         match self {
             Sampler::Halton(s) => s.get_pixel_2d(),
+            Sampler::Pmj02bn(s) => s.get_pixel_2d(),
             _ => self.get_2d(),
         }
     }

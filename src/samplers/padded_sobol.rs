@@ -4,9 +4,8 @@
 
 use glam::{UVec2, Vec2};
 
-use super::hash::permutation_element;
+use super::hash::{permutation_element, pixel_dimension_hash};
 use super::zsobol::{fast_owen_scramble, owen_scramble, sobol_bits};
-use crate::sampling::rng::murmur_hash64a;
 use crate::sampling::warp::ONE_MINUS_EPSILON;
 use crate::scene::sampler::Randomization;
 
@@ -42,12 +41,7 @@ impl PaddedSobolSampler {
 
     /// pbrt-v4's `Hash(pixel, dimension, seed)` and the sample's shuffled index.
     fn hash_and_index(&self) -> (u64, u64) {
-        let mut bytes = [0u8; 16];
-        bytes[0..4].copy_from_slice(&(self.pixel.x as i32).to_le_bytes());
-        bytes[4..8].copy_from_slice(&(self.pixel.y as i32).to_le_bytes());
-        bytes[8..12].copy_from_slice(&(self.dimension as i32).to_le_bytes());
-        bytes[12..16].copy_from_slice(&self.seed.to_le_bytes());
-        let hash = murmur_hash64a(&bytes, 0);
+        let hash = pixel_dimension_hash(self.pixel, self.dimension, self.seed);
         let index = permutation_element(self.sample_index, self.samples_per_pixel, hash as u32);
         (hash, u64::from(index))
     }

@@ -31,6 +31,7 @@ fn all(spp: u32) -> Vec<(&'static str, Sampler)> {
         ("halton none", sampler(SamplerKind::Halton(HaltonRandomization::None), spp, Randomization::FastOwen)),
         ("paddedsobol fastowen", sampler(SamplerKind::PaddedSobol, spp, Randomization::FastOwen)),
         ("paddedsobol owen", sampler(SamplerKind::PaddedSobol, spp, Randomization::Owen)),
+        ("pmj02bn", sampler(SamplerKind::Pmj02bn, spp, Randomization::FastOwen)),
     ]
 }
 
@@ -93,6 +94,7 @@ fn settings_of(name: &str) -> SamplerSettings {
         "independent" => SamplerKind::Independent,
         "stratified" => SamplerKind::Stratified { x: 4, y: 4, jitter: true },
         "sobol" => SamplerKind::Sobol,
+        "pmj02bn" => SamplerKind::Pmj02bn,
         _ => SamplerKind::ZSobol,
     };
     SamplerSettings {
@@ -112,9 +114,9 @@ fn starting_dimension_skips_that_many_values() {
             s.get_1d();
         }
         let (a, b) = (s.get_2d(), s.get_1d());
-        // Halton keeps dimensions 0 and 1 for the film position (`get_pixel_2d`), so its
-        // other dimensions start at 2, as in pbrt-v4.
-        let skipped = if name.starts_with("halton") { 7 } else { 5 };
+        // Halton and pmj02bn keep dimensions 0 and 1 for the film position (`get_pixel_2d`),
+        // so their other dimensions start at 2, as in pbrt-v4.
+        let skipped = if name.starts_with("halton") || name == "pmj02bn" { 7 } else { 5 };
         s.start_pixel_sample(pixel, 3, skipped);
         assert_eq!((a, b), (s.get_2d(), s.get_1d()), "{name}");
     }
@@ -231,7 +233,11 @@ fn low_discrepancy_samplers_integrate_smooth_functions_faster() {
             // Independent sampling's error is about 0.02 here, stratified's about 0.0025 and
             // the Sobol' samplers' below 0.001 (N^-1 against N^-1/2, and better).
             // Halton's per-pixel points are every (2^a·3^b)-th of one sequence: about 0.003.
-            let bound = if name == "stratified" || name.starts_with("halton") { 0.25 } else { 0.1 };
+            // pmj02bn's per-pixel blue-noise rotation (pbrt-v4's Cranley–Patterson shift)
+            // wraps the net around the square, which costs the smoothness Sobol' exploits:
+            // about 0.0025, like stratified.
+            let bound =
+                if name == "stratified" || name.starts_with("halton") || name == "pmj02bn" { 0.25 } else { 0.1 };
             assert!(e < bound * independent, "start {start}: {rmse:?}");
         }
     }

@@ -1231,6 +1231,9 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions) -> Result<Scene
     } else if opts.quick {
         sampler.pixel_samples = (sampler.pixel_samples / 4).max(1);
     }
+    if sampler.kind == crate::scene::sampler::SamplerKind::Pmj02bn {
+        crate::scene::sampler::check_pmj02bn_samples(sampler.pixel_samples, &desc.sampler.loc)?;
+    }
     if let Some(seed) = opts.seed {
         sampler.seed = seed;
     }

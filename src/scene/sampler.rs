@@ -26,6 +26,8 @@ pub enum SamplerKind {
     Halton(crate::samplers::HaltonRandomization),
     /// `paddedsobol`: independently scrambled 2D Sobol' sets per dimension pair.
     PaddedSobol,
+    /// `pmj02bn`: progressive multi-jittered (0,2) blue-noise points.
+    Pmj02bn,
 }
 
 /// How the Sobol' samplers randomize their points (pbrt-v4's `randomization` parameter).
@@ -51,8 +53,7 @@ pub struct SamplerSettings {
 }
 
 impl SamplerSettings {
-    /// Reads a sampler entity. The pbrt-v4 sampler nimbus lacks (pmj02bn)
-    /// are replaced by zsobol with a warning: the image converges to the same result.
+    /// Reads a sampler entity, with pbrt-v4's defaults and warnings.
     pub fn from_entity(
         e: &Entity,
         option_seed: Option<i32>,
@@ -94,25 +95,17 @@ impl SamplerSettings {
                         })
                     }
                     "paddedsobol" => SamplerKind::PaddedSobol,
-                    "pmj02bn" => {
-                        // These read "randomization"; accept it so it is not reported unused.
-                        p.get_opt_string("randomization")?;
-                        warnings.push(Warning::new(
-                            &e.loc,
-                            format!("sampler \"{name}\" is not in nimbus; using \"zsobol\" (same expected image)"),
-                        ));
-                        SamplerKind::ZSobol
-                    }
+                    "pmj02bn" => SamplerKind::Pmj02bn,
                     other => {
                         return Err(Error::new(
                             &e.loc,
                             format!(
-                                "sampler \"{other}\" unknown (nimbus has independent, stratified, sobol, zsobol, halton and paddedsobol)"
+                                "sampler \"{other}\" unknown (nimbus has independent, stratified, sobol, zsobol, halton, paddedsobol and pmj02bn)"
                             ),
                         ));
                     }
                 };
-                // Only the Sobol' samplers are checked: the replaced sampler accepts other values.
+                // Only the Sobol' samplers read it (Halton's is read above).
                 if matches!(name, "sobol" | "zsobol" | "paddedsobol") {
                     let r = p.get_one_string("randomization", "fastowen")?;
                     randomization = match r {
@@ -125,6 +118,15 @@ impl SamplerSettings {
                             ));
                         }
                     };
+                }
+                if kind == SamplerKind::Pmj02bn {
+                    check_pmj02bn_samples(spp, p.loc("pixelsamples").unwrap_or(&e.loc))?;
+                    if !spp.is_power_of_two() || spp.trailing_zeros() % 2 == 1 {
+                        warnings.push(Warning::new(
+                            p.loc("pixelsamples").unwrap_or(&e.loc),
+                            "pmj02bn results are best with power-of-4 samples per pixel (1, 4, 16, 64, ...), as pbrt-v4 warns",
+                        ));
+                    }
                 }
                 if kind == SamplerKind::ZSobol && !spp.is_power_of_two() {
                     let used = 1u32 << spp.ilog2();
@@ -140,6 +142,16 @@ impl SamplerSettings {
         };
         Ok(SamplerSettings { kind, pixel_samples, seed, randomization })
     }
+}
+
+/// pmj02bn's points come from sequences of 65,536: more samples per pixel are an error, as in
+/// pbrt-v4 (`loc`: where the count was given).
+pub fn check_pmj02bn_samples(spp: u32, loc: &nimbus_parser::FileLoc) -> Result<(), Error> {
+    let max = crate::samplers::PMJ02BN_MAX_SAMPLES;
+    if spp > max {
+        return Err(Error::new(loc, format!("pmj02bn takes at most {max} samples per pixel ({spp} asked for)")));
+    }
+    Ok(())
 }
 
 #[cfg(test)]
@@ -167,8 +179,9 @@ mod tests {
         let h = settings("Sampler \"halton\" \"string randomization\" \"owen\"").unwrap();
         assert_eq!(h.kind, SamplerKind::Halton(crate::samplers::HaltonRandomization::Owen));
         assert!(settings("Sampler \"halton\" \"string randomization\" \"fastowen\"").is_err());
-        let p = settings("Sampler \"pmj02bn\" \"string randomization\" \"permutedigits\"").unwrap();
-        assert_eq!(p.kind, SamplerKind::ZSobol);
+        let p = settings("Sampler \"pmj02bn\"").unwrap();
+        assert_eq!((p.kind, p.pixel_samples), (SamplerKind::Pmj02bn, 16));
+        assert!(settings("Sampler \"pmj02bn\" \"integer pixelsamples\" 65537").is_err());
         let p = settings("Sampler \"paddedsobol\" \"string randomization\" \"owen\"").unwrap();
         assert_eq!((p.kind, p.randomization), (SamplerKind::PaddedSobol, Randomization::Owen));
     }

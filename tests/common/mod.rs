@@ -147,13 +147,14 @@ pub fn transport(spectral: bool) -> nimbus::scene::BuildOptions {
 }
 
 /// pbrt-v4's samplers nimbus has, at 16 spp.
-pub const SAMPLERS: [&str; 6] = [
+pub const SAMPLERS: [&str; 7] = [
     r#"Sampler "independent" "integer pixelsamples" 16"#,
     r#"Sampler "stratified" "integer xsamples" 4 "integer ysamples" 4"#,
     r#"Sampler "sobol" "integer pixelsamples" 16"#,
     r#"Sampler "zsobol" "integer pixelsamples" 16"#,
     r#"Sampler "halton" "integer pixelsamples" 16"#,
     r#"Sampler "paddedsobol" "integer pixelsamples" 16"#,
+    r#"Sampler "pmj02bn" "integer pixelsamples" 16"#,
 ];
 
 /// pbrt-v4's analytic scene: the inside of a reversed unit sphere of diffuse albedo 0.5 with

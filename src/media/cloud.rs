@@ -17,7 +17,8 @@ pub struct Cloud {
 }
 
 impl Cloud {
-    /// Density at `p` in [0, 1]³ of the medium's box, in [0, 1].
+    /// Density at the medium-space point `p`, in [0, 1] (pbrt-v4's default box is the unit
+    /// cube, where the cloud thins out above y = 0.5).
     pub fn density_at(&self, p: Vec3) -> f32 {
         let mut pp = self.frequency * p;
         if self.wispiness > 0.0 {

@@ -67,7 +67,9 @@ impl Density {
     fn at(&self, pm: Vec3, pu: Vec3) -> f32 {
         match self {
             Density::Field(f) => f.at(pm, pu),
-            Density::Cloud(c) => c.density_at(pu),
+            // pbrt-v4 evaluates its cloud at the medium-space point itself; the bounds only
+            // clip rays (with p0, p1 other than the unit box the cloud is not rescaled).
+            Density::Cloud(c) => c.density_at(pm),
         }
     }
 
@@ -416,5 +418,34 @@ fn grid_segments<'a, C: Channels>(
     match bounds.intersect_ray(o, d, t_max) {
         Some((t0, t1)) => Segments::Dda(DdaIterator::new(majorant, o, d, t0, t1, sigma_t)),
         None => Segments::Single(None),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cloud_density_is_read_at_the_medium_space_point() {
+        // pbrt-v4's cloud takes the medium-space point as it is: with a box of [-1, 1]³ the
+        // height falloff still starts at y = 0.5, not at the box's three-quarter height.
+        let cloud = Cloud { density: 1.0, wispiness: 1.0, frequency: 4.0 };
+        let bounds = Bounds3::new(Vec3::splat(-1.0), Vec3::splat(1.0));
+        let shift = Affine3A::from_translation(Vec3::new(3.0, 0.0, 0.0));
+        let m = Medium::grid(
+            "cloud".into(),
+            shift,
+            bounds,
+            Density::Cloud(cloud),
+            SpectrumValue::constant(0.0),
+            SpectrumValue::constant(1.0),
+            Emission::None,
+            0.0,
+        );
+        for y in [-0.8f32, -0.2, 0.2, 0.45, 0.7] {
+            let p = Vec3::new(0.3, y, -0.4);
+            let s: MediumPoint<Rgb> = m.sample_point(shift.transform_point3(p), &());
+            assert!((s.sigma_s.x - cloud.density_at(p)).abs() < 1e-6, "y {y}");
+        }
     }
 }

@@ -508,7 +508,10 @@ Shape "trianglemesh" "integer indices" [0 1 2 0 2 3] "point3 P" [-10 -10 0  10 -
         r#""diffuse" "texture reflectance" "t""#,
     );
     assert!(px.iter().all(|p| (p.x - 0.9).abs() < 1e-4 || (p.x - 0.1).abs() < 1e-4));
-    assert!(px.iter().any(|p| p.x > 0.5) && px.iter().any(|p| p.x < 0.5), "dots and background");
+    // Dots (radius 0.35 in half of the unit cells) cover about a fifth of the plane, and
+    // pbrt-v4 shows `outside` in them and `inside` around them (its constructor swaps the two).
+    let background = px.iter().filter(|p| p.x > 0.5).count() as f32 / px.len() as f32;
+    assert!((0.65..0.95).contains(&background), "{background} of the plane shows \"inside\"");
     for texture in [
         r#"Texture "t" "float" "wrinkled" "float roughness" 0.5"#,
         r#"Texture "t" "float" "windy""#,

@@ -272,9 +272,13 @@ impl TextureSettings {
                     variation: p.get_one_float("variation", 0.2)?,
                 }
             }
+            // pbrt-v4 (through its latest version) passes `inside` and `outside` to the
+            // texture's constructor in the opposite order of its parameters, so its dots show
+            // `outside` (default 0) and the space between them `inside` (default 1). Scenes
+            // were made to look right in pbrt-v4, so nimbus renders what pbrt-v4 renders.
             "dots" => TextureKind::Dots {
-                inside: input(t, "inside", 1.0)?,
-                outside: input(t, "outside", 0.0)?,
+                inside: input(t, "outside", 0.0)?,
+                outside: input(t, "inside", 1.0)?,
                 mapping: mapping(t)?,
             },
             "directionmix" => TextureKind::DirectionMix {

@@ -76,6 +76,35 @@ fn goniometric_lights_need_a_square_image() {
     assert!(e.message.contains("wide.exr") && e.message.contains("not square"), "{}", e.message);
 }
 
+/// `illuminance` on an infinite light, as pbrt-v4 applies it: a uniform `L` is divided by π
+/// (the illuminance of a unit sky), an image by pbrt-v4's upper-hemisphere sum, which counts
+/// 2π/N steradians per texel where each covers 4π/N: asking for E, a uniform sky shines E/π
+/// and a unit image map 2E/π, twice as bright.
+#[test]
+fn illuminance_scales_infinite_lights_as_pbrt_v4_does() {
+    let dir = crate::common::scratch_dir("illuminance");
+    let mut img = nimbus::imageio::Image::new(16, 16);
+    img.pixels.iter_mut().for_each(|p| *p = glam::Vec3::ONE);
+    nimbus::imageio::write_image(&dir.join("white.exr"), &img).unwrap();
+    let sky = |light: &str| {
+        let text = format!(
+            "LookAt 0 0 0  0 0 1  0 1 0\nCamera \"perspective\"\nSampler \"independent\" \"integer pixelsamples\" 4\n\
+             Film \"rgb\" \"integer xresolution\" 4 \"integer yresolution\" 4\nWorldBegin\n{light}\n"
+        );
+        let path = dir.join("s.pbrt");
+        std::fs::write(&path, text).unwrap();
+        let desc = nimbus::parser::load_file(&path).unwrap();
+        let opts = crate::common::transport(false);
+        let image = render_scene(&nimbus::scene::build_scene(&desc, &opts).unwrap());
+        image.pixels.iter().map(|p| p.x as f64).sum::<f64>() / image.pixels.len() as f64
+    };
+    let pi = std::f64::consts::PI;
+    let uniform = sky("LightSource \"infinite\" \"rgb L\" [1 1 1] \"float illuminance\" 2");
+    assert!((uniform - 2.0 / pi).abs() < 1e-4, "{uniform}");
+    let map = sky("LightSource \"infinite\" \"string filename\" \"white.exr\" \"float illuminance\" 2");
+    assert!((map - 4.0 / pi).abs() < 0.02 * 4.0 / pi, "{map}");
+}
+
 /// pbrt-v4 stops when a projection light has no image; so does nimbus, saying so.
 #[test]
 fn projection_lights_need_an_image() {

@@ -158,7 +158,10 @@ impl Camera {
             let lens = self.lens_radius * concentric_disk(u_lens);
             let ft = self.focal_distance / d.z;
             let focus = o + d * ft;
-            o = Vec3::new(o.x + lens.x, o.y + lens.y, 0.0);
+            // The ray leaves from the lens point itself, as in pbrt-v4 for both projections:
+            // an orthographic camera with a lens thus loses its film offset and sees the focus
+            // plane in perspective from the lens (pbrt-v4's image, which scenes are made for).
+            o = Vec3::new(lens.x, lens.y, 0.0);
             d = (focus - o).normalize();
         }
         let w = self.world_from_camera_at(time);
@@ -251,5 +254,29 @@ mod tests {
         // pbrt-v4's left-handed camera: raster +x goes towards world -x for this LookAt.
         let right = cam.generate_ray(Vec2::new(200.0, 50.0), Vec2::ZERO, 0.0).unwrap().ray;
         assert!(right.d.x < -0.5, "{:?}", right.d);
+    }
+
+    #[test]
+    fn thin_lens_rays_leave_from_the_lens_point_as_in_pbrt() {
+        // pbrt-v4 sets a lens ray's origin to the lens sample for both projections, so an
+        // orthographic camera with a lens looks at its focus plane in perspective from the
+        // lens: a film corner's ray leaves from within the lens radius of the camera origin
+        // and still reaches the corner of the screen window at the focal distance.
+        let cam_from_world = look_at([0.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, 1.0, 0.0]).unwrap();
+        let ortho = CameraSettings {
+            projection: Projection::Orthographic,
+            lens_radius: 0.1,
+            focal_distance: 5.0,
+            screen_window: Some([-2.0, 2.0, -1.0, 1.0]),
+            ..settings(90.0)
+        };
+        let cam = Camera::new(&ortho, &cam_from_world.inverse(), [40, 20], 35.0).unwrap();
+        for u in [Vec2::new(0.5, 0.5), Vec2::new(0.9, 0.2), Vec2::new(0.1, 0.7)] {
+            let r = cam.generate_ray(Vec2::ZERO, u, 0.0).unwrap().ray;
+            assert!(r.o.z.abs() < 1e-6 && r.o.truncate().length() <= 0.1 + 1e-6, "{:?}", r.o);
+            let focus = r.o + r.d * ((5.0 - r.o.z) / r.d.z);
+            // Raster (0, 0) is the screen window's top left, camera (−2, 1): world (−2, 1) here.
+            assert!((focus - Vec3::new(-2.0, 1.0, 5.0)).length() < 1e-4, "{focus:?}");
+        }
     }
 }

@@ -105,6 +105,62 @@ fn illuminance_scales_infinite_lights_as_pbrt_v4_does() {
     assert!((map - 4.0 / pi).abs() < 0.02 * 4.0 / pi, "{map}");
 }
 
+/// pbrt-v4's image-textured area lights: a quad whose emission image is constant renders
+/// exactly as the same RGB given as `L`, lit surfaces included, with `power` and in both
+/// transports; a two-texel image shows each texel on its half (v runs up the image); `L` and
+/// `filename` together are refused.
+#[test]
+fn image_area_lights_emit_their_texels() {
+    let dir = crate::common::scratch_dir("image-area-light");
+    let write = |name: &str, w: usize, texels: &[[f32; 3]]| {
+        let mut img = nimbus::imageio::Image::new(w, texels.len() / w);
+        for (p, t) in img.pixels.iter_mut().zip(texels) {
+            *p = glam::Vec3::from(*t);
+        }
+        nimbus::imageio::write_image(&dir.join(name), &img).unwrap();
+    };
+    write("flat.exr", 2, &[[0.8, 0.5, 0.2]; 4]);
+    write("halves.exr", 1, &[[1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]);
+    let render = |emission: &str, spectral: bool| {
+        let text = format!(
+            "LookAt 0 0 4  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" 40\n\
+             Sampler \"zsobol\" \"integer pixelsamples\" 16\n\
+             Film \"rgb\" \"integer xresolution\" 16 \"integer yresolution\" 16\nWorldBegin\n\
+             AttributeBegin\nAreaLightSource \"diffuse\" {emission}\n\
+             Shape \"bilinearmesh\" \"point3 P\" [-1 -1 0 1 -1 0 -1 1 0 1 1 0] \"point2 uv\" [0 0 1 0 0 1 1 1]\n\
+             AttributeEnd\nTranslate 0 0 -1\nMaterial \"diffuse\"\nShape \"sphere\" \"float radius\" 0.3\n"
+        );
+        let path = dir.join("s.pbrt");
+        std::fs::write(&path, text).unwrap();
+        let desc = nimbus::parser::load_file(&path).unwrap();
+        let opts = crate::common::transport(spectral);
+        nimbus::scene::build_scene(&desc, &opts).map(|scene| render_scene(&scene))
+    };
+    // With `power`, pbrt-v4 normalises an RGB `L` by its illuminant alone but an image by its
+    // texels' mean luminance too, so the image then shines 1/Y(0.8, 0.5, 0.2) times brighter.
+    let y = 0.2126 * 0.8 + 0.7152 * 0.5 + 0.0722 * 0.2;
+    for spectral in [false, true] {
+        for (extra, ratio) in [("", 1.0), ("\"float power\" 3", 1.0 / y)] {
+            let a = render(&format!("\"rgb L\" [0.8 0.5 0.2] {extra}"), spectral).unwrap();
+            let b = render(&format!("\"string filename\" \"flat.exr\" {extra}"), spectral).unwrap();
+            let worst =
+                a.pixels.iter().zip(&b.pixels).map(|(p, q)| (*p * ratio - *q).abs().max_element()).fold(0.0, f32::max);
+            // Identical paths: only the RGB→spectrum round trip of the texels (and the digits of
+            // the luminance weights) may differ.
+            let tolerance = if spectral { 2e-3 } else { 1e-4 };
+            assert!(worst <= tolerance, "spectral {spectral} {extra}: {worst}");
+        }
+    }
+    // The top of the quad (v near 1) shows the image's first row, the bottom its second, and
+    // between the texel centres (v = 0.75 and 0.25) the two blend bilinearly.
+    let img = render("\"string filename\" \"halves.exr\"", false).unwrap();
+    let (top, middle, bottom) = (img.get(8, 4), img.get(8, 8) + img.get(8, 7), img.get(8, 12));
+    assert!(top.x > 0.95 && top.z < 0.05 && bottom.z > 0.95 && bottom.x < 0.05, "{top} {bottom}");
+    assert!((middle.x - 1.0).abs() < 0.05 && (middle.z - 1.0).abs() < 0.05, "{middle}");
+    let e = render("\"string filename\" \"flat.exr\" \"rgb L\" [1 1 1]", false).expect_err("refused");
+    assert!(e.message.contains("both \"L\" and \"filename\""), "{}", e.message);
+}
+
 /// pbrt-v4 stops when a projection light has no image; so does nimbus, saying so.
 #[test]
 fn projection_lights_need_an_image() {

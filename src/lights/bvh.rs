@@ -252,7 +252,7 @@ pub fn light_bounds(light: &Light, shapes: &ShapeStore) -> Option<LightBounds> {
         | LightKind::PortalInfinite(_) => {
             return None;
         }
-        LightKind::Area { geometry, l, two_sided, area, .. } => {
+        LightKind::Area { geometry, l, image, two_sided, area, .. } => {
             // The cone of normals on the emitting side: flat shapes have one normal, the
             // others pbrt-v4 bounds by the whole sphere.
             let (w, cos_theta_o) = match *geometry {
@@ -281,7 +281,12 @@ pub fn light_bounds(light: &Light, shapes: &ShapeStore) -> Option<LightBounds> {
             LightBounds {
                 bounds: shapes.bounds(*geometry),
                 w,
-                phi: l.rgb.max_element() * area * PI * if *two_sided { 2.0 } else { 1.0 },
+                // An image counts by its mean texel (pbrt-v4's `DiffuseAreaLight::Bounds`).
+                phi: l.rgb.max_element()
+                    * image.as_ref().map_or(1.0, |i| i.mean_channel())
+                    * area
+                    * PI
+                    * if *two_sided { 2.0 } else { 1.0 },
                 cos_theta_o,
                 cos_theta_e: cos_half_pi,
                 two_sided: *two_sided,
@@ -531,6 +536,7 @@ mod tests {
                     LightKind::Area {
                         geometry: Geometry::Triangle { mesh: shapes.meshes.len() as u32 - 1, tri: 0 },
                         l: i,
+                        image: None,
                         two_sided: k % 4 == 3,
                         area,
                         interface: NONE,
@@ -596,6 +602,7 @@ mod tests {
             kind: LightKind::Area {
                 geometry: Geometry::Triangle { mesh: 0, tri: 0 },
                 l: SpectrumValue::constant(1.0),
+                image: None,
                 two_sided,
                 area: 0.5,
                 interface: NONE,

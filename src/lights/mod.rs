@@ -3,6 +3,7 @@
 //! emitting primitive, as in pbrt-v4).
 
 mod bvh;
+mod emission_image;
 mod envmap;
 pub mod goniometric;
 mod portal;
@@ -10,11 +11,13 @@ pub mod projection;
 mod sampler;
 
 pub use bvh::{LightBounds, LightBvh, light_bounds};
+pub use emission_image::EmissionImage;
 pub use envmap::EnvironmentMap;
 pub use portal::{PortalMap, portal_frame};
 pub use sampler::{LightSampler, LightSamplerKind};
 
 use std::f32::consts::PI;
+use std::sync::Arc;
 
 use glam::{Vec2, Vec3};
 
@@ -86,8 +89,11 @@ pub enum LightKind {
     Area {
         /// The emitting geometry (never an instance).
         geometry: Geometry,
-        /// Emitted radiance.
+        /// Emitted radiance (with an image: the factor the image's radiance is scaled by).
         l: SpectrumValue,
+        /// The emission image read at the surface's (u, v) (`"string filename"`), shared by
+        /// the shape's primitives.
+        image: Option<Arc<EmissionImage>>,
         /// Emits from both sides.
         two_sided: bool,
         /// Surface area (world space).
@@ -184,8 +190,9 @@ impl Light {
             LightKind::UniformInfinite { l } => 4.0 * PI * PI * scene.radius * scene.radius * average(l.rgb),
             LightKind::ImageInfinite(map) => 4.0 * PI * PI * scene.radius * scene.radius * map.average_radiance(),
             LightKind::PortalInfinite(map) => map.power(),
-            LightKind::Area { l, two_sided, area, .. } => {
-                PI * if *two_sided { 2.0 } else { 1.0 } * area * average(l.rgb)
+            LightKind::Area { l, image, two_sided, area, .. } => {
+                let mean = image.as_ref().map_or(1.0, |i| i.mean_channel());
+                PI * if *two_sided { 2.0 } else { 1.0 } * area * average(l.rgb) * mean
             }
         };
         if p.is_finite() { p.max(0.0) } else { 0.0 }
@@ -236,7 +243,7 @@ impl Light {
                 let (wi, pdf, l) = map.sample::<C>(ctx.p, u, lambda)?;
                 Some(infinite_sample(ctx, scene, wi, pdf, l))
             }
-            LightKind::Area { geometry, l, two_sided, alpha, .. } => {
+            LightKind::Area { geometry, l, image, two_sided, alpha, .. } => {
                 let s = match *geometry {
                     Geometry::Triangle { mesh, tri } => triangle_sample(&shapes.meshes[mesh as usize], tri, u),
                     Geometry::Sphere(i) => shapes.spheres[i as usize].sample(ctx.p, u)?,
@@ -268,13 +275,12 @@ impl Light {
                 if !(*two_sided || cos_light > 0.0) || l.is_zero() {
                     return None;
                 }
-                if *alpha != NONE {
-                    let uv = shapes.uv_at(*geometry, s.p, ctx.p)?;
-                    if alpha_masked(surfaces, *alpha, s.p, uv, s.n) {
-                        return None;
-                    }
+                let uv =
+                    if *alpha != NONE || image.is_some() { shapes.uv_at(*geometry, s.p, ctx.p)? } else { Vec2::ZERO };
+                if *alpha != NONE && alpha_masked(surfaces, *alpha, s.p, uv, s.n) {
+                    return None;
                 }
-                let le = C::eval(l, lambda);
+                let le = area_radiance(l, image.as_deref(), uv, lambda);
                 Some(LightSample { l: le, wi, pdf, p: s.p, n: s.n, delta: false, infinite: false })
             }
         }
@@ -321,8 +327,10 @@ impl Light {
     #[inline]
     pub fn emitted<C: Channels>(&self, hit: &SurfaceHit, w: Vec3, lambda: &C::Lambda, surfaces: &Surfaces) -> C {
         if self.emits(hit, w, surfaces) {
-            let LightKind::Area { l, .. } = &self.kind else { unreachable!("only area lights emit from surfaces") };
-            C::eval(l, lambda)
+            let LightKind::Area { l, image, .. } = &self.kind else {
+                unreachable!("only area lights emit from surfaces")
+            };
+            area_radiance(l, image.as_deref(), hit.uv, lambda)
         } else {
             C::ZERO
         }
@@ -351,6 +359,22 @@ impl Light {
             LightKind::PortalInfinite(map) => map.le(o, d, lambda),
             _ => C::ZERO,
         }
+    }
+}
+
+/// An area light's radiance at surface coordinates `uv`: `l`, times the image there if it has
+/// one.
+#[inline]
+pub(crate) fn area_radiance<C: Channels>(
+    l: &SpectrumValue,
+    image: Option<&EmissionImage>,
+    uv: Vec2,
+    lambda: &C::Lambda,
+) -> C {
+    let le = C::eval(l, lambda);
+    match image {
+        Some(image) => le * image.radiance::<C>(uv, lambda),
+        None => le,
     }
 }
 

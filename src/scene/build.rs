@@ -33,7 +33,9 @@ use crate::film::filter::Filter;
 use crate::geometry::ply::read_ply;
 use crate::geometry::{Bounds3, MotionTransform};
 use crate::integrators::IntegratorSettings;
-use crate::lights::{EnvironmentMap, Light, LightKind, LightSampler, LightSamplerKind, PortalMap, SceneSphere};
+use crate::lights::{
+    EmissionImage, EnvironmentMap, Light, LightKind, LightSampler, LightSamplerKind, PortalMap, SceneSphere,
+};
 use crate::materials::{ConductorInput, HairAbsorption, Material, RoughnessTex, ShadingPerturbation, resolve};
 use crate::math::Frame;
 use crate::media::dense::DenseGrid;
@@ -672,19 +674,48 @@ fn material(
 }
 
 /// Emission of an area light: pbrt-v4's photometric normalisation and `power`.
+/// An area light's radiance `L` (with an image, the factor its texels are scaled by) for a
+/// primitive of `area`: pbrt-v4's `power` makes the primitive emit that many watts, counting
+/// an image by its mean luminance.
 fn area_light_radiance(
     settings: &AreaLightSettings,
+    image: Option<&EmissionImage>,
     e: &nimbus_parser::Entity,
     area: f32,
     spectra: &SpectrumResolver<'_>,
 ) -> Result<SpectrumValue, Error> {
-    let l = spectra.illuminant(&settings.radiance, e.color_space).map_err(|m| err(&e.loc, m.to_string()))?;
+    let l = match image {
+        Some(_) => SpectrumValue::constant(1.0),
+        None => spectra.illuminant(&settings.radiance, e.color_space).map_err(|m| err(&e.loc, m.to_string()))?,
+    };
     let mut scale = settings.scale;
     if let Some(phi) = settings.power {
-        let k_e = if settings.two_sided { 2.0 } else { 1.0 } * area * std::f32::consts::PI;
-        scale *= phi / k_e;
+        let mean = image.map_or(1.0, |i| i.mean_luminance());
+        let k_e = mean * if settings.two_sided { 2.0 } else { 1.0 } * area * std::f32::consts::PI;
+        if k_e > 0.0 {
+            scale *= phi / k_e;
+        }
     }
     Ok(l.scaled(scale))
+}
+
+/// An area light's emission image, read once for all of a shape's primitives. RGB transport
+/// converts each texel into the film's RGB (through its sensor) once, as it does for `L`.
+fn emission_image(
+    settings: &AreaLightSettings,
+    e: &nimbus_parser::Entity,
+    spectra: &SpectrumResolver<'_>,
+    rgb_transport: bool,
+) -> Result<Option<Arc<EmissionImage>>, Error> {
+    let Some(path) = &settings.image else { return Ok(None) };
+    let loc = e.params.loc("filename").unwrap_or(&e.loc);
+    let what = |m: String| err(loc, format!("area light image {}: {m}", nimbus_parser::loc_shown(path)));
+    let image = crate::imageio::read_image(path).map_err(what)?;
+    let mut image = EmissionImage::new(&image, e.color_space).map_err(what)?;
+    if rgb_transport {
+        image.map_pixels(|p| spectra.emitted_texel(p, e.color_space));
+    }
+    Ok(Some(Arc::new(image)))
 }
 
 /// A shape's boundary index from its `MediumInterface` and its material.
@@ -700,6 +731,8 @@ struct ShapeBuilder<'a> {
     lights: Vec<Light>,
     triangles: usize,
     mesh_bytes: usize,
+    /// The render's transport is RGB (emission images are converted to film RGB once).
+    rgb_transport: bool,
 }
 
 impl ShapeBuilder<'_> {
@@ -804,6 +837,7 @@ impl ShapeBuilder<'_> {
             }
             let al_entity = &area_lights[al];
             let settings = AreaLightSettings::from_entity(al_entity)?;
+            let image = emission_image(&settings, al_entity, &self.spectra, self.rgb_transport)?;
             for prim in &mut prims[first..] {
                 let area = match prim.geometry {
                     Geometry::Triangle { mesh, tri } => self.store.meshes[mesh as usize].triangle_area(tri),
@@ -822,12 +856,13 @@ impl ShapeBuilder<'_> {
                     Geometry::Bilinear { mesh, patch } => self.store.bilinear_meshes[mesh as usize].area(patch),
                     Geometry::Curve(_) | Geometry::Instance(_) => continue,
                 };
-                let l = area_light_radiance(&settings, al_entity, area, &self.spectra)?;
+                let l = area_light_radiance(&settings, image.as_deref(), al_entity, area, &self.spectra)?;
                 prim.area_light = self.lights.len() as u32;
                 self.lights.push(Light {
                     kind: LightKind::Area {
                         geometry: prim.geometry,
                         l,
+                        image: image.clone(),
                         two_sided: settings.two_sided,
                         area,
                         interface: prim.interface,
@@ -1399,6 +1434,7 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions) -> Result<Scene
         lights: Vec::new(),
         triangles: 0,
         mesh_bytes: 0,
+        rgb_transport: transport.transport == Transport::Rgb,
     };
     let mut prims = Vec::new();
     let mut bounds = Vec::new();

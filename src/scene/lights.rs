@@ -212,8 +212,10 @@ impl LightSettings {
 /// Everything an area light (`AreaLightSource "diffuse"`) specifies.
 #[derive(Clone, Debug, PartialEq)]
 pub struct AreaLightSettings {
-    /// Emitted radiance.
+    /// Emitted radiance (white with an image).
     pub radiance: SpectrumSpec,
+    /// The emission image (`"string filename"`), read at the surface's (u, v).
+    pub image: Option<PathBuf>,
     /// Multiplier.
     pub scale: f32,
     /// Emit from both sides.
@@ -232,14 +234,14 @@ impl AreaLightSettings {
             ));
         }
         let p = &e.params;
-        if let Some(f) = p.get_opt_string("filename")? {
-            return Err(Error::new(
-                p.loc("filename").unwrap_or(&e.loc),
-                format!("image-textured area lights (\"filename\" \"{f}\") are not supported by nimbus"),
-            ));
+        let image = image_file(e, "area light")?;
+        let radiance = spectrum(p, "L")?;
+        if image.is_some() && radiance.is_some() {
+            return Err(Error::new(&e.loc, "area light: both \"L\" and \"filename\" given (pbrt-v4 refuses that too)"));
         }
         Ok(AreaLightSettings {
-            radiance: spectrum(p, "L")?.unwrap_or_else(white),
+            radiance: radiance.unwrap_or_else(white),
+            image,
             scale: p.get_one_float("scale", 1.0)?,
             two_sided: p.get_one_bool("twosided", false)?,
             power: positive_opt(e, "power")?,

@@ -171,7 +171,7 @@ impl Emitter {
                 let (ray, area) = from_infinity(w, u);
                 (ray, l * (area / pdf))
             }
-            LightKind::Area { geometry, l, two_sided, interface, alpha, .. } => {
+            LightKind::Area { geometry, l, image, two_sided, interface, alpha, .. } => {
                 let shapes = &scene.surfaces.shapes;
                 let s = match *geometry {
                     Geometry::Triangle { mesh, tri } => triangle_sample(&shapes.meshes[mesh as usize], tri, u),
@@ -184,11 +184,13 @@ impl Emitter {
                     Geometry::Curve(_) | Geometry::Instance(_) => return None,
                 };
                 // pbrt-v4's `SampleLe` checks the point against the alpha texture.
-                if *alpha != NONE {
-                    let uv = shapes.uv_at(*geometry, s.p, s.p + s.n)?;
-                    if crate::lights::alpha_masked(&scene.surfaces, *alpha, s.p, uv, s.n) {
-                        return None;
-                    }
+                let uv = if *alpha != NONE || image.is_some() {
+                    shapes.uv_at(*geometry, s.p, s.p + s.n)?
+                } else {
+                    Vec2::ZERO
+                };
+                if *alpha != NONE && crate::lights::alpha_masked(&scene.surfaces, *alpha, s.p, uv, s.n) {
+                    return None;
                 }
                 // Natively cosine-weighted about the normal (either side for two-sided
                 // emitters); the power is L·|cos| over the densities.
@@ -208,7 +210,8 @@ impl Emitter {
                 if pdf <= 0.0 || (!*two_sided && cos <= 0.0) {
                     return None;
                 }
-                let power = C::eval(l, lambda) * (cos.abs() / (pdf * s.pdf));
+                let le: C = crate::lights::area_radiance(l, image.as_deref(), uv, lambda);
+                let power = le * (cos.abs() / (pdf * s.pdf));
                 let ray = spawn_ray(s.p, if cos > 0.0 { n } else { -n }, d);
                 // The medium on the side the photon leaves towards: the shape's interface says,
                 // else the medium whose boundary encloses the light.

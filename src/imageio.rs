@@ -222,6 +222,25 @@ pub fn read_exr_channels(path: &Path) -> Result<Vec<(String, Vec<f32>)>, String>
         .collect())
 }
 
+/// The first three channels of an image file in the order pbrt-v4 reads them, per pixel: for
+/// an OpenEXR file its channel list, which is sorted by name (B, G, R; with alpha A, B, G),
+/// and `None` for other formats (R, G, B) or files with fewer channels.
+pub fn pbrt_channel_order(path: &Path) -> Result<Option<Vec<Rgb>>, String> {
+    use exr::prelude::*;
+    if !path.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr")) {
+        return Ok(None);
+    }
+    let img = read_all_flat_layers_from_file(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let layer = img.layer_data.first().ok_or_else(|| format!("{}: no layer", path.display()))?;
+    let mut channels: Vec<_> = layer.channel_data.list.iter().collect();
+    channels.sort_by_key(|c| c.name.to_string());
+    if channels.len() < 3 {
+        return Ok(None);
+    }
+    let v: Vec<Vec<f32>> = channels[..3].iter().map(|c| c.sample_data.values_as_f32().collect()).collect();
+    Ok(Some((0..v[0].len()).map(|i| Rgb::new(v[0][i], v[1][i], v[2][i])).collect()))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

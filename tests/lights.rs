@@ -79,7 +79,8 @@ fn goniometric_lights_need_a_square_image() {
 /// `illuminance` on an infinite light, as pbrt-v4 applies it: a uniform `L` is divided by π
 /// (the illuminance of a unit sky), an image by pbrt-v4's upper-hemisphere sum, which counts
 /// 2π/N steradians per texel where each covers 4π/N: asking for E, a uniform sky shines E/π
-/// and a unit image map 2E/π, twice as bright.
+/// and a unit image map 2E/π, twice as bright; and an OpenEXR map's channels are weighed in
+/// the file's order.
 #[test]
 fn illuminance_scales_infinite_lights_as_pbrt_v4_does() {
     let dir = crate::common::scratch_dir("illuminance");
@@ -103,6 +104,15 @@ fn illuminance_scales_infinite_lights_as_pbrt_v4_does() {
     assert!((uniform - 2.0 / pi).abs() < 1e-4, "{uniform}");
     let map = sky("LightSource \"infinite\" \"string filename\" \"white.exr\" \"float illuminance\" 2");
     assert!((map - 4.0 / pi).abs() < 0.02 * 4.0 / pi, "{map}");
+    // pbrt-v4 weighs an OpenEXR map's channels in the file's (alphabetical) order, B, G, R,
+    // with the luminance weights of R, G, B; the light's `scale` multiplies on top.
+    img.pixels.iter_mut().for_each(|p| *p = glam::Vec3::new(0.2, 0.5, 1.0));
+    nimbus::imageio::write_image(&dir.join("blue.exr"), &img).unwrap();
+    let blue =
+        sky("LightSource \"infinite\" \"string filename\" \"blue.exr\" \"float illuminance\" 2 \"float scale\" 3");
+    let k_e = pi / 2.0 * (0.2126 * 1.0 + 0.7152 * 0.5 + 0.0722 * 0.2);
+    let expected = 3.0 * 0.2 * 2.0 / k_e;
+    assert!((blue - expected).abs() < 0.02 * expected, "{blue} vs {expected}");
 }
 
 /// pbrt-v4's image-textured area lights: a quad whose emission image is constant renders

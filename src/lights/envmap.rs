@@ -2,7 +2,6 @@
 //! 2008), importance-sampled by a piecewise-constant distribution over the image.
 
 use std::f32::consts::PI;
-use std::path::Path;
 
 use crate::sampling::warp::{equal_area_sphere_to_square, equal_area_square_to_sphere};
 use glam::{Affine3A, Vec2, Vec3};
@@ -56,17 +55,6 @@ impl EnvironmentMap {
         })
     }
 
-    /// Reads an environment map image (EXR or PNG) of color space `space`.
-    pub fn load(
-        path: &Path,
-        space: ColorSpace,
-        world_from_light: Affine3A,
-        scale: f32,
-    ) -> Result<EnvironmentMap, String> {
-        let image = crate::imageio::read_image(path)?;
-        EnvironmentMap::new(&image, space, world_from_light, scale)
-    }
-
     /// Applies `f` to every pixel (e.g. RGB transport converting each texel through a camera
     /// sensor once); the sampling distribution is kept, as it only needs to be proportional
     /// to the radiance roughly.
@@ -112,27 +100,27 @@ impl EnvironmentMap {
         let wl = self.light_from_world.transform_vector3(w).normalize_or_zero();
         self.distribution.pdf(equal_area_sphere_to_square(wl)) / (4.0 * PI)
     }
+}
 
-    /// pbrt-v4's reference for the `illuminance` parameter: the illuminance at a point facing
-    /// the light space's +z axis, ∫ L cos θ over that hemisphere, as pbrt-v4 computes it. It
-    /// sums over the upper hemisphere's texels with 2π/N steradians each where a texel of the
-    /// equal-area map covers 4π/N, so the value is half the true illuminance and pbrt-v4's
-    /// image lights come out twice as bright as the `illuminance` asked for (its uniform
-    /// `L` lights do not: they divide by π). Scenes are tuned in pbrt-v4, so nimbus follows.
-    pub fn upper_hemisphere_illuminance(&self) -> f32 {
-        let n = self.size;
-        let mut sum = 0.0f64;
-        for y in 0..n {
-            for x in 0..n {
-                let uv = Vec2::new((x as f32 + 0.5) / n as f32, (y as f32 + 0.5) / n as f32);
-                let w = equal_area_square_to_sphere(uv);
-                if w.z > 0.0 {
-                    sum += (luminance(self.pixels[y * n + x]) * w.z) as f64;
-                }
+/// pbrt-v4's reference for an image infinite light's `illuminance`: the illuminance at a point
+/// facing the light space's +z axis, ∫ L cos θ over that hemisphere, as pbrt-v4 computes it
+/// from a `width`×`height` image. Two of its quirks are part of every pbrt-v4 image, so nimbus
+/// keeps them: it counts 2π/N steradians per texel where a texel of the equal-area map covers
+/// 4π/N (half the true illuminance: image lights shine twice the illuminance asked for), and
+/// it weighs the file's first three channels in the file's order, which for an OpenEXR file
+/// is alphabetical (B, G, R: the caller passes `values` in that order).
+pub fn reference_illuminance(values: &[Rgb], width: usize, height: usize) -> f32 {
+    let mut sum = 0.0f64;
+    for y in 0..height {
+        for x in 0..width {
+            let uv = Vec2::new((x as f32 + 0.5) / width as f32, (y as f32 + 0.5) / height as f32);
+            let w = equal_area_square_to_sphere(uv);
+            if w.z > 0.0 {
+                sum += (luminance(values[y * width + x]) * w.z) as f64;
             }
         }
-        (sum * 2.0 * PI as f64 / (n * n) as f64) as f32
     }
+    (sum * 2.0 * PI as f64 / (width * height) as f64) as f32
 }
 
 /// The texel of a square `size`² image holding `uv`, as emitted radiance in the path's
@@ -181,13 +169,6 @@ mod tests {
             assert_eq!(map.lookup::<Rgb>(w, &()), l);
         }
         // A constant map of 1 has illuminance π; pbrt-v4's reference gives π/2.
-        let flat = EnvironmentMap::new(
-            &Image { pixels: vec![Rgb::ONE; 64 * 64], ..Image::new(64, 64) },
-            ColorSpace::Srgb,
-            Affine3A::IDENTITY,
-            1.0,
-        )
-        .unwrap();
-        assert!((flat.upper_hemisphere_illuminance() - PI / 2.0).abs() < 0.03);
+        assert!((reference_illuminance(&[Rgb::ONE; 64 * 64], 64, 64) - PI / 2.0).abs() < 0.03);
     }
 }

@@ -12,7 +12,7 @@ mod sampler;
 
 pub use bvh::{LightBounds, LightBvh, light_bounds};
 pub use emission_image::EmissionImage;
-pub use envmap::EnvironmentMap;
+pub use envmap::{EnvironmentMap, reference_illuminance};
 pub use portal::{PortalMap, portal_frame};
 pub use sampler::{LightSampler, LightSamplerKind};
 

@@ -674,6 +674,19 @@ fn material(
 }
 
 /// Emission of an area light: pbrt-v4's photometric normalisation and `power`.
+/// The factor pbrt-v4 scales an image infinite light by for an `illuminance` of `ev`: `ev`
+/// over its reference illuminance of the image as read from `path` (the light's own `scale`
+/// multiplies on top, as in pbrt-v4).
+fn illuminance_factor(ev: f32, path: Option<&std::path::Path>, image: &crate::imageio::Image) -> Result<f32, String> {
+    let ordered = match path {
+        Some(p) => crate::imageio::pbrt_channel_order(p)?,
+        None => None,
+    };
+    let values = ordered.as_deref().unwrap_or(&image.pixels);
+    let k_e = crate::lights::reference_illuminance(values, image.width, image.height);
+    Ok(if k_e > 0.0 { ev / k_e } else { 1.0 })
+}
+
 /// An area light's radiance `L` (with an image, the factor its texels are scaled by) for a
 /// primitive of `area`: pbrt-v4's `power` makes the primitive emit that many watts, counting
 /// an image by its mean luminance.
@@ -1020,12 +1033,7 @@ fn light(
             };
             let mut scale = settings.scale;
             if let Some(ev) = illuminance {
-                let k_e = EnvironmentMap::new(&image, cs, world, 1.0)
-                    .map_err(|m| err(&e.loc, m))?
-                    .upper_hemisphere_illuminance();
-                if k_e > 0.0 {
-                    scale *= ev / k_e;
-                }
+                scale *= illuminance_factor(*ev, filename.as_deref(), &image).map_err(|m| err(&e.loc, m))?;
             }
             // The corners are world-space points (pbrt-v4 does not apply the light's transform
             // to them), the image is oriented by the light's transform.
@@ -1043,14 +1051,12 @@ fn light(
         }
         LightSpec::Infinite { radiance: None, filename: Some(path), illuminance, .. } => {
             let cs = e.color_space;
-            let mut map = EnvironmentMap::load(path, cs, world, settings.scale).map_err(|m| err(&e.loc, m))?;
+            let image = crate::imageio::read_image(path).map_err(|m| err(&e.loc, m))?;
+            let mut scale = settings.scale;
             if let Some(ev) = illuminance {
-                let k_e = map.upper_hemisphere_illuminance();
-                if k_e > 0.0 {
-                    map =
-                        EnvironmentMap::load(path, cs, world, settings.scale * ev / k_e).map_err(|m| err(&e.loc, m))?;
-                }
+                scale *= illuminance_factor(*ev, Some(path), &image).map_err(|m| err(&e.loc, m))?;
             }
+            let mut map = EnvironmentMap::new(&image, cs, world, scale).map_err(|m| err(&e.loc, m))?;
             // RGB transport sees each texel's film RGB; through a camera sensor that is the
             // texel's illuminant spectrum seen by the sensor (spectral transport converts at
             // lookup).

@@ -466,8 +466,7 @@ impl Surfaces {
     #[inline(never)]
     fn alpha_passes(&self, prim: Primitive, instance: u32, detail: Detail, ray: &Ray, t: f32) -> bool {
         let s = self.surface(&Candidate { t, prim, instance, detail }, ray, instance != NONE);
-        let alpha =
-            self.textures.eval_float(self.alphas[prim.alpha as usize], &TexContext { p: s.p, uv: s.uv, n: s.n });
+        let alpha = self.textures.eval_float(self.alphas[prim.alpha as usize], &TexContext::at(s.p, s.uv, s.n));
         alpha_passes(alpha, ray, t)
     }
 

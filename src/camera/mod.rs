@@ -2,12 +2,14 @@
 //! the field of view spans the shorter image axis, and camera space looks down +z with +y
 //! up in a left-handed frame (so LookAt scenes come out exactly as pbrt-v4 frames them).
 
+mod footprint;
 mod realistic;
 
 use std::sync::Arc;
 
 use glam::{Affine3A, DMat4, Vec2, Vec3};
 
+pub use footprint::Footprint;
 pub use realistic::RealisticLens;
 
 use crate::geometry::{MotionTransform, Ray};

@@ -389,7 +389,7 @@ fn infinite_sample<C>(ctx: &LightContext, scene: &SceneSphere, wi: Vec3, pdf: f3
 /// where a number hashed from the point exceeds a fractional alpha (a fixed pattern over the
 /// surface, apart from the alpha test rays get when they hit it).
 pub(crate) fn alpha_masked(surfaces: &Surfaces, alpha: u32, p: Vec3, uv: Vec2, n: Vec3) -> bool {
-    let a = surfaces.textures.eval_float(surfaces.alphas[alpha as usize], &crate::textures::TexContext { p, uv, n });
+    let a = surfaces.textures.eval_float(surfaces.alphas[alpha as usize], &crate::textures::TexContext::at(p, uv, n));
     if a >= 1.0 {
         return false;
     }

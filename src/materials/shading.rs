@@ -59,7 +59,7 @@ impl ShadingPerturbation {
 /// pbrt-v4's `BumpMap`: p'(u, v) = p + d(u, v)·n, differentiated by forward differences of the
 /// displacement and the normal's own derivatives.
 fn bump(textures: &Textures, displacement: Tex, s: &SurfaceHit, d: &SurfaceDerivatives) -> (Vec3, Vec3) {
-    let eval = |p: Vec3, uv: Vec2| textures.eval_float(displacement, &TexContext { p, uv, n: s.n });
+    let eval = |p: Vec3, uv: Vec2| textures.eval_float(displacement, &TexContext::at(p, uv, s.n));
     let (du, dv) = (BUMP_DELTA, BUMP_DELTA);
     let disp = eval(s.p, s.uv);
     let u_displace = eval(s.p + du * d.dpdu, s.uv + Vec2::new(du, 0.0));

@@ -26,7 +26,6 @@ use crate::media::MediumKind;
 use crate::samplers::Sampler;
 use crate::sampling::rng::{Pcg32, hash_vec3};
 use crate::scene::Scene;
-use crate::textures::TexContext;
 
 /// What a camera sample sees first, in the film's output space.
 #[derive(Clone, Copy, Debug)]
@@ -106,8 +105,7 @@ fn visible_surface(
         let wo = -ray.d;
         let material = scene.surface_material(&mut hit, wo);
         let s = hit.surface;
-        let Some(bxdf) = material.bxdf::<Rgb>(&scene.textures, &TexContext { p: s.p, uv: s.uv, n: s.n }, &mut ())
-        else {
+        let Some(bxdf) = material.bxdf::<Rgb>(&scene.textures, &scene.tex_context(&s), &mut ()) else {
             medium = medium_after(scene, &hit, ray.d, medium);
             ray = hit.spawn_ray(ray.d);
             continue;

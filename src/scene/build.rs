@@ -115,6 +115,8 @@ pub struct Scene {
     pub shading: Vec<ShadingPerturbation>,
     /// Texture nodes.
     pub textures: Textures,
+    /// The camera's footprint model, when a texture filters over it.
+    pub footprint: Option<crate::camera::Footprint>,
     /// Lights (area lights first, one per emitting primitive).
     pub lights: Vec<Light>,
     /// Next-event light selection.
@@ -151,13 +153,23 @@ impl Scene {
         self.camera.moves() || self.surfaces.instances.iter().any(|i| i.motion.is_some())
     }
 
+    /// The texture lookup at surface hit `s`, with its screen-space footprint when a texture
+    /// needs one.
+    #[inline]
+    pub fn tex_context(&self, s: &crate::shapes::SurfaceHit) -> TexContext {
+        let mut ctx = TexContext::at(s.p, s.uv, s.n);
+        if let Some(f) = &self.footprint {
+            (ctx.dpdx, ctx.dpdy) = f.dp_dxy(s.p, s.n);
+        }
+        ctx
+    }
+
     /// The material that scatters at `hit` seen from `wo` (`mix` resolved), with the hit's
     /// shading normal and tangents replaced by the material's bump or normal map.
     #[inline]
     pub fn surface_material(&self, hit: &mut crate::accel::Hit, wo: Vec3) -> &Material {
         let s = &mut hit.surface;
-        let id =
-            resolve(&self.materials, hit.prim.material, &self.textures, &TexContext { p: s.p, uv: s.uv, n: s.n }, wo);
+        let id = resolve(&self.materials, hit.prim.material, &self.textures, &self.tex_context(s), wo);
         let shading = &self.shading[id as usize];
         if !shading.is_none() {
             let d = self.surfaces.derivatives(hit);
@@ -1540,6 +1552,10 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions) -> Result<Scene
         _ => LightSamplerKind::Bvh,
     };
     let light_sampler = LightSampler::new(&lights, &surfaces.shapes, &sphere, kind);
+    let footprint = tb
+        .textures
+        .uses_footprint()
+        .then(|| crate::camera::Footprint::new(&camera, film.resolution, sampler.pixel_samples));
     Ok(Scene {
         camera,
         film,
@@ -1551,6 +1567,7 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions) -> Result<Scene
         surfaces,
         materials,
         shading,
+        footprint,
         textures: tb.textures,
         lights,
         light_sampler,

@@ -35,6 +35,18 @@ pub struct TexContext {
     pub uv: Vec2,
     /// Geometric normal (for `directionmix`; zero where there is none).
     pub n: Vec3,
+    /// The point's screen-space footprint, ∂p/∂x and ∂p/∂y (zero: a point lookup, as for
+    /// alpha tests and light paths), [`crate::camera::Footprint`].
+    pub dpdx: Vec3,
+    /// See `dpdx`.
+    pub dpdy: Vec3,
+}
+
+impl TexContext {
+    /// A lookup at a point without a footprint.
+    pub fn at(p: Vec3, uv: Vec2, n: Vec3) -> TexContext {
+        TexContext { p, uv, n, dpdx: Vec3::ZERO, dpdy: Vec3::ZERO }
+    }
 }
 
 /// How points map to (s, t).
@@ -233,6 +245,21 @@ pub struct Textures {
 }
 
 impl Textures {
+    /// Whether any texture filters over the shading point's footprint (procedural noise and
+    /// the 3D checkerboard): only then do hits compute one.
+    pub fn uses_footprint(&self) -> bool {
+        self.nodes.iter().any(|n| {
+            matches!(
+                n,
+                TexNode::Fbm { .. }
+                    | TexNode::Wrinkled { .. }
+                    | TexNode::Windy { .. }
+                    | TexNode::Marble { .. }
+                    | TexNode::Checkerboard3D { .. }
+            )
+        })
+    }
+
     /// Evaluates a spectrum texture input in the path's channels; image texels are read as
     /// spectra of kind `role` (albedo, unbounded or illuminant, as pbrt-v4's material
     /// parameters ask for them).
@@ -301,13 +328,16 @@ impl Textures {
                 }
             }
             TexNode::Checkerboard3D { a, b, texture_from_world } => {
-                // Unfiltered, as nimbus's other textures (no ray differentials).
-                let p = texture_from_world.transform_point3(ctx.p).floor();
-                if (p.x as i64 + p.y as i64 + p.z as i64) % 2 == 0 {
-                    self.eval(*a, ctx, lambda, role)
-                } else {
-                    self.eval(*b, ctx, lambda, role)
-                }
+                // pbrt-v4's filtered checkerboard: the product of the three axes' box-filtered
+                // square waves over 1.5 × the footprint (a triangle filter's reach).
+                let p = texture_from_world.transform_point3(ctx.p);
+                let (dx, dy) =
+                    (texture_from_world.transform_vector3(ctx.dpdx), texture_from_world.transform_vector3(ctx.dpdy));
+                let w = 1.5 * dx.abs().max(dy.abs());
+                let t = 0.5 - 0.5 * filtered_square(p.x, w.x) * filtered_square(p.y, w.y) * filtered_square(p.z, w.z);
+                let va = if t != 1.0 { self.eval(*a, ctx, lambda, role) } else { C::ZERO };
+                let vb = if t != 0.0 { self.eval(*b, ctx, lambda, role) } else { C::ZERO };
+                va * (1.0 - t) + vb * t
             }
             TexNode::Bilerp { v, mapping } => {
                 let st = mapping.map(ctx);
@@ -318,22 +348,23 @@ impl Textures {
                     + self.eval::<C>(v[3], ctx, lambda, role) * (s * t)
             }
             TexNode::Fbm { texture_from_world, octaves, omega } => {
-                let p = texture_from_world.transform_point3(ctx.p);
-                C::splat(noise::fbm(p, Vec3::ZERO, Vec3::ZERO, *omega, *octaves))
+                let (p, dx, dy) = texture_point(texture_from_world, ctx);
+                C::splat(noise::fbm(p, dx, dy, *omega, *octaves))
             }
             TexNode::Wrinkled { texture_from_world, octaves, omega } => {
-                let p = texture_from_world.transform_point3(ctx.p);
-                C::splat(noise::turbulence(p, Vec3::ZERO, Vec3::ZERO, *omega, *octaves))
+                let (p, dx, dy) = texture_point(texture_from_world, ctx);
+                C::splat(noise::turbulence(p, dx, dy, *omega, *octaves))
             }
             TexNode::Windy { texture_from_world } => {
-                let p = texture_from_world.transform_point3(ctx.p);
-                let wind = noise::fbm(0.1 * p, Vec3::ZERO, Vec3::ZERO, 0.5, 3);
-                let wave = noise::fbm(p, Vec3::ZERO, Vec3::ZERO, 0.5, 6);
+                let (p, dx, dy) = texture_point(texture_from_world, ctx);
+                let wind = noise::fbm(0.1 * p, 0.1 * dx, 0.1 * dy, 0.5, 3);
+                let wave = noise::fbm(p, dx, dy, 0.5, 6);
                 C::splat(wind.abs() * wave)
             }
             TexNode::Marble { texture_from_world, octaves, omega, scale, variation } => {
-                let p = *scale * texture_from_world.transform_point3(ctx.p);
-                let marble = p.y + variation * noise::fbm(p, Vec3::ZERO, Vec3::ZERO, *omega, *octaves);
+                let (p, dx, dy) = texture_point(texture_from_world, ctx);
+                let (p, dx, dy) = (*scale * p, *scale * dx, *scale * dy);
+                let marble = p.y + variation * noise::fbm(p, dx, dy, *omega, *octaves);
                 C::from_rgb(marble_color(0.5 + 0.5 * marble.sin()), role, ColorSpace::Srgb, lambda)
             }
             TexNode::Dots { inside, outside, mapping } => {
@@ -423,6 +454,29 @@ pub(crate) fn bilerp(image: &Image, st: Vec2, wrap: Wrap) -> Rgb {
         + dx * dy * texel(image, xi + 1, yi + 1, wrap)
 }
 
+/// A 3D texture's point and footprint in texture space.
+#[inline]
+fn texture_point(texture_from_world: &Affine3A, ctx: &TexContext) -> (Vec3, Vec3, Vec3) {
+    (
+        texture_from_world.transform_point3(ctx.p),
+        texture_from_world.transform_vector3(ctx.dpdx),
+        texture_from_world.transform_vector3(ctx.dpdy),
+    )
+}
+
+/// pbrt-v4's filtered 1D checkerboard: the square wave ±1 (+1 on even cells) averaged over
+/// [x − r, x + r] (its closed-form integral); the point value where that stays in one cell.
+fn filtered_square(x: f32, r: f32) -> f32 {
+    if (x - r).floor() == (x + r).floor() {
+        return 1.0 - 2.0 * (x.floor() as i64 & 1) as f32;
+    }
+    let d = |x: f32| {
+        let y = x / 2.0 - (x / 2.0).floor() - 0.5;
+        x / 2.0 + y * (1.0 - 2.0 * y.abs())
+    };
+    (d(x + r) - 2.0 * d(x) + d(x - r)) / (r * r)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -440,7 +494,7 @@ mod tests {
             b: Tex::Const(SpectrumValue::constant(0.5)),
             amount: Tex::Const(SpectrumValue::constant(0.5)),
         });
-        let at = |u: f32, v: f32| TexContext { p: Vec3::ZERO, uv: Vec2::new(u, v), n: Vec3::Z };
+        let at = |u: f32, v: f32| TexContext::at(Vec3::ZERO, Vec2::new(u, v), Vec3::Z);
         assert_eq!(t.eval_rgb(Tex::Node(0), &at(0.25, 0.25)), Rgb::ONE);
         assert_eq!(t.eval_rgb(Tex::Node(0), &at(0.75, 0.25)), Rgb::ZERO);
         assert_eq!(t.eval_rgb(Tex::Node(1), &at(0.25, 0.25)), Rgb::splat(0.75));
@@ -457,7 +511,7 @@ mod tests {
             texture_from_world: Affine3A::from_scale(Vec3::splat(4.0)),
         });
         let at = |x: f32, y: f32, z: f32| {
-            t.eval_rgb(Tex::Node(0), &TexContext { p: Vec3::new(x, y, z), uv: Vec2::ZERO, n: Vec3::Z }).x
+            t.eval_rgb(Tex::Node(0), &TexContext::at(Vec3::new(x, y, z), Vec2::ZERO, Vec3::Z)).x
         };
         assert_eq!(at(0.1, 0.1, 0.1), 1.0);
         assert_eq!(at(0.3, 0.1, 0.1), 0.0);
@@ -466,6 +520,18 @@ mod tests {
         assert_eq!(at(-0.1, 0.1, 0.1), 0.0);
         assert_eq!(at(-0.1, -0.1, 0.1), 1.0);
         assert_eq!(at(-0.3, -0.1, -0.1), 1.0);
+        // With a footprint, pbrt-v4 box-filters each axis over 1.5× it: a footprint far wider
+        // than a cell averages to gray, a narrow one away from the edges changes nothing, and
+        // across an edge it blends linearly (x = 0.25 is the edge in x at texture scale 4).
+        let filtered = |p: Vec3, d: f32| {
+            let ctx =
+                TexContext { dpdx: Vec3::splat(d), dpdy: Vec3::splat(d), ..TexContext::at(p, Vec2::ZERO, Vec3::Z) };
+            t.eval_rgb(Tex::Node(0), &ctx).x
+        };
+        assert!((filtered(Vec3::splat(0.1), 10.0) - 0.5).abs() < 0.01);
+        assert_eq!(filtered(Vec3::splat(0.125), 0.01), 1.0);
+        let edge = filtered(Vec3::new(0.25, 0.125, 0.125), 0.01);
+        assert!((edge - 0.5).abs() < 1e-3, "{edge}");
     }
 
     #[test]
@@ -482,7 +548,7 @@ mod tests {
             space: ColorSpace::Srgb,
             gray: true,
         });
-        let v = t.eval_rgb(Tex::Node(0), &TexContext { p: Vec3::ZERO, uv: Vec2::new(0.5, 0.5), n: Vec3::Z });
+        let v = t.eval_rgb(Tex::Node(0), &TexContext::at(Vec3::ZERO, Vec2::new(0.5, 0.5), Vec3::Z));
         assert!((v.x - 0.5).abs() < 1e-6);
     }
 }

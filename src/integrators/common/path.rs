@@ -22,7 +22,6 @@ use crate::media::phase::HenyeyGreenstein;
 use crate::samplers::Sampler;
 use crate::sampling::rng::{Pcg32, hash_sample};
 use crate::scene::Scene;
-use crate::textures::TexContext;
 
 /// Parameters of the loop.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -383,7 +382,7 @@ pub fn trace_path<C: Channels, O: PathObserver<C>>(
 
         let material = scene.surface_material(&mut hit, wo);
         let s = &hit.surface;
-        let tex_ctx = TexContext { p: s.p, uv: s.uv, n: s.n };
+        let tex_ctx = scene.tex_context(s);
         let Some(mut bxdf) = material.bxdf::<C>(&scene.textures, &tex_ctx, lambda) else {
             // An interface: cross it without counting a bounce.
             medium = medium_after(scene, &hit, ray.d, medium);

@@ -320,7 +320,8 @@ pub fn trace<C: Channels>(
         let Some(mut hit) = hit else { return };
         let material = scene.surface_material(&mut hit, -ray.d);
         let s = &hit.surface;
-        let tex_ctx = TexContext { p: s.p, uv: s.uv, n: s.n };
+        // Light paths carry no camera footprint (pbrt-v4 has none there either).
+        let tex_ctx = TexContext::at(s.p, s.uv, s.n);
         let Some(bxdf) = material.bxdf::<C>(&scene.textures, &tex_ctx, lambda) else {
             medium = medium_after(scene, &hit, ray.d, medium);
             ray = s.spawn_ray(ray.d);

@@ -32,7 +32,6 @@ use crate::media::phase::HenyeyGreenstein;
 use crate::samplers::Sampler;
 use crate::sampling::distribution::AliasTable;
 use crate::scene::Scene;
-use crate::textures::TexContext;
 
 /// Per-path state.
 struct Path<C> {
@@ -216,7 +215,7 @@ pub fn trace<C: Channels>(
                 }
                 let material = scene.surface_material(&mut hit, wo);
                 let s = &hit.surface;
-                let tex_ctx = TexContext { p: s.p, uv: s.uv, n: s.n };
+                let tex_ctx = scene.tex_context(s);
                 let Some(b) = material.bxdf::<C>(&scene.textures, &tex_ctx, lambda) else {
                     // An emissive `interface`: its light is counted; the ray goes on.
                     let medium = medium_after(scene, &hit, isect.ray.d, isect.medium);

@@ -24,6 +24,18 @@ pub struct Image {
 }
 
 impl Image {
+    /// Keeps `alpha` (one value per pixel) as channel `A` unless it is empty or all one.
+    fn keep_alpha(&mut self, alpha: Vec<f32>) {
+        if alpha.len() == self.pixels.len() && alpha.iter().any(|&a| a != 1.0) {
+            self.channels.push(("A".into(), alpha));
+        }
+    }
+
+    /// The alpha channel a file carried (RGBA PNG or OpenEXR), if not all one.
+    pub fn alpha(&self) -> Option<&[f32]> {
+        self.channels.iter().find(|(n, _)| n == "A").map(|(_, v)| v.as_slice())
+    }
+
     /// A black image.
     pub fn new(width: usize, height: usize) -> Image {
         Image {
@@ -172,6 +184,7 @@ pub fn read_png(path: &Path) -> Result<crate::imageio::Image, String> {
         if sixteen { u16::from_be_bytes([buf[2 * i], buf[2 * i + 1]]) as f32 / 65535.0 } else { buf[i] as f32 / 255.0 }
     };
     let mut pixels = Vec::with_capacity(w * h);
+    let mut alpha = Vec::new();
     for k in 0..w * h {
         let base = k * channels;
         let rgb = match channels {
@@ -179,22 +192,36 @@ pub fn read_png(path: &Path) -> Result<crate::imageio::Image, String> {
             _ => Rgb::new(srgb_decode(value(base)), srgb_decode(value(base + 1)), srgb_decode(value(base + 2))),
         };
         pixels.push(rgb);
+        // pbrt-v4 keeps an RGBA PNG's alpha (decoded like the colour channels; a gray PNG's
+        // alpha it drops).
+        if channels == 4 {
+            alpha.push(srgb_decode(value(base + 3)));
+        }
     }
-    Ok(crate::imageio::Image { width: w, height: h, pixels, metadata: BTreeMap::new(), channels: Vec::new() })
+    let mut image =
+        crate::imageio::Image { width: w, height: h, pixels, metadata: BTreeMap::new(), channels: Vec::new() };
+    image.keep_alpha(alpha);
+    Ok(image)
 }
 
-/// Reads the first RGB(A) layer of an OpenEXR file (alpha ignored) and its text attributes.
+/// Reads the first RGB(A) layer of an OpenEXR file (an alpha other than 1 kept as channel
+/// `A`) and its text attributes.
 pub fn read_exr(path: &Path) -> Result<crate::imageio::Image, String> {
     use exr::prelude::*;
+    type Pixels = (usize, usize, Vec<Rgb>, Vec<f32>);
     let img = read_first_rgba_layer_from_file(
         path,
-        |res, _| (res.width(), res.height(), vec![Rgb::ZERO; res.width() * res.height()]),
-        |(w, _h, px): &mut (usize, usize, Vec<Rgb>), pos, (r, g, b, _a): (f32, f32, f32, f32)| {
+        |res, _| {
+            let n = res.width() * res.height();
+            (res.width(), res.height(), vec![Rgb::ZERO; n], vec![1.0; n])
+        },
+        |(w, _h, px, alpha): &mut Pixels, pos, (r, g, b, a): (f32, f32, f32, f32)| {
             px[pos.y() * *w + pos.x()] = Rgb::new(r, g, b);
+            alpha[pos.y() * *w + pos.x()] = a;
         },
     )
     .map_err(|e| format!("{}: {e}", path.display()))?;
-    let (width, height, pixels) = img.layer_data.channel_data.pixels;
+    let (width, height, pixels, alpha) = img.layer_data.channel_data.pixels;
     let mut metadata = BTreeMap::new();
     for (k, v) in &img.layer_data.attributes.other {
         if let exr::meta::attribute::AttributeValue::Text(t) = v {
@@ -204,7 +231,9 @@ pub fn read_exr(path: &Path) -> Result<crate::imageio::Image, String> {
     if pixels.iter().any(|p| !p.is_finite()) {
         return Err(format!("{}: image contains NaN or infinite values", path.display()));
     }
-    Ok(crate::imageio::Image { width, height, pixels, metadata, channels: Vec::new() })
+    let mut image = crate::imageio::Image { width, height, pixels, metadata, channels: Vec::new() };
+    image.keep_alpha(alpha);
+    Ok(image)
 }
 
 /// Every channel of an OpenEXR file's first layer other than R, G, B and A, by name (a
@@ -267,6 +296,26 @@ mod tests {
         img.metadata.insert("nimbus:scene".into(), "сцены/σ.pbrt".into());
         write_image(&path, &img).unwrap();
         assert_eq!(read_exr(&path).unwrap().metadata.get("nimbus:scene").map(String::as_str), Some("?????/?.pbrt"));
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn rgba_png_alpha_is_kept_as_pbrt_decodes_it() {
+        let dir = std::env::temp_dir().join(format!("nimbus-imageio-alpha-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("a.png");
+        let file = std::fs::File::create(&path).unwrap();
+        let mut enc = png::Encoder::new(std::io::BufWriter::new(file), 2, 1);
+        enc.set_color(png::ColorType::Rgba);
+        enc.set_depth(png::BitDepth::Eight);
+        let mut w = enc.write_header().unwrap();
+        w.write_image_data(&[255, 0, 0, 255, 0, 255, 0, 128]).unwrap();
+        w.finish().unwrap();
+        let img = read_png(&path).unwrap();
+        assert_eq!(img.pixels[0], Rgb::new(1.0, 0.0, 0.0));
+        // pbrt-v4 decodes an 8-bit alpha with the image's encoding, sRGB here.
+        let a = img.alpha().expect("alpha kept");
+        assert!(a[0] == 1.0 && (a[1] - srgb_decode(128.0 / 255.0)).abs() < 1e-6, "{a:?}");
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -388,8 +388,11 @@ impl TextureBuilder<'_> {
                 // A texture-space direction, taken to world space (pbrt-v4's renderFromTexture).
                 dir: texture_from_world.inverse().transform_vector3(Vec3::from(*dir)).normalize_or_zero(),
             },
-            TextureKind::ImageMap { filename, scale, invert, wrap, encoding, mapping: m } => {
-                let image = load_texture_image(filename, encoding).map_err(|m| err(&e.loc, m))?;
+            TextureKind::ImageMap { filename, filter, scale, invert, wrap, encoding, mapping: m } => {
+                let mut image = load_texture_image(filename, encoding).map_err(|m| err(&e.loc, m))?;
+                if t.value == TextureValue::Float {
+                    float_texels(&mut image, filter);
+                }
                 let wrap = match wrap.as_str() {
                     "repeat" => Wrap::Repeat,
                     "black" => Wrap::Black,
@@ -427,6 +430,22 @@ impl TextureBuilder<'_> {
     }
 }
 
+/// The value a float `imagemap` reads from each texel, as pbrt-v4's MIP map reads it (kept in
+/// all three channels): the `bilinear` and `trilinear` filters interpolate the alpha channel
+/// of an image that has one (not all 1) and otherwise the mean of R, G and B; `point` and
+/// `ewa` read the first channel, R.
+fn float_texels(image: &mut crate::imageio::Image, filter: &str) {
+    let alpha = image.alpha().map(<[f32]>::to_vec);
+    for (i, p) in image.pixels.iter_mut().enumerate() {
+        let v = match (filter, &alpha) {
+            ("point" | "ewa", _) => p.x,
+            (_, Some(a)) => a[i],
+            _ => (p.x + p.y + p.z) / 3.0,
+        };
+        *p = Rgb::splat(v);
+    }
+}
+
 fn load_texture_image(path: &Path, encoding: &str) -> Result<crate::imageio::Image, String> {
     let is_png = path.extension().is_some_and(|x| x.eq_ignore_ascii_case("png"));
     let mut image = crate::imageio::read_image(path)?;
@@ -441,11 +460,17 @@ fn load_texture_image(path: &Path, encoding: &str) -> Result<crate::imageio::Ima
                 return Err(format!("imagemap: unknown encoding \"{other}\" (sRGB, linear or \"gamma g\")"));
             }
         };
+        let enc = |v: f32| {
+            if v <= 0.003_130_8 { 12.92 * v } else { 1.055 * v.powf(1.0 / 2.4) - 0.055 }
+        };
         for p in &mut image.pixels {
-            let enc = |v: f32| {
-                if v <= 0.003_130_8 { 12.92 * v } else { 1.055 * v.powf(1.0 / 2.4) - 0.055 }
-            };
             *p = Rgb::new(enc(p.x).powf(gamma), enc(p.y).powf(gamma), enc(p.z).powf(gamma));
+        }
+        // pbrt-v4 decodes an 8-bit image's alpha with the same encoding.
+        for (_, values) in image.channels.iter_mut().filter(|(n, _)| n == "A") {
+            for a in values.iter_mut() {
+                *a = enc(*a).powf(gamma);
+            }
         }
     }
     Ok(image)
@@ -1590,4 +1615,31 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions) -> Result<Scene
         },
         warnings,
     })
+}
+
+#[cfg(test)]
+mod float_texel_tests {
+    use super::*;
+
+    #[test]
+    fn float_imagemaps_read_the_channels_pbrt_v4_reads() {
+        let image = || {
+            let mut img = crate::imageio::Image::new(2, 1);
+            img.pixels = vec![Rgb::new(0.9, 0.3, 0.0), Rgb::new(0.2, 0.4, 0.6)];
+            img
+        };
+        // Bilinear (the default) and trilinear: the mean of R, G and B.
+        let mut img = image();
+        float_texels(&mut img, "bilinear");
+        assert!((img.pixels[0] - Rgb::splat(0.4)).abs().max_element() < 1e-6);
+        // Point and EWA read texels one by one: the first channel.
+        let mut img = image();
+        float_texels(&mut img, "ewa");
+        assert_eq!(img.pixels[1], Rgb::splat(0.2));
+        // An alpha channel other than all-one is what bilinear filtering reads.
+        let mut img = image();
+        img.channels.push(("A".into(), vec![0.25, 1.0]));
+        float_texels(&mut img, "bilinear");
+        assert_eq!(img.pixels, vec![Rgb::splat(0.25), Rgb::ONE]);
+    }
 }

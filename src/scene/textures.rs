@@ -141,6 +141,9 @@ pub enum TextureKind {
     ImageMap {
         /// The image.
         filename: PathBuf,
+        /// pbrt-v4's filter (`bilinear`, `point`, `trilinear`, `ewa`): which of an image's
+        /// channels a float texture reads depends on it.
+        filter: String,
         /// Multiplier.
         scale: f32,
         /// 1 - value.
@@ -298,10 +301,11 @@ impl TextureSettings {
                         format!("imagemap: cannot find image \"{name}\" (tried {})", shown(&filename)),
                     ));
                 }
-                p.get_one_string("filter", "bilinear")?;
+                let filter = p.get_one_string("filter", "bilinear")?.to_string();
                 p.get_one_float("maxanisotropy", 8.0)?;
                 TextureKind::ImageMap {
                     filename,
+                    filter,
                     scale: p.get_one_float("scale", 1.0)?,
                     invert: p.get_one_bool("invert", false)?,
                     wrap: p.get_one_string("wrap", "repeat")?.to_string(),

@@ -126,13 +126,17 @@ mod tests {
         // linear function are exact.
         let mut textures = Textures::default();
         textures.nodes.push(crate::textures::TexNode::Image {
-            image: image(2, 1, vec![Vec3::ZERO, Vec3::ONE]),
+            image: Arc::new(crate::textures::MipMap::new(
+                (*image(2, 1, vec![Vec3::ZERO, Vec3::ONE])).clone(),
+                Wrap::Clamp,
+                crate::textures::MipFilter::Bilinear,
+            )),
             mapping: crate::textures::TexMapping::Uv { s: Vec2::ONE, d: Vec2::ZERO },
             scale: 0.25,
             invert: false,
-            wrap: Wrap::Clamp,
             space: nimbus_parser::ColorSpace::Srgb,
             gray: true,
+            float: true,
         });
         let mut s = plane_hit();
         ShadingPerturbation::Bump(Tex::Node(0)).apply(&textures, &mut s, &PLANE);

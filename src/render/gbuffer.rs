@@ -105,7 +105,7 @@ fn visible_surface(
         let wo = -ray.d;
         let material = scene.surface_material(&mut hit, wo);
         let s = hit.surface;
-        let Some(bxdf) = material.bxdf::<Rgb>(&scene.textures, &scene.tex_context(&s), &mut ()) else {
+        let Some(bxdf) = material.bxdf::<Rgb>(&scene.textures, &scene.tex_context(&hit), &mut ()) else {
             medium = medium_after(scene, &hit, ray.d, medium);
             ray = hit.spawn_ray(ray.d);
             continue;

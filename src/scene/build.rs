@@ -44,7 +44,7 @@ use crate::media::{Density, Emission, Field, Medium};
 use crate::shapes::{BilinearMesh, Curve, CurveCommon, Cylinder, Disk, Mesh, Sphere, uniform_scale};
 use crate::spectra::RgbRole;
 use crate::spectra::{BlackbodyRgbTable, PixelSensor, SpectrumValue};
-use crate::textures::{Tex, TexContext, TexMapping, TexNode, Textures, Wrap};
+use crate::textures::{MipFilter, MipMap, Tex, TexContext, TexMapping, TexNode, Textures, Wrap};
 
 /// Command-line choices that override the scene file (pbrt-v4's flags).
 #[derive(Clone, Debug, Default)]
@@ -117,6 +117,8 @@ pub struct Scene {
     pub textures: Textures,
     /// The camera's footprint model, when a texture filters over it.
     pub footprint: Option<crate::camera::Footprint>,
+    /// A texture also reads the footprint in (u, v) (MIP-mapped images).
+    pub uv_footprint: bool,
     /// Lights (area lights first, one per emitting primitive).
     pub lights: Vec<Light>,
     /// Next-event light selection.
@@ -156,10 +158,15 @@ impl Scene {
     /// The texture lookup at surface hit `s`, with its screen-space footprint when a texture
     /// needs one.
     #[inline]
-    pub fn tex_context(&self, s: &crate::shapes::SurfaceHit) -> TexContext {
+    pub fn tex_context(&self, hit: &crate::accel::Hit) -> TexContext {
+        let s = &hit.surface;
         let mut ctx = TexContext::at(s.p, s.uv, s.n);
         if let Some(f) = &self.footprint {
             (ctx.dpdx, ctx.dpdy) = f.dp_dxy(s.p, s.n);
+            if self.uv_footprint {
+                let d = self.surfaces.derivatives(hit);
+                (ctx.duvdx, ctx.duvdy) = uv_footprint(d.dpdu, d.dpdv, ctx.dpdx, ctx.dpdy);
+            }
         }
         ctx
     }
@@ -168,8 +175,13 @@ impl Scene {
     /// shading normal and tangents replaced by the material's bump or normal map.
     #[inline]
     pub fn surface_material(&self, hit: &mut crate::accel::Hit, wo: Vec3) -> &Material {
-        let s = &mut hit.surface;
-        let id = resolve(&self.materials, hit.prim.material, &self.textures, &self.tex_context(s), wo);
+        let id = hit.prim.material;
+        // Only a mix reads a texture here (its amount); the footprint costs derivatives.
+        let id = if matches!(self.materials[id as usize], Material::Mix { .. }) {
+            resolve(&self.materials, id, &self.textures, &self.tex_context(hit), wo)
+        } else {
+            id
+        };
         let shading = &self.shading[id as usize];
         if !shading.is_none() {
             let d = self.surfaces.derivatives(hit);
@@ -389,10 +401,7 @@ impl TextureBuilder<'_> {
                 dir: texture_from_world.inverse().transform_vector3(Vec3::from(*dir)).normalize_or_zero(),
             },
             TextureKind::ImageMap { filename, filter, scale, invert, wrap, encoding, mapping: m } => {
-                let mut image = load_texture_image(filename, encoding).map_err(|m| err(&e.loc, m))?;
-                if t.value == TextureValue::Float {
-                    float_texels(&mut image, filter);
-                }
+                let image = load_texture_image(filename, encoding).map_err(|m| err(&e.loc, m))?;
                 let wrap = match wrap.as_str() {
                     "repeat" => Wrap::Repeat,
                     "black" => Wrap::Black,
@@ -405,14 +414,26 @@ impl TextureBuilder<'_> {
                     }
                 };
                 let gray = image.pixels.iter().all(|p| p.x == p.y && p.y == p.z);
+                let filter = match filter.as_str() {
+                    "point" => MipFilter::Point,
+                    "bilinear" => MipFilter::Bilinear,
+                    "trilinear" => MipFilter::Trilinear,
+                    "ewa" | "EWA" => MipFilter::Ewa,
+                    other => {
+                        return Err(err(
+                            &e.loc,
+                            format!("imagemap: unknown filter \"{other}\" (point, bilinear, trilinear or ewa)"),
+                        ));
+                    }
+                };
                 TexNode::Image {
-                    image: Arc::new(image),
+                    image: Arc::new(MipMap::new(image, wrap, filter)),
                     mapping: mapping(m),
                     scale: *scale,
                     invert: *invert,
-                    wrap,
                     space: cs,
                     gray,
+                    float: t.value == TextureValue::Float,
                 }
             }
             TextureKind::Unsupported(_) => TexNode::Scale {
@@ -427,22 +448,6 @@ impl TextureBuilder<'_> {
             TextureValue::Spectrum => self.spectrum_names.insert(t.name.clone(), id),
         };
         Ok(())
-    }
-}
-
-/// The value a float `imagemap` reads from each texel, as pbrt-v4's MIP map reads it (kept in
-/// all three channels): the `bilinear` and `trilinear` filters interpolate the alpha channel
-/// of an image that has one (not all 1) and otherwise the mean of R, G and B; `point` and
-/// `ewa` read the first channel, R.
-fn float_texels(image: &mut crate::imageio::Image, filter: &str) {
-    let alpha = image.alpha().map(<[f32]>::to_vec);
-    for (i, p) in image.pixels.iter_mut().enumerate() {
-        let v = match (filter, &alpha) {
-            ("point" | "ewa", _) => p.x,
-            (_, Some(a)) => a[i],
-            _ => (p.x + p.y + p.z) / 3.0,
-        };
-        *p = Rgb::splat(v);
     }
 }
 
@@ -711,6 +716,23 @@ fn material(
 }
 
 /// Emission of an area light: pbrt-v4's photometric normalisation and `power`.
+/// ∂(u, v)/∂x and ∂(u, v)/∂y from the screen-space footprint (`dpdx`, `dpdy`) and the
+/// surface's ∂p/∂u, ∂p/∂v, by least squares as pbrt-v4's `ComputeDifferentials` does
+/// (clamped to ±10⁸; zero where the parameterisation degenerates).
+fn uv_footprint(dpdu: Vec3, dpdv: Vec3, dpdx: Vec3, dpdy: Vec3) -> (Vec2, Vec2) {
+    let (a00, a01, a11) = (dpdu.dot(dpdu), dpdu.dot(dpdv), dpdv.dot(dpdv));
+    let inv_det = 1.0 / (a00 * a11 - a01 * a01);
+    let inv_det = if inv_det.is_finite() { inv_det } else { 0.0 };
+    let solve = |d: Vec3| {
+        let (b0, b1) = (dpdu.dot(d), dpdv.dot(d));
+        let du = (a11 * b0 - a01 * b1) * inv_det;
+        let dv = (a00 * b1 - a01 * b0) * inv_det;
+        let clamp = |v: f32| if v.is_finite() { v.clamp(-1e8, 1e8) } else { 0.0 };
+        Vec2::new(clamp(du), clamp(dv))
+    };
+    (solve(dpdx), solve(dpdy))
+}
+
 /// The factor pbrt-v4 scales an image infinite light by for an `illuminance` of `ev`: `ev`
 /// over its reference illuminance of the image as read from `path` (the light's own `scale`
 /// multiplies on top, as in pbrt-v4).
@@ -1593,6 +1615,7 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions) -> Result<Scene
         materials,
         shading,
         footprint,
+        uv_footprint: tb.textures.uses_uv_footprint(),
         textures: tb.textures,
         lights,
         light_sampler,
@@ -1618,28 +1641,20 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions) -> Result<Scene
 }
 
 #[cfg(test)]
-mod float_texel_tests {
+mod footprint_tests {
     use super::*;
 
     #[test]
-    fn float_imagemaps_read_the_channels_pbrt_v4_reads() {
-        let image = || {
-            let mut img = crate::imageio::Image::new(2, 1);
-            img.pixels = vec![Rgb::new(0.9, 0.3, 0.0), Rgb::new(0.2, 0.4, 0.6)];
-            img
-        };
-        // Bilinear (the default) and trilinear: the mean of R, G and B.
-        let mut img = image();
-        float_texels(&mut img, "bilinear");
-        assert!((img.pixels[0] - Rgb::splat(0.4)).abs().max_element() < 1e-6);
-        // Point and EWA read texels one by one: the first channel.
-        let mut img = image();
-        float_texels(&mut img, "ewa");
-        assert_eq!(img.pixels[1], Rgb::splat(0.2));
-        // An alpha channel other than all-one is what bilinear filtering reads.
-        let mut img = image();
-        img.channels.push(("A".into(), vec![0.25, 1.0]));
-        float_texels(&mut img, "bilinear");
-        assert_eq!(img.pixels, vec![Rgb::splat(0.25), Rgb::ONE]);
+    fn uv_footprints_solve_the_tangent_plane() {
+        // p = (2u, 3v, 0): a step (0.2, 0.3, 0) is (du, dv) = (0.1, 0.1); one along the
+        // normal has no (u, v) component; a degenerate parameterisation gives zero.
+        let (dx, dy) =
+            uv_footprint(Vec3::new(2.0, 0.0, 0.0), Vec3::new(0.0, 3.0, 0.0), Vec3::new(0.2, 0.3, 0.0), Vec3::Z);
+        assert!((dx - Vec2::new(0.1, 0.1)).length() < 1e-6 && dy.length() < 1e-6, "{dx} {dy}");
+        // A sheared parameterisation: p = u·(1, 0, 0) + v·(1, 1, 0).
+        let (dx, _) = uv_footprint(Vec3::X, Vec3::new(1.0, 1.0, 0.0), Vec3::new(0.0, 0.5, 0.0), Vec3::ZERO);
+        assert!((dx - Vec2::new(-0.5, 0.5)).length() < 1e-6, "{dx}");
+        let (dx, dy) = uv_footprint(Vec3::X, Vec3::X, Vec3::ONE, Vec3::ONE);
+        assert!(dx == Vec2::ZERO && dy == Vec2::ZERO);
     }
 }

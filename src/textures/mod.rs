@@ -5,6 +5,10 @@
 //! texels become spectra (for spectral transport) only after filtering, as in pbrt-v4's
 //! `RGBImageTexture`.
 
+mod mipmap;
+
+pub use mipmap::{MipFilter, MipMap, MipSample};
+
 use std::f32::consts::PI;
 use std::sync::Arc;
 
@@ -40,12 +44,16 @@ pub struct TexContext {
     pub dpdx: Vec3,
     /// See `dpdx`.
     pub dpdy: Vec3,
+    /// The footprint in (u, v): ∂(u, v)/∂x (zero without a footprint).
+    pub duvdx: Vec2,
+    /// ∂(u, v)/∂y.
+    pub duvdy: Vec2,
 }
 
 impl TexContext {
     /// A lookup at a point without a footprint.
     pub fn at(p: Vec3, uv: Vec2, n: Vec3) -> TexContext {
-        TexContext { p, uv, n, dpdx: Vec3::ZERO, dpdy: Vec3::ZERO }
+        TexContext { p, uv, n, dpdx: Vec3::ZERO, dpdy: Vec3::ZERO, duvdx: Vec2::ZERO, duvdy: Vec2::ZERO }
     }
 }
 
@@ -220,20 +228,20 @@ pub enum TexNode {
     },
     /// A bilinearly filtered image.
     Image {
-        /// Pixels (linear).
-        image: Arc<Image>,
+        /// Pixels (linear) and their MIP pyramid.
+        image: Arc<MipMap>,
         /// Mapping.
         mapping: TexMapping,
         /// Multiplier.
         scale: f32,
         /// 1 - value.
         invert: bool,
-        /// Out-of-range behaviour.
-        wrap: Wrap,
         /// Color space of the texels.
         space: ColorSpace,
         /// True when every texel is gray (RGB transport then carries it exactly).
         gray: bool,
+        /// A float texture: its lookups read what pbrt-v4 reads for one ([`MipSample::float`]).
+        float: bool,
     },
 }
 
@@ -256,8 +264,15 @@ impl Textures {
                     | TexNode::Windy { .. }
                     | TexNode::Marble { .. }
                     | TexNode::Checkerboard3D { .. }
+                    | TexNode::Image { .. }
             )
         })
+    }
+
+    /// Whether any texture reads a footprint in (u, v) (MIP-mapped images), which costs the
+    /// surface's derivatives at each hit.
+    pub fn uses_uv_footprint(&self) -> bool {
+        self.nodes.iter().any(|n| matches!(n, TexNode::Image { image, .. } if image.has_levels()))
     }
 
     /// Evaluates a spectrum texture input in the path's channels; image texels are read as
@@ -377,11 +392,17 @@ impl Textures {
                 let vb = if amount != 1.0 { self.eval(*b, ctx, lambda, role) } else { C::ZERO };
                 va * amount + vb * (1.0 - amount)
             }
-            TexNode::Image { image, mapping, scale, invert, wrap, space, .. } => {
+            TexNode::Image { image, mapping, scale, invert, space, float, .. } => {
                 let mut st = mapping.map(ctx);
                 // pbrt-v4 flips t so that images are not upside down.
                 st.y = 1.0 - st.y;
-                let v = bilerp(image, st, *wrap) * *scale;
+                // The (s, t) footprint of the uv mapping (others: none, the finest level).
+                let (dst0, dst1) = match mapping {
+                    TexMapping::Uv { s, .. } => (*s * ctx.duvdx, *s * ctx.duvdy),
+                    _ => (Vec2::ZERO, Vec2::ZERO),
+                };
+                let sample = image.lookup(st, dst0, dst1);
+                let v = if *float { Rgb::splat(sample.float()) } else { sample.rgb } * *scale;
                 let v = if *invert { (Rgb::ONE - v).max(Rgb::ZERO) } else { v.max(Rgb::ZERO) };
                 C::from_rgb(v, role, *space, lambda)
             }
@@ -426,7 +447,7 @@ fn in_dot(st: Vec2) -> bool {
     (st - Vec2::new(s_center, t_center)).length_squared() < radius * radius
 }
 
-fn texel(image: &Image, x: i64, y: i64, wrap: Wrap) -> Rgb {
+pub(crate) fn texel(image: &Image, x: i64, y: i64, wrap: Wrap) -> Rgb {
     let (w, h) = (image.width as i64, image.height as i64);
     let (x, y) = match wrap {
         Wrap::Repeat => (x.rem_euclid(w), y.rem_euclid(h)),
@@ -540,13 +561,13 @@ mod tests {
         img.pixels = vec![Rgb::ZERO, Rgb::ONE];
         let mut t = Textures::default();
         t.nodes.push(TexNode::Image {
-            image: Arc::new(img),
+            image: Arc::new(MipMap::new(img, Wrap::Clamp, MipFilter::Bilinear)),
             mapping: TexMapping::Uv { s: Vec2::ONE, d: Vec2::ZERO },
             scale: 1.0,
             invert: false,
-            wrap: Wrap::Clamp,
             space: ColorSpace::Srgb,
             gray: true,
+            float: false,
         });
         let v = t.eval_rgb(Tex::Node(0), &TexContext::at(Vec3::ZERO, Vec2::new(0.5, 0.5), Vec3::Z));
         assert!((v.x - 0.5).abs() < 1e-6);

@@ -36,6 +36,17 @@ impl Image {
         self.channels.iter().find(|(n, _)| n == "A").map(|(_, v)| v.as_slice())
     }
 
+    /// The image whose pixel (x, y) is `f(x, y)`.
+    pub fn from_fn(width: usize, height: usize, f: impl Fn(usize, usize) -> Rgb) -> Image {
+        let mut img = Image::new(width, height);
+        for y in 0..height {
+            for x in 0..width {
+                img.pixels[y * width + x] = f(x, y);
+            }
+        }
+        img
+    }
+
     /// A black image.
     pub fn new(width: usize, height: usize) -> Image {
         Image {

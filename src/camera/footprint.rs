@@ -128,7 +128,7 @@ fn rotate_from_to(from: Vec3, to: Vec3) -> Mat3 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::camera::{CameraSettings, Projection};
+    use crate::scene::camera::CameraSettings;
     use nimbus_parser::transform::look_at;
 
     #[test]
@@ -137,15 +137,7 @@ mod tests {
         // between neighbouring pixels is at the film's corners, (1, 1, 1)/√3, where a step of
         // 0.02 in x turns the direction by 0.02·√(2/3)/√3. On a plane facing the camera at
         // distance 5 the footprint is that times 5 times max(1/8, 1/√16).
-        let settings = CameraSettings {
-            projection: Projection::Perspective { fov: 90.0 },
-            lens_radius: 0.0,
-            focal_distance: 1e6,
-            screen_window: None,
-            frame_aspect_ratio: None,
-            shutter_open: 0.0,
-            shutter_close: 1.0,
-        };
+        let settings = CameraSettings::perspective(90.0);
         let world_from_camera = look_at([0.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, 1.0, 0.0]).unwrap().inverse();
         let camera = Camera::new(&settings, &world_from_camera, [100, 100], 35.0).unwrap();
         let f = Footprint::new(&camera, [100, 100], 16);

@@ -210,15 +210,7 @@ mod tests {
     use nimbus_parser::transform::look_at;
 
     fn settings(fov: f32) -> CameraSettings {
-        CameraSettings {
-            projection: Projection::Perspective { fov },
-            lens_radius: 0.0,
-            focal_distance: 1e6,
-            screen_window: None,
-            frame_aspect_ratio: None,
-            shutter_open: 0.0,
-            shutter_close: 1.0,
-        }
+        CameraSettings::perspective(fov)
     }
 
     #[test]

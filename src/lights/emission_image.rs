@@ -84,13 +84,7 @@ mod tests {
     use super::*;
 
     fn image(w: usize, h: usize, f: impl Fn(usize, usize) -> f32) -> EmissionImage {
-        let mut img = Image::new(w, h);
-        for y in 0..h {
-            for x in 0..w {
-                img.pixels[y * w + x] = Rgb::splat(f(x, y));
-            }
-        }
-        EmissionImage::new(&img, ColorSpace::Srgb).unwrap()
+        EmissionImage::new(&Image::from_fn(w, h, |x, y| Rgb::splat(f(x, y))), ColorSpace::Srgb).unwrap()
     }
 
     #[test]

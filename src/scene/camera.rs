@@ -171,6 +171,20 @@ pub struct CameraSettings {
 }
 
 impl CameraSettings {
+    /// A pinhole perspective camera of `fov` degrees with pbrt-v4's other defaults (the screen
+    /// window from the film, the shutter open over [0, 1]).
+    pub fn perspective(fov: f32) -> CameraSettings {
+        CameraSettings {
+            projection: Projection::Perspective { fov },
+            lens_radius: 0.0,
+            focal_distance: 1e6,
+            screen_window: None,
+            frame_aspect_ratio: None,
+            shutter_open: 0.0,
+            shutter_close: 1.0,
+        }
+    }
+
     /// pbrt-v4's warning for a realistic camera whose `aperturediameter` is wider than its
     /// lens's stop (which then opens only that far).
     pub fn aperture_warning(&self, camera: &CameraEntity) -> Option<Warning> {

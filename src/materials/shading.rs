@@ -11,10 +11,7 @@ use crate::math::Frame;
 use crate::shapes::{SurfaceDerivatives, SurfaceHit};
 use crate::textures::{Tex, TexContext, Textures, Wrap, bilerp};
 
-/// pbrt-v4's finite-difference step in u and v when a ray carries no differentials. nimbus
-/// traces no ray differentials, so every bump uses it (pbrt-v4 takes half the pixel's
-/// footprint in uv at camera hits: the derivative of a smooth displacement is the same; an
-/// image texture with detail below a pixel is not averaged as pbrt-v4 averages it).
+/// pbrt-v4's finite-difference step in u and v where a hit has no footprint in (u, v).
 const BUMP_DELTA: f32 = 0.0005;
 
 /// What a material does to the shading geometry.
@@ -37,12 +34,13 @@ impl ShadingPerturbation {
     }
 
     /// Replaces the hit's shading normal and tangent by the perturbed ones, given the
-    /// surface's derivatives there. Degenerate parameterisations (no ∂p/∂u or ∂p/∂v: a bump
-    /// or a map has no frame) keep the shape's.
-    pub fn apply(&self, textures: &Textures, s: &mut SurfaceHit, d: &SurfaceDerivatives) {
+    /// surface's derivatives there and its texture lookup `ctx` (with its footprint, which
+    /// sets a bump's finite-difference steps). Degenerate parameterisations (no ∂p/∂u or
+    /// ∂p/∂v: a bump or a map has no frame) keep the shape's.
+    pub fn apply(&self, textures: &Textures, s: &mut SurfaceHit, d: &SurfaceDerivatives, ctx: &TexContext) {
         let (dpdu, dpdv) = match self {
             ShadingPerturbation::None => return,
-            ShadingPerturbation::Bump(displacement) => bump(textures, *displacement, s, d),
+            ShadingPerturbation::Bump(displacement) => bump(textures, *displacement, s, d, ctx),
             ShadingPerturbation::NormalMap(map) => normal_map(map, s, d),
         };
         // pbrt-v4's SetShadingGeometry(normalize(∂p/∂u × ∂p/∂v), ..., false): the shading
@@ -57,10 +55,21 @@ impl ShadingPerturbation {
 }
 
 /// pbrt-v4's `BumpMap`: p'(u, v) = p + d(u, v)·n, differentiated by forward differences of the
-/// displacement and the normal's own derivatives.
-fn bump(textures: &Textures, displacement: Tex, s: &SurfaceHit, d: &SurfaceDerivatives) -> (Vec3, Vec3) {
-    let eval = |p: Vec3, uv: Vec2| textures.eval_float(displacement, &TexContext::at(p, uv, s.n));
-    let (du, dv) = (BUMP_DELTA, BUMP_DELTA);
+/// displacement over half the hit's (u, v) footprint (0.0005 without one) and the normal's
+/// own derivatives; the shifted lookups keep the footprint.
+fn bump(
+    textures: &Textures,
+    displacement: Tex,
+    s: &SurfaceHit,
+    d: &SurfaceDerivatives,
+    ctx: &TexContext,
+) -> (Vec3, Vec3) {
+    let eval = |p: Vec3, uv: Vec2| textures.eval_float(displacement, &TexContext { p, uv, ..*ctx });
+    let step = |a: f32, b: f32| {
+        let h = 0.5 * (a.abs() + b.abs());
+        if h == 0.0 { BUMP_DELTA } else { h }
+    };
+    let (du, dv) = (step(ctx.duvdx.x, ctx.duvdy.x), step(ctx.duvdx.y, ctx.duvdy.y));
     let disp = eval(s.p, s.uv);
     let u_displace = eval(s.p + du * d.dpdu, s.uv + Vec2::new(du, 0.0));
     let v_displace = eval(s.p + dv * d.dpdv, s.uv + Vec2::new(0.0, dv));
@@ -139,14 +148,25 @@ mod tests {
             float: true,
         });
         let mut s = plane_hit();
-        ShadingPerturbation::Bump(Tex::Node(0)).apply(&textures, &mut s, &PLANE);
+        let ctx = TexContext::at(s.p, s.uv, s.n);
+        ShadingPerturbation::Bump(Tex::Node(0)).apply(&textures, &mut s, &PLANE, &ctx);
         let expected = Vec3::new(-0.5, 0.0, 1.0).normalize();
         assert!((s.ns - expected).length() < 1e-3, "{:?}", s.ns);
         assert!(s.dpdu.dot(s.ns).abs() < 1e-5);
         // A constant displacement on a plane changes nothing.
         let mut s = plane_hit();
-        ShadingPerturbation::Bump(constant(0.25)).apply(&textures, &mut s, &PLANE);
+        let ctx = TexContext::at(s.p, s.uv, s.n);
+        ShadingPerturbation::Bump(constant(0.25)).apply(&textures, &mut s, &PLANE, &ctx);
         assert!((s.ns - Vec3::Z).length() < 1e-6);
+        // With a footprint the step is half of it in (u, v), as pbrt-v4 takes it: at u = 0.7
+        // a step of 0.1 crosses the last texel centre, where the ramp stops, and sees half
+        // the slope (0.25 instead of 0.5).
+        let mut s = SurfaceHit { p: Vec3::new(0.7, 0.2, 0.0), uv: Vec2::new(0.7, 0.2), ..plane_hit() };
+        let ctx =
+            TexContext { duvdx: Vec2::new(0.1, 0.0), duvdy: Vec2::new(0.1, 0.0), ..TexContext::at(s.p, s.uv, s.n) };
+        ShadingPerturbation::Bump(Tex::Node(0)).apply(&textures, &mut s, &PLANE, &ctx);
+        let expected = Vec3::new(-0.25, 0.0, 1.0).normalize();
+        assert!((s.ns - expected).length() < 1e-3, "{:?}", s.ns);
     }
 
     #[test]
@@ -158,7 +178,8 @@ mod tests {
         let hit = sphere.hit(1.0, p);
         let d = sphere.derivatives(&hit);
         let mut s = hit;
-        ShadingPerturbation::Bump(constant(0.3)).apply(&Textures::default(), &mut s, &d);
+        let ctx = TexContext::at(s.p, s.uv, s.n);
+        ShadingPerturbation::Bump(constant(0.3)).apply(&Textures::default(), &mut s, &d, &ctx);
         assert!((s.ns - hit.ns).length() < 1e-4, "{:?} vs {:?}", s.ns, hit.ns);
         // ∂n/∂u on a unit sphere is ∂p/∂u (n = p): the tangents scale by 1 + d.
         assert!((s.dpdu.length() / hit.dpdu.length() - 1.3).abs() < 1e-3);
@@ -173,6 +194,7 @@ mod tests {
             &Textures::default(),
             &mut s,
             &PLANE,
+            &TexContext::at(Vec3::ZERO, Vec2::ZERO, Vec3::Z),
         );
         assert!((s.ns - Vec3::Z).length() < 1e-6, "{:?}", s.ns);
         let tilt = Vec3::new(0.6, 0.0, 0.8);
@@ -181,6 +203,7 @@ mod tests {
             &Textures::default(),
             &mut s,
             &PLANE,
+            &TexContext::at(Vec3::ZERO, Vec2::ZERO, Vec3::Z),
         );
         assert!((s.ns - tilt).length() < 1e-5, "{:?}", s.ns);
         assert!((s.dpdu.length() - 1.0).abs() < 1e-5 && s.dpdu.dot(s.ns).abs() < 1e-5);

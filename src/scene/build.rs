@@ -160,13 +160,24 @@ impl Scene {
     #[inline]
     pub fn tex_context(&self, hit: &crate::accel::Hit) -> TexContext {
         let s = &hit.surface;
+        match &self.footprint {
+            Some(_) if self.uv_footprint => self.footprint_context(hit, &self.surfaces.derivatives(hit)),
+            Some(f) => {
+                let (dpdx, dpdy) = f.dp_dxy(s.p, s.n);
+                TexContext { dpdx, dpdy, ..TexContext::at(s.p, s.uv, s.n) }
+            }
+            None => TexContext::at(s.p, s.uv, s.n),
+        }
+    }
+
+    /// The lookup at `hit` with its full footprint, from the surface derivatives `d`
+    /// already at hand (bump mapping steps by it).
+    fn footprint_context(&self, hit: &crate::accel::Hit, d: &crate::shapes::SurfaceDerivatives) -> TexContext {
+        let s = &hit.surface;
         let mut ctx = TexContext::at(s.p, s.uv, s.n);
         if let Some(f) = &self.footprint {
             (ctx.dpdx, ctx.dpdy) = f.dp_dxy(s.p, s.n);
-            if self.uv_footprint {
-                let d = self.surfaces.derivatives(hit);
-                (ctx.duvdx, ctx.duvdy) = uv_footprint(d.dpdu, d.dpdv, ctx.dpdx, ctx.dpdy);
-            }
+            (ctx.duvdx, ctx.duvdy) = uv_footprint(d.dpdu, d.dpdv, ctx.dpdx, ctx.dpdy);
         }
         ctx
     }
@@ -185,7 +196,8 @@ impl Scene {
         let shading = &self.shading[id as usize];
         if !shading.is_none() {
             let d = self.surfaces.derivatives(hit);
-            shading.apply(&self.textures, &mut hit.surface, &d);
+            let ctx = self.footprint_context(hit, &d);
+            shading.apply(&self.textures, &mut hit.surface, &d, &ctx);
         }
         &self.materials[id as usize]
     }
@@ -1599,9 +1611,8 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions) -> Result<Scene
         _ => LightSamplerKind::Bvh,
     };
     let light_sampler = LightSampler::new(&lights, &surfaces.shapes, &sphere, kind);
-    let footprint = tb
-        .textures
-        .uses_footprint()
+    let bumps = shading.iter().any(|s| matches!(s, ShadingPerturbation::Bump(_)));
+    let footprint = (tb.textures.uses_footprint() || bumps)
         .then(|| crate::camera::Footprint::new(&camera, film.resolution, sampler.pixel_samples));
     Ok(Scene {
         camera,

@@ -91,6 +91,36 @@ pub enum TexMapping {
 }
 
 impl TexMapping {
+    /// The footprint of `ctx` in (s, t): (∂s/∂x, ∂t/∂x) and (∂s/∂y, ∂t/∂y), as pbrt-v4's
+    /// mappings compute them. pbrt-v4's spherical mapping pairs s (from θ) with the derivative
+    /// of φ and t with that of θ; nimbus keeps that pairing, as it decides pbrt-v4's filtering.
+    pub fn footprint(&self, ctx: &TexContext) -> (Vec2, Vec2) {
+        let along = |dsdp: Vec3, dtdp: Vec3, m: &Affine3A| {
+            let (dx, dy) = (m.transform_vector3(ctx.dpdx), m.transform_vector3(ctx.dpdy));
+            (Vec2::new(dsdp.dot(dx), dtdp.dot(dx)), Vec2::new(dsdp.dot(dy), dtdp.dot(dy)))
+        };
+        let finite = |(a, b): (Vec2, Vec2)| {
+            if a.is_finite() && b.is_finite() { (a, b) } else { (Vec2::ZERO, Vec2::ZERO) }
+        };
+        match self {
+            TexMapping::Uv { s, .. } => (*s * ctx.duvdx, *s * ctx.duvdy),
+            TexMapping::Spherical { texture_from_world } => {
+                let p = texture_from_world.transform_point3(ctx.p);
+                let x2y2 = p.x * p.x + p.y * p.y;
+                let r = x2y2.sqrt();
+                let dsdp = Vec3::new(-p.y, p.x, 0.0) / (2.0 * PI * x2y2);
+                let dtdp = Vec3::new(p.x * p.z / r, p.y * p.z / r, -r) / (PI * (x2y2 + p.z * p.z));
+                finite(along(dsdp, dtdp, texture_from_world))
+            }
+            TexMapping::Cylindrical { texture_from_world } => {
+                let p = texture_from_world.transform_point3(ctx.p);
+                let dsdp = Vec3::new(-p.y, p.x, 0.0) / (2.0 * PI * (p.x * p.x + p.y * p.y));
+                finite(along(dsdp, Vec3::Z, texture_from_world))
+            }
+            TexMapping::Planar { texture_from_world, vs, vt, .. } => along(*vs, *vt, texture_from_world),
+        }
+    }
+
     /// (s, t) at `ctx`.
     pub fn map(&self, ctx: &TexContext) -> Vec2 {
         match self {
@@ -264,15 +294,19 @@ impl Textures {
                     | TexNode::Windy { .. }
                     | TexNode::Marble { .. }
                     | TexNode::Checkerboard3D { .. }
+                    | TexNode::Checkerboard { .. }
                     | TexNode::Image { .. }
             )
         })
     }
 
-    /// Whether any texture reads a footprint in (u, v) (MIP-mapped images), which costs the
-    /// surface's derivatives at each hit.
+    /// Whether any texture reads a footprint in (u, v) (MIP-mapped images, uv-mapped
+    /// checkerboards), which costs the surface's derivatives at each hit.
     pub fn uses_uv_footprint(&self) -> bool {
-        self.nodes.iter().any(|n| matches!(n, TexNode::Image { image, .. } if image.has_levels()))
+        self.nodes.iter().any(|n| {
+            matches!(n, TexNode::Image { image, .. } if image.has_levels())
+                || matches!(n, TexNode::Checkerboard { mapping: TexMapping::Uv { .. }, .. })
+        })
     }
 
     /// Evaluates a spectrum texture input in the path's channels; image texels are read as
@@ -335,12 +369,15 @@ impl Textures {
                 va * (1.0 - t) + vb * t
             }
             TexNode::Checkerboard { a, b, mapping } => {
+                // pbrt-v4's filtered checkerboard over 1.5 × the (s, t) footprint (point
+                // sampled without one, and for mappings other than uv).
                 let st = mapping.map(ctx);
-                if (st.x.floor() as i64 + st.y.floor() as i64) % 2 == 0 {
-                    self.eval(*a, ctx, lambda, role)
-                } else {
-                    self.eval(*b, ctx, lambda, role)
-                }
+                let (dst0, dst1) = mapping.footprint(ctx);
+                let w = 1.5 * dst0.abs().max(dst1.abs());
+                let t = 0.5 - 0.5 * filtered_square(st.x, w.x) * filtered_square(st.y, w.y);
+                let va = if t != 1.0 { self.eval(*a, ctx, lambda, role) } else { C::ZERO };
+                let vb = if t != 0.0 { self.eval(*b, ctx, lambda, role) } else { C::ZERO };
+                va * (1.0 - t) + vb * t
             }
             TexNode::Checkerboard3D { a, b, texture_from_world } => {
                 // pbrt-v4's filtered checkerboard: the product of the three axes' box-filtered
@@ -396,11 +433,7 @@ impl Textures {
                 let mut st = mapping.map(ctx);
                 // pbrt-v4 flips t so that images are not upside down.
                 st.y = 1.0 - st.y;
-                // The (s, t) footprint of the uv mapping (others: none, the finest level).
-                let (dst0, dst1) = match mapping {
-                    TexMapping::Uv { s, .. } => (*s * ctx.duvdx, *s * ctx.duvdy),
-                    _ => (Vec2::ZERO, Vec2::ZERO),
-                };
+                let (dst0, dst1) = mapping.footprint(ctx);
                 let sample = image.lookup(st, dst0, dst1);
                 let v = if *float { Rgb::splat(sample.float()) } else { sample.rgb } * *scale;
                 let v = if *invert { (Rgb::ONE - v).max(Rgb::ZERO) } else { v.max(Rgb::ZERO) };
@@ -519,6 +552,34 @@ mod tests {
         assert_eq!(t.eval_rgb(Tex::Node(0), &at(0.25, 0.25)), Rgb::ONE);
         assert_eq!(t.eval_rgb(Tex::Node(0), &at(0.75, 0.25)), Rgb::ZERO);
         assert_eq!(t.eval_rgb(Tex::Node(1), &at(0.25, 0.25)), Rgb::splat(0.75));
+        // With a (u, v) footprint the squares blur as pbrt-v4 blurs them: gray when it spans
+        // many squares, a linear blend across an edge (u = 0.5 is one at scale 2).
+        let wide = TexContext { duvdx: Vec2::splat(5.0), ..at(0.25, 0.25) };
+        assert!((t.eval_rgb(Tex::Node(0), &wide).x - 0.5).abs() < 0.01);
+        let edge = TexContext { duvdx: Vec2::new(0.01, 0.0), ..at(0.5, 0.25) };
+        assert!((t.eval_rgb(Tex::Node(0), &edge).x - 0.5).abs() < 1e-3);
+    }
+
+    #[test]
+    fn mappings_carry_the_footprint_into_s_and_t() {
+        let ctx = TexContext {
+            dpdx: Vec3::new(0.1, 0.0, 0.0),
+            dpdy: Vec3::new(0.0, 0.0, 0.2),
+            ..TexContext::at(Vec3::new(1.0, 0.0, 0.5), Vec2::ZERO, Vec3::Z)
+        };
+        let planar =
+            TexMapping::Planar { texture_from_world: Affine3A::IDENTITY, vs: Vec3::X, vt: Vec3::Z, d: Vec2::ZERO };
+        assert_eq!(planar.footprint(&ctx), (Vec2::new(0.1, 0.0), Vec2::new(0.0, 0.2)));
+        // Cylindrical: φ/2π turns by 1/(2π r) per unit along the circle, t is z.
+        let cylinder = TexMapping::Cylindrical { texture_from_world: Affine3A::IDENTITY };
+        let (dx, dy) = cylinder.footprint(&ctx);
+        assert!(dx.abs_diff_eq(Vec2::ZERO, 1e-7) && dy.abs_diff_eq(Vec2::new(0.0, 0.2), 1e-7), "{dx} {dy}");
+        let along_circle = TexContext { dpdx: Vec3::new(0.0, 0.1, 0.0), ..ctx };
+        let (dx, _) = cylinder.footprint(&along_circle);
+        assert!((dx.x - 0.1 / (2.0 * PI)).abs() < 1e-6, "{dx}");
+        // On the axis the derivatives are infinite: no footprint rather than NaN.
+        let on_axis = TexContext { p: Vec3::new(0.0, 0.0, 0.5), ..ctx };
+        assert_eq!(cylinder.footprint(&on_axis), (Vec2::ZERO, Vec2::ZERO));
     }
 
     /// pbrt-v4's 3D checkerboard: the parity of ⌊x⌋ + ⌊y⌋ + ⌊z⌋ of the texture-space point

@@ -103,9 +103,9 @@ fn visible_surface(
         }
         let mut hit = hit?;
         let wo = -ray.d;
-        let material = scene.surface_material(&mut hit, wo);
+        let (material, tex_ctx) = scene.surface_material(&mut hit, wo);
         let s = hit.surface;
-        let Some(bxdf) = material.bxdf::<Rgb>(&scene.textures, &scene.tex_context(&hit), &mut ()) else {
+        let Some(bxdf) = material.bxdf::<Rgb>(&scene.textures, &tex_ctx, &mut ()) else {
             medium = medium_after(scene, &hit, ray.d, medium);
             ray = hit.spawn_ray(ray.d);
             continue;

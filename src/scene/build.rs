@@ -155,51 +155,34 @@ impl Scene {
         self.camera.moves() || self.surfaces.instances.iter().any(|i| i.motion.is_some())
     }
 
-    /// The texture lookup at surface hit `s`, with its screen-space footprint when a texture
-    /// needs one.
+    /// The material that scatters at `hit` seen from `wo` (`mix` resolved), with the hit's
+    /// shading normal and tangents replaced by the material's bump or normal map, and the
+    /// texture lookup there: its screen-space footprint when a texture or a bump needs one
+    /// (computed once per hit, with the surface derivatives at most once).
     #[inline]
-    pub fn tex_context(&self, hit: &crate::accel::Hit) -> TexContext {
-        let s = &hit.surface;
-        match &self.footprint {
-            Some(_) if self.uv_footprint => self.footprint_context(hit, &self.surfaces.derivatives(hit)),
-            Some(f) => {
-                let (dpdx, dpdy) = f.dp_dxy(s.p, s.n);
-                TexContext { dpdx, dpdy, ..TexContext::at(s.p, s.uv, s.n) }
-            }
-            None => TexContext::at(s.p, s.uv, s.n),
-        }
-    }
-
-    /// The lookup at `hit` with its full footprint, from the surface derivatives `d`
-    /// already at hand (bump mapping steps by it).
-    fn footprint_context(&self, hit: &crate::accel::Hit, d: &crate::shapes::SurfaceDerivatives) -> TexContext {
+    pub fn surface_material(&self, hit: &mut crate::accel::Hit, wo: Vec3) -> (&Material, TexContext) {
         let s = &hit.surface;
         let mut ctx = TexContext::at(s.p, s.uv, s.n);
+        let mut derivatives = None;
         if let Some(f) = &self.footprint {
             (ctx.dpdx, ctx.dpdy) = f.dp_dxy(s.p, s.n);
-            (ctx.duvdx, ctx.duvdy) = uv_footprint(d.dpdu, d.dpdv, ctx.dpdx, ctx.dpdy);
+            if self.uv_footprint {
+                let d = self.surfaces.derivatives(hit);
+                (ctx.duvdx, ctx.duvdy) = uv_footprint(d.dpdu, d.dpdv, ctx.dpdx, ctx.dpdy);
+                derivatives = Some(d);
+            }
         }
-        ctx
-    }
-
-    /// The material that scatters at `hit` seen from `wo` (`mix` resolved), with the hit's
-    /// shading normal and tangents replaced by the material's bump or normal map.
-    #[inline]
-    pub fn surface_material(&self, hit: &mut crate::accel::Hit, wo: Vec3) -> &Material {
-        let id = hit.prim.material;
-        // Only a mix reads a texture here (its amount); the footprint costs derivatives.
-        let id = if matches!(self.materials[id as usize], Material::Mix { .. }) {
-            resolve(&self.materials, id, &self.textures, &self.tex_context(hit), wo)
-        } else {
-            id
-        };
+        let id = resolve(&self.materials, hit.prim.material, &self.textures, &ctx, wo);
         let shading = &self.shading[id as usize];
         if !shading.is_none() {
-            let d = self.surfaces.derivatives(hit);
-            let ctx = self.footprint_context(hit, &d);
+            let d = derivatives.unwrap_or_else(|| self.surfaces.derivatives(hit));
+            // A bump steps by the (u, v) footprint even where no texture reads it.
+            if self.footprint.is_some() && !self.uv_footprint {
+                (ctx.duvdx, ctx.duvdy) = uv_footprint(d.dpdu, d.dpdv, ctx.dpdx, ctx.dpdy);
+            }
             shading.apply(&self.textures, &mut hit.surface, &d, &ctx);
         }
-        &self.materials[id as usize]
+        (&self.materials[id as usize], ctx)
     }
 
     /// The matrix from what the film accumulates to output RGB: for RGB transport samples are

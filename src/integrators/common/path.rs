@@ -380,9 +380,8 @@ pub fn trace_path<C: Channels, O: PathObserver<C>>(
             }
         }
 
-        let material = scene.surface_material(&mut hit, wo);
+        let (material, tex_ctx) = scene.surface_material(&mut hit, wo);
         let s = &hit.surface;
-        let tex_ctx = scene.tex_context(&hit);
         let Some(mut bxdf) = material.bxdf::<C>(&scene.textures, &tex_ctx, lambda) else {
             // An interface: cross it without counting a bounce.
             medium = medium_after(scene, &hit, ray.d, medium);

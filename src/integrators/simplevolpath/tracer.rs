@@ -213,9 +213,8 @@ pub fn trace<C: Channels>(
                         &scene.surfaces,
                     ));
                 }
-                let material = scene.surface_material(&mut hit, wo);
+                let (material, tex_ctx) = scene.surface_material(&mut hit, wo);
                 let s = &hit.surface;
-                let tex_ctx = scene.tex_context(&hit);
                 let Some(b) = material.bxdf::<C>(&scene.textures, &tex_ctx, lambda) else {
                     // An emissive `interface`: its light is counted; the ray goes on.
                     let medium = medium_after(scene, &hit, isect.ray.d, isect.medium);

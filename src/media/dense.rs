@@ -75,20 +75,31 @@ impl<T: GridValue> DenseGrid<T> {
         (pf.as_ivec3(), ps - pf)
     }
 
+    /// The indices into [`DenseGrid::values`] of the eight samples of the cell whose lowest
+    /// corner is `c`, x fastest, then y, then z; `None` for a cell with a corner outside the
+    /// grid (those samples are zero).
+    #[inline]
+    pub fn corner_indices(&self, c: IVec3) -> Option<[usize; 8]> {
+        let n = self.n.as_ivec3();
+        if !(c.cmpge(IVec3::ZERO).all() && (c + IVec3::ONE).cmplt(n).all()) {
+            return None;
+        }
+        let (dx, dy) = (1, n.x as usize);
+        let dz = dy * n.y as usize;
+        let b = (c.z as usize * n.y as usize + c.y as usize) * n.x as usize + c.x as usize;
+        Some([b, b + dx, b + dy, b + dx + dy, b + dz, b + dx + dz, b + dy + dz, b + dx + dy + dz])
+    }
+
     /// The eight samples of the cell whose lowest corner is `c` (zero outside), mapped by `f`,
     /// x fastest, then y, then z.
     #[inline]
     pub fn corners<U>(&self, c: IVec3, f: impl Fn(T) -> U) -> [U; 8] {
-        let n = self.n.as_ivec3();
         // Written out rather than through `array::from_fn`, whose per-element closure the
         // compiler left uninlined here: a spectral rgbgrid lookup converts 8 corners per grid.
-        if c.cmpge(IVec3::ZERO).all() && (c + IVec3::ONE).cmplt(n).all() {
-            // A cell inside the grid (nearly every lookup): one index, fixed offsets.
-            let (dx, dy) = (1, n.x as usize);
-            let dz = dy * n.y as usize;
-            let b = (c.z as usize * n.y as usize + c.y as usize) * n.x as usize + c.x as usize;
-            let v = &self.values[b..=b + dx + dy + dz];
-            [f(v[0]), f(v[dx]), f(v[dy]), f(v[dx + dy]), f(v[dz]), f(v[dx + dz]), f(v[dy + dz]), f(v[dx + dy + dz])]
+        if let Some(i) = self.corner_indices(c) {
+            // A cell inside the grid (nearly every lookup).
+            let v = &self.values;
+            [f(v[i[0]]), f(v[i[1]]), f(v[i[2]]), f(v[i[3]]), f(v[i[4]]), f(v[i[5]]), f(v[i[6]]), f(v[i[7]])]
         } else {
             let at = |x: i32, y: i32, z: i32| f(self.at(c.x + x, c.y + y, c.z + z));
             [at(0, 0, 0), at(1, 0, 0), at(0, 1, 0), at(1, 1, 0), at(0, 0, 1), at(1, 0, 1), at(0, 1, 1), at(1, 1, 1)]

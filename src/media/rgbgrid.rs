@@ -41,18 +41,42 @@ pub struct RgbGridMedium {
     pub(super) id: u64,
 }
 
-/// The converted corner values of the cell a thread looked up last. A spectral lookup
-/// evaluates 8 voxel spectra per coefficient, the larger part of a spectral `rgbgrid`
-/// render; 41 % of lookups on the parity suite's smoke land in the cell before them (the
-/// next tentative collision of the same ray), and reuse these. A memo is exact: the values
-/// are a function of the grid, the cell and the wavelengths, all in the key.
-struct CellMemo {
+/// A thread's converted voxel values. A spectral lookup converts 8 voxel spectra per
+/// coefficient at the path's wavelengths, the larger part of a spectral `rgbgrid` render, and
+/// a path comes back to the same voxels: 41 % of lookups on the parity suite's smoke land in
+/// the cell before them (the next tentative collision of the same ray), and about two thirds
+/// of the other lookups' corners were converted before on the same path (by its earlier
+/// collisions and its shadow rays through the same cells): 6 % of the render's time. So the last cell's corners are kept,
+/// and every voxel converted for the current medium and wavelengths in a direct-mapped cache.
+/// Both are exact: the values are a function of the medium, the voxel and the wavelengths,
+/// all in the keys.
+struct Memo {
     /// [`RgbGridMedium::id`] of the medium the values belong to (0: none yet).
     grid: u64,
-    cell: IVec3,
+    /// The wavelengths they were converted at.
     lambda: Vec4,
-    /// σa, σs and Le at the eight corners, as lanes.
+    /// The cell of `values`.
+    cell: IVec3,
+    /// σa, σs and Le at the eight corners of `cell`, as lanes.
     values: [[Vec4; 8]; 3],
+    /// Generation of (`grid`, `lambda`): a cache slot is valid while its tag holds it.
+    stamp: u32,
+    /// Per slot, the stamp (high half) and voxel index (low half) its values belong to.
+    tags: Vec<u64>,
+    /// Per slot, σa, σs and Le of its voxel.
+    slots: Vec<[Vec4; 3]>,
+}
+
+/// Slots of the voxel cache (48 KiB of values per thread); a path converts a few dozen voxels.
+const CACHE_BITS: u32 = 10;
+
+impl Memo {
+    /// The slot of voxel `i`: Fibonacci hashing, since plain low bits would put the z and
+    /// z + 1 corners of a grid whose x·y size is a multiple of the cache into one slot.
+    #[inline]
+    fn slot(i: usize) -> usize {
+        ((i as u32).wrapping_mul(0x9e37_79b9) >> (32 - CACHE_BITS)) as usize
+    }
 }
 
 /// The largest value in band `b` of `bands` of a voxel packed for spectral transport or not:
@@ -77,8 +101,16 @@ pub(super) fn new_id() -> u64 {
 }
 
 thread_local! {
-    static MEMO: RefCell<CellMemo> = const {
-        RefCell::new(CellMemo { grid: 0, cell: IVec3::ZERO, lambda: Vec4::ZERO, values: [[Vec4::ZERO; 8]; 3] })
+    static MEMO: RefCell<Memo> = const {
+        RefCell::new(Memo {
+            grid: 0,
+            lambda: Vec4::ZERO,
+            cell: IVec3::ZERO,
+            values: [[Vec4::ZERO; 8]; 3],
+            stamp: 0,
+            tags: Vec::new(),
+            slots: Vec::new(),
+        })
     };
 }
 
@@ -106,13 +138,45 @@ impl RgbGridMedium {
         };
         let id = self.id;
         MEMO.with_borrow_mut(|m| {
-            if m.grid != id || m.cell != cell || m.lambda != key {
-                for (values, (grid, role)) in m.values.iter_mut().zip(grids) {
-                    if let Some(g) = grid {
-                        *values = g.corners(cell, |v| C::from_voxel(v, role, self.space, lambda).to_lanes());
+            if m.grid != id || m.lambda != key {
+                // Other wavelengths or another medium: every slot is stale.
+                (m.grid, m.lambda, m.cell) = (id, key, IVec3::MIN);
+                m.stamp = m.stamp.wrapping_add(1);
+                if m.stamp == 0 || m.tags.is_empty() {
+                    m.tags = vec![u64::MAX; 1 << CACHE_BITS];
+                    m.slots = vec![[Vec4::ZERO; 3]; 1 << CACHE_BITS];
+                    m.stamp = 1;
+                }
+            }
+            if m.cell != cell {
+                m.cell = cell;
+                match any.corner_indices(cell) {
+                    Some(corners) => {
+                        for (k, &v) in corners.iter().enumerate() {
+                            let slot = Memo::slot(v);
+                            let tag = (m.stamp as u64) << 32 | v as u64;
+                            if m.tags[slot] != tag {
+                                m.tags[slot] = tag;
+                                for (value, (grid, role)) in m.slots[slot].iter_mut().zip(grids) {
+                                    if let Some(g) = grid {
+                                        *value = C::from_voxel(g.values()[v], role, self.space, lambda).to_lanes();
+                                    }
+                                }
+                            }
+                            for i in 0..3 {
+                                m.values[i][k] = m.slots[slot][i];
+                            }
+                        }
+                    }
+                    // A cell on the grid's edge: its outer corners are zero, not voxels.
+                    None => {
+                        for (values, (grid, role)) in m.values.iter_mut().zip(grids) {
+                            if let Some(g) = grid {
+                                *values = g.corners(cell, |v| C::from_voxel(v, role, self.space, lambda).to_lanes());
+                            }
+                        }
                     }
                 }
-                (m.grid, m.cell, m.lambda) = (id, cell, key);
             }
             let [sigma_a, sigma_s, le] = std::array::from_fn(|i| match grids[i].0 {
                 Some(_) => C::from_lanes(trilinear(&m.values[i], d)),

@@ -284,6 +284,9 @@ impl Medium {
             name,
             kind: MediumKind::RgbGrid(Box::new(RgbGridMedium {
                 medium_from_world: world_from_medium.inverse(),
+                unit_from_world: Affine3A::from_scale(Vec3::ONE / (bounds.max - bounds.min))
+                    * Affine3A::from_translation(-bounds.min)
+                    * world_from_medium.inverse(),
                 bounds,
                 sigma_a,
                 sigma_s,

@@ -36,6 +36,8 @@ pub struct RgbGridMedium {
     pub space: ColorSpace,
     /// Majorant grid (of max σt over channels).
     pub majorant: MajorantGrid,
+    /// [0, 1]³-of-`bounds`-from-world transform (the grids' lookup coordinates).
+    pub(super) unit_from_world: Affine3A,
     /// Identifies this medium's data in the per-thread memo (an address could be reused by a
     /// later scene's medium).
     pub(super) id: u64,
@@ -119,8 +121,7 @@ impl RgbGridMedium {
     /// voxels around `p` converted and interpolated (pbrt-v4's `RGBGridMedium::SamplePoint`).
     #[inline]
     pub fn sample_point<C: Channels>(&self, p: Vec3, lambda: &C::Lambda) -> MediumPoint<C> {
-        let pm = self.medium_from_world.transform_point3(p);
-        let pu = (pm - self.bounds.min) / (self.bounds.max - self.bounds.min);
+        let pu = self.unit_from_world.transform_point3(p);
         // All grids share one resolution (one nx, ny, nz), hence one cell.
         let Some(any) = self.sigma_a.as_ref().or(self.sigma_s.as_ref()).or(self.le.as_ref()) else {
             return MediumPoint { sigma_a: C::ONE, sigma_s: C::ONE, le: C::ZERO };

@@ -228,6 +228,10 @@ impl RayIntegrator for RadianceGraphIntegrator {
     ) -> C {
         let medium = &scene.media[0];
         let mut rng = Pcg32::new(hash_sample(sampler.get_1d(), Vec2::ZERO), hash_sample(sampler.get_1d(), Vec2::ONE));
+        // The first tentative collision comes from the sampler, as in volpath (pbrt-v4's
+        // SampleT_maj): a pixel's samples then cover the depths along its rays evenly, where
+        // the generator's values fall where they may. Later ones come from the generator.
+        let mut u_first = Some(sampler.get_1d());
         // The lights' radiance in the path's channels, once per sample (at most a few lights).
         let mut le = [C::ZERO; MAX_LIGHTS];
         let n_lights = self.lights.len();
@@ -248,13 +252,19 @@ impl RayIntegrator for RadianceGraphIntegrator {
             if inside {
                 let t_max = hit.as_ref().map_or(f32::INFINITY, |h| h.surface.t);
                 match self.estimator {
-                    Estimator::DeltaTracking => match sample_event(medium, &ray, t_max, &mut rng) {
+                    Estimator::DeltaTracking => match sample_event(
+                        medium,
+                        &ray,
+                        t_max,
+                        u_first.take().unwrap_or_else(|| rng.uniform()),
+                        &mut rng,
+                    ) {
                         Event::Scatter(p) => return self.radiance_at(p, 1.0, le),
                         Event::Absorb => return C::ZERO,
                         Event::Pass => {}
                     },
                     Estimator::Collision => {
-                        let u = rng.uniform();
+                        let u = u_first.take().unwrap_or_else(|| rng.uniform());
                         sample_t_maj::<Rgb, _>(medium, &ray, t_max, u, &mut rng, 0, &(), |p, mp, sigma_maj, _, rng| {
                             let s = sigma_maj[0];
                             l += self.radiance_at(p, beta * mp.sigma_s[0] / s, le);

@@ -237,7 +237,8 @@ impl<'a> Volume<'a> {
     /// tracking with absorption and scattering as events, as the thesis's `TracePath`):
     /// a real scattering point, or the end of the path.
     pub fn sample_scatter(&self, ray: &Ray, t_max: f32, rng: &mut Pcg32) -> Event {
-        sample_event(self.medium, ray, t_max, rng)
+        let u = rng.uniform();
+        sample_event(self.medium, ray, t_max, u, rng)
     }
 
     /// Transmittance along `ray` to distance `t_max` inside the medium, one ratio-tracking
@@ -265,11 +266,10 @@ impl<'a> Volume<'a> {
 }
 
 /// Delta tracking through a gray medium with absorption and real scattering as events (the
-/// thesis's `TracePath` and graph integrator).
+/// thesis's `TracePath` and graph integrator), the first tentative collision at `u`.
 #[inline]
-pub fn sample_event(medium: &Medium, ray: &Ray, t_max: f32, rng: &mut Pcg32) -> Event {
+pub fn sample_event(medium: &Medium, ray: &Ray, t_max: f32, u: f32, rng: &mut Pcg32) -> Event {
     let mut event = Event::Pass;
-    let u = rng.uniform();
     sample_t_maj::<Rgb, _>(medium, ray, t_max, u, rng, 0, &(), |p, mp, sigma_maj, _, rng| {
         let um = rng.uniform() * sigma_maj[0];
         if um < mp.sigma_a[0] {

@@ -132,6 +132,24 @@ def main():
             main_rows.append(row)
         results["accuracy"] = main_rows
 
+        # 1b. The same with denser graphs (4x the light paths, 4x the direct-light samples per
+        # node: scenes/*-dense.json): how far the error is the graph's own noise.
+        dense_rows = []
+        for name, scene in [("cloud", cloud), ("cube", cube)]:
+            d = os.path.join(work, f"{name}-dense")
+            os.makedirs(d)
+            shutil.copy(os.path.join(HERE, "scenes", f"{name}-dense.json"), os.path.join(d, f"{name}-dense.json"))
+            graph, stats = build(scene, os.path.join(d, f"{name}-dense.json"), d)
+            ref = os.path.join(work, f"{name}-ref.exr")
+            row = {"scene": name, "nodes": stats["amounts"]["vertices"], "edges": stats["amounts"]["edges"], "build_s": stats["nimbus"]["seconds"]}
+            for est in ["graph", "collision"]:
+                src = scene if est == "graph" else os.path.join(work, f"{name}-collision.pbrt")
+                img = os.path.join(d, f"{est}.exr")
+                row[f"{est}_s"] = render(src, img, SPP, ["--integrator", "graph", "--graph-data", graph] if est == "graph" else ["--graph-data", graph])
+                row[est] = diff(img, ref)
+            dense_rows.append(row)
+        results["accuracy_dense"] = dense_rows
+
         # 2. Node radius sweep (thesis Table 5.4, node size) on the cloud.
         base = next(r for r in main_rows if r["scene"] == "cloud")
         with open(os.path.join(work, "cloud_stats.json")) as f:
@@ -255,6 +273,12 @@ def main():
         for r in main_rows:
             c = r["collision"]
             lines.append(f"| {r['scene']} | {r['collision_s']:.2f} | {r['volpath_s'] / r['collision_s']:.1f}× | {c['mae'] / c['ref_mean']:.2%} | {c['mpe']:.2e} | {c['mne']:.2e} | {c['mean'] / c['ref_mean'] - 1:+.2%} |")
+        lines += ["", "Denser graphs (`scenes/*-dense.json`: 4× the light paths and 4× the direct-light samples per node; the cube is homogeneous, so both estimators are one):", "",
+                  "| scene | nodes | edges | build s | graph MAE/mean | mean vs ref | collision MAE/mean | mean vs ref | collision render s |", "|---|--:|--:|--:|--:|--:|--:|--:|--:|"]
+        for r in dense_rows:
+            g, c = r["graph"], r["collision"]
+            lines.append(f"| {r['scene']} | {r['nodes']} | {r['edges']} | {r['build_s']:.2f} | {g['mae'] / g['ref_mean']:.2%} | {g['mean'] / g['ref_mean'] - 1:+.2%} | "
+                         f"{c['mae'] / c['ref_mean']:.2%} | {c['mean'] / c['ref_mean'] - 1:+.2%} | {r['collision_s']:.2f} |")
         lines += ["", "Node radius (cloud):", "", "| radius | nodes | edges | MAE/mean | MPE | MNE |", "|--:|--:|--:|--:|--:|--:|"]
         for s in sweep:
             lines.append(f"| {s['radius']:.4f} | {s['nodes']} | {s['edges']} | {s['mae'] / s['ref_mean']:.2%} | {s['mpe']:.2e} | {s['mne']:.2e} |")

@@ -5,13 +5,15 @@
 //! pbrt-v4 finds, once per camera, the smallest change of a camera ray's origin and direction
 //! between neighbouring pixels (`FindMinimumDifferentials`, over 512 film positions along the
 //! diagonal), and at every surface point intersects rays offset by those changes with the
-//! tangent plane. It uses the camera ray's own differentials at the first hit and reflected or
-//! refracted ones after specular bounces; nimbus uses the approximation everywhere (they agree
-//! at the image centre of a perspective camera, where the smallest differential is).
+//! tangent plane. Where a path still carries ray differentials — the camera ray's own, up to
+//! its first hit, and reflected or refracted ones after perfectly specular bounces — it
+//! intersects those instead ([`Differentials`]), as nimbus does for perspective and
+//! orthographic cameras (spherical and realistic ones use the approximation everywhere).
 
 use glam::{Affine3A, Mat3, Vec2, Vec3};
 
 use super::Camera;
+use crate::geometry::Ray;
 
 /// A camera's smallest per-pixel ray differentials and the sample-count scale.
 #[derive(Clone, Debug)]
@@ -68,6 +70,15 @@ impl Footprint {
         Footprint { world_from_camera, camera_from_world, min_pos, min_dir, spp_scale }
     }
 
+    /// The differentials of camera ray `ray` from `camera` (whose footprint this is), scaled
+    /// by max(1/8, 1/√spp) as pbrt-v4 scales them; `None` for spherical and realistic cameras.
+    pub fn camera_differentials(&self, camera: &Camera, ray: &Ray) -> Option<Differentials> {
+        let d = camera.differentials(ray)?;
+        let s = self.spp_scale;
+        let scale = |(o, dir): (Vec3, Vec3)| (ray.o + (o - ray.o) * s, ray.d + (dir - ray.d) * s);
+        Some(Differentials { rx: scale(d.rx), ry: scale(d.ry) })
+    }
+
     /// (∂p/∂x, ∂p/∂y) at world point `p` with normal `n`: where rays offset by the smallest
     /// differentials meet the tangent plane, relative to `p` (pbrt-v4's `Approximate_dp_dxy`).
     pub fn dp_dxy(&self, p: Vec3, n: Vec3) -> (Vec3, Vec3) {
@@ -89,6 +100,74 @@ impl Footprint {
             self.spp_scale * self.world_from_camera.transform_vector3(dx),
             self.spp_scale * self.world_from_camera.transform_vector3(dy),
         )
+    }
+}
+
+/// A ray's differentials (pbrt-v4's `RayDifferential`): the rays through the neighbouring
+/// pixels in x and y, scaled by the footprint's sample-count factor, as lines (a path crossing
+/// an `interface` keeps them unchanged).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Differentials {
+    /// Origin and direction of the ray one pixel over in x.
+    pub rx: (Vec3, Vec3),
+    /// Origin and direction of the ray one pixel over in y.
+    pub ry: (Vec3, Vec3),
+}
+
+impl Differentials {
+    /// (∂p/∂x, ∂p/∂y) at `p` with geometric normal `n`: where the offset rays meet the tangent
+    /// plane, relative to `p` (pbrt-v4's `ComputeDifferentials`); `None` when one of them runs
+    /// parallel to it.
+    pub fn dp_dxy(&self, p: Vec3, n: Vec3) -> Option<(Vec3, Vec3)> {
+        let d = n.dot(p);
+        let meet = |(o, dir): (Vec3, Vec3)| {
+            let nd = n.dot(dir);
+            (nd != 0.0).then(|| o + (d - n.dot(o)) / nd * dir - p).filter(|v| v.is_finite())
+        };
+        Some((meet(self.rx)?, meet(self.ry)?))
+    }
+
+    /// The differentials of the ray leaving `p` along `wi` after a perfectly specular
+    /// reflection (`eta` = None) or transmission (relative index `eta`) of the ray that
+    /// arrived along −`wo` with these differentials: pbrt-v4's `SurfaceInteraction::SpawnRay`
+    /// for specular flags, with the hit's footprint (`dpdx`, `dpdy`) and the change of its
+    /// shading normal `ns` across the footprint (`dndx`, `dndy`). `None` where pbrt-v4 drops
+    /// them (beyond 10⁸). Refraction follows pbrt-v4's formula term for term, whose change of
+    /// direction along the surface is η times the incoming one where Snell's law's derivative
+    /// gives 1/η (pbrt-v3 had the inverse index there): textures seen through glass filter
+    /// over η² times the footprint, as in pbrt-v4's images.
+    #[allow(clippy::too_many_arguments)] // pbrt-v4's formula reads all of them
+    pub fn specular(
+        &self,
+        p: Vec3,
+        (dpdx, dpdy): (Vec3, Vec3),
+        ns: Vec3,
+        (dndx, dndy): (Vec3, Vec3),
+        wo: Vec3,
+        wi: Vec3,
+        eta: Option<f32>,
+    ) -> Option<Differentials> {
+        let dwodx = -self.rx.1 - wo;
+        let dwody = -self.ry.1 - wo;
+        let (rx_d, ry_d) = match eta {
+            None => {
+                let dx = dwodx.dot(ns) + wo.dot(dndx);
+                let dy = dwody.dot(ns) + wo.dot(dndy);
+                (wi - dwodx + 2.0 * (wo.dot(ns) * dndx + dx * ns), wi - dwody + 2.0 * (wo.dot(ns) * dndy + dy * ns))
+            }
+            Some(eta) => {
+                // The normal on wo's side.
+                let (n, dndx, dndy) = if wo.dot(ns) < 0.0 { (-ns, -dndx, -dndy) } else { (ns, dndx, dndy) };
+                let dx = dwodx.dot(n) + wo.dot(dndx);
+                let dy = dwody.dot(n) + wo.dot(dndy);
+                let mu = wo.dot(n) / eta - wi.dot(n).abs();
+                let k = 1.0 / eta + 1.0 / (eta * eta) * wo.dot(n) / wi.dot(n);
+                (wi - eta * dwodx + (mu * dndx + dx * k * n), wi - eta * dwody + (mu * dndy + dy * k * n))
+            }
+        };
+        let out = Differentials { rx: (p + dpdx, rx_d), ry: (p + dpdy, ry_d) };
+        let fine = [out.rx.0, out.rx.1, out.ry.0, out.ry.1].iter().all(|v| v.length_squared() <= 1e16);
+        fine.then_some(out)
     }
 }
 
@@ -152,6 +231,112 @@ mod tests {
         let longest = tx.length().max(ty.length());
         assert!(longest > 1.2 * expected && longest < 2.01 * expected, "{tx} {ty}");
         assert!(tx.dot(n).abs() < 1e-5 && ty.dot(n).abs() < 1e-5, "footprints lie in the tangent plane");
+    }
+
+    /// A camera looking down +z from the origin, over 80×60 pixels.
+    fn camera(settings: &CameraSettings) -> Camera {
+        let world_from_camera = look_at([0.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, 1.0, 0.0]).unwrap().inverse();
+        Camera::new(settings, &world_from_camera, [80, 60], 35.0).unwrap()
+    }
+
+    fn close(a: Vec3, b: Vec3, tol: f32) -> bool {
+        (a - b).length() <= tol
+    }
+
+    /// A projective camera ray's differentials are the rays through the film positions one
+    /// pixel over with the same lens point, as pbrt-v4's cameras compute them: for pinhole and
+    /// thin-lens perspective cameras and a pinhole orthographic one.
+    #[test]
+    fn camera_differentials_are_the_next_pixels_rays() {
+        let ortho = CameraSettings {
+            projection: crate::scene::camera::Projection::Orthographic,
+            ..CameraSettings::perspective(0.0)
+        };
+        let lens = CameraSettings { lens_radius: 0.3, focal_distance: 7.0, ..CameraSettings::perspective(50.0) };
+        for settings in [CameraSettings::perspective(50.0), lens, ortho] {
+            let cam = camera(&settings);
+            for (p, u) in [(Vec2::new(40.0, 30.0), Vec2::new(0.2, 0.9)), (Vec2::new(3.3, 55.1), Vec2::new(0.7, 0.4))] {
+                let ray = cam.generate_ray(p, u, 0.5).unwrap().ray;
+                let d = cam.differentials(&ray).unwrap();
+                for (got, offset) in [(d.rx, Vec2::X), (d.ry, Vec2::Y)] {
+                    let want = cam.generate_ray(p + offset, u, 0.5).unwrap().ray;
+                    assert!(
+                        close(got.0, want.o, 1e-4) && close(got.1, want.d, 1e-5),
+                        "{settings:?} at {p}: {got:?} vs {want:?}"
+                    );
+                }
+            }
+        }
+        // Spherical cameras keep the approximation.
+        let sph = CameraSettings {
+            projection: crate::scene::camera::Projection::Spherical { equal_area: true },
+            ..CameraSettings::perspective(0.0)
+        };
+        let cam = camera(&sph);
+        assert!(cam.differentials(&cam.generate_ray(Vec2::new(10.0, 10.0), Vec2::ZERO, 0.5).unwrap().ray).is_none());
+    }
+
+    /// A camera ray's footprint on a plane facing a pinhole perspective camera is one pixel's
+    /// step on that plane (times the sample-count factor) wherever the ray goes, since the
+    /// projection onto such a plane is linear; the approximation, from the smallest change of
+    /// direction anywhere on the film (at a 90° camera's corners), is smaller at the centre.
+    #[test]
+    fn ray_footprints_are_one_pixel_on_a_facing_plane() {
+        let cam = camera(&CameraSettings::perspective(90.0));
+        let f = Footprint::new(&cam, [80, 60], 16);
+        let n = Vec3::new(0.0, 0.0, -1.0);
+        // Screen 2·(80/60) wide over 80 pixels, tan 45° = 1, at distance 5, spp factor 1/4.
+        let step = 2.0 * (80.0 / 60.0) / 80.0 * 5.0 * 0.25;
+        for p_film in [Vec2::new(40.0, 30.0), Vec2::new(1.0, 1.0), Vec2::new(77.5, 20.0)] {
+            let ray = cam.generate_ray(p_film, Vec2::ZERO, 0.5).unwrap().ray;
+            let p = ray.o + ray.d * (5.0 / ray.d.z);
+            let (dx, dy) = f.camera_differentials(&cam, &ray).unwrap().dp_dxy(p, n).unwrap();
+            // pbrt-v4 scales the difference of unit directions, not the step on the film: off
+            // axis that is not exactly a quarter pixel on the plane (0.9 % at the corner).
+            assert!(close(dx, Vec3::new(step, 0.0, 0.0), 0.015 * step), "{dx} at {p_film}");
+            assert!(close(dy, Vec3::new(0.0, -step, 0.0), 0.015 * step), "{dy} at {p_film}");
+            if p_film == Vec2::new(40.0, 30.0) {
+                let (ax, _) = f.dp_dxy(p, n);
+                assert!(ax.length() < 0.5 * step, "{ax}");
+            }
+        }
+    }
+
+    /// A flat mirror reflects the differentials as lines: the reflected offset rays are the
+    /// mirror images of the incoming ones. A flat interface bends them by Snell's law to
+    /// first order.
+    #[test]
+    fn specular_differentials_reflect_and_refract_the_offset_rays() {
+        let n = Vec3::Y;
+        let p = Vec3::new(0.3, 0.0, -0.2);
+        let d0 = Vec3::new(0.4, -1.0, 0.3).normalize();
+        let o0 = p - 3.0 * d0;
+        // Offset rays: the neighbouring pixels' (a small change of direction and origin).
+        let rx = (o0 + Vec3::new(0.001, 0.0, 0.0), (d0 + Vec3::new(0.002, 0.0, -0.001)).normalize());
+        let ry = (o0, (d0 + Vec3::new(0.0, 0.0015, 0.002)).normalize());
+        let diff = Differentials { rx, ry };
+        let (dpdx, dpdy) = diff.dp_dxy(p, n).unwrap();
+        let wo = -d0;
+        let reflect = |d: Vec3| d - 2.0 * d.dot(n) * n;
+        let r = diff.specular(p, (dpdx, dpdy), n, (Vec3::ZERO, Vec3::ZERO), wo, reflect(d0), None).unwrap();
+        for (out, inc) in [(r.rx, rx), (r.ry, ry)] {
+            // Where the incoming offset ray meets the plane, and its reflected direction.
+            let hit = inc.0 + inc.1 * (-inc.0.y / inc.1.y);
+            assert!(close(out.0, hit, 1e-5), "{out:?} vs {hit}");
+            assert!(close(out.1, reflect(inc.1), 1e-4), "{out:?} vs {}", reflect(inc.1));
+        }
+        // An index-matched interface (η = 1) passes the offset rays on unbent.
+        let t = diff.specular(p, (dpdx, dpdy), n, (Vec3::ZERO, Vec3::ZERO), wo, d0, Some(1.0)).unwrap();
+        for (out, inc) in [(t.rx, rx), (t.ry, ry)] {
+            let hit = inc.0 + inc.1 * (-inc.0.y / inc.1.y);
+            assert!(close(out.0, hit, 1e-5) && close(out.1, inc.1, 1e-5), "{out:?} vs {inc:?}");
+        }
+        // Through η = 1.5 the spread of directions is pbrt-v4's: η times the incoming spread
+        // where it is parallel to the surface (Snell's law's derivative would give 1/η).
+        let t = diff.specular(p, (dpdx, dpdy), n, (Vec3::ZERO, Vec3::ZERO), wo, d0, Some(1.5)).unwrap();
+        let tangential = |v: Vec3| v - v.dot(n) * n;
+        let spread_in = tangential(rx.1 - d0);
+        assert!(close(tangential(t.rx.1 - d0), 1.5 * spread_in, 1e-6), "{:?}", t.rx);
     }
 
     #[test]

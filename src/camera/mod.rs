@@ -9,7 +9,7 @@ use std::sync::Arc;
 
 use glam::{Affine3A, DMat4, Vec2, Vec3};
 
-pub use footprint::Footprint;
+pub use footprint::{Differentials, Footprint};
 pub use realistic::RealisticLens;
 
 use crate::geometry::{MotionTransform, Ray};
@@ -21,6 +21,8 @@ use crate::scene::camera::{CameraSettings, Projection};
 #[derive(Clone, Debug)]
 pub struct Camera {
     world_from_camera: Affine3A,
+    /// Its inverse (of the start transform for a moving camera).
+    camera_from_world: Affine3A,
     /// The camera's motion over the shutter interval, for animated camera transforms.
     motion: Option<MotionTransform>,
     shutter_open: f32,
@@ -81,6 +83,7 @@ impl Camera {
         };
         Ok(Camera {
             world_from_camera: Affine3A::from_mat4(world_from_camera.as_mat4()),
+            camera_from_world: Affine3A::from_mat4(world_from_camera.as_mat4()).inverse(),
             motion: None,
             shutter_open: settings.shutter_open,
             shutter_close: settings.shutter_close,
@@ -99,6 +102,7 @@ impl Camera {
     /// The camera moving with `motion` (its transform at each ray's time).
     pub fn with_motion(mut self, motion: MotionTransform) -> Camera {
         self.world_from_camera = motion.start();
+        self.camera_from_world = self.world_from_camera.inverse();
         self.motion = Some(motion);
         self
     }
@@ -172,6 +176,58 @@ impl Camera {
 }
 
 impl Camera {
+    /// The unscaled differentials of `ray`, a ray this camera generated: the rays through the
+    /// film positions one pixel over in x and in y with the same lens point and time, as
+    /// pbrt-v4's perspective and orthographic cameras compute them. A projective ray determines
+    /// its film position (and its lens point), so they follow from the ray alone. `None` for
+    /// spherical and realistic cameras, whose rays pbrt-v4 differentiates numerically from the
+    /// film sample.
+    pub fn differentials(&self, ray: &Ray) -> Option<Differentials> {
+        if self.spherical.is_some() || self.realistic.is_some() {
+            return None;
+        }
+        let w = self.world_from_camera_at(ray.time);
+        let c = if self.motion.is_some() { w.inverse() } else { self.camera_from_world };
+        let (o, d) = (c.transform_point3(ray.o), c.transform_vector3(ray.d));
+        if d.z <= 0.0 {
+            return None;
+        }
+        // One pixel's step on the film, in camera space (on the z = 1 plane for perspective).
+        let k = if self.perspective { self.tan_half_fov } else { 1.0 };
+        let step = [
+            Vec3::new((self.screen_max.x - self.screen_min.x) / self.resolution.x * k, 0.0, 0.0),
+            Vec3::new(0.0, -(self.screen_max.y - self.screen_min.y) / self.resolution.y * k, 0.0),
+        ];
+        let offset = |dx: Vec3| -> (Vec3, Vec3) {
+            match (self.perspective, self.lens_radius > 0.0) {
+                // The pinhole direction to the film point, one pixel over.
+                (true, false) => (o, (d / d.z + dx).normalize()),
+                // Through the same lens point to the focus-plane point of the next pixel.
+                (true, true) => {
+                    let focus = o + d * (self.focal_distance / d.z);
+                    let dir = (focus / focus.z + dx).normalize();
+                    (o, (dir * (self.focal_distance / dir.z) - o).normalize())
+                }
+                (false, false) => (o + dx, d),
+                // The film point one pixel over, pushed to the focus plane by pbrt-v4's
+                // focal distance over the lens ray's z (not the film ray's).
+                (false, true) => {
+                    let film = o + d * (self.focal_distance / d.z) - Vec3::new(0.0, 0.0, self.focal_distance);
+                    (o, (film + dx + Vec3::new(0.0, 0.0, self.focal_distance / d.z) - o).normalize())
+                }
+            }
+        };
+        // A rotation (LookAt's) keeps unit directions unit: one square root less per ray.
+        let unit = [w.matrix3.x_axis, w.matrix3.y_axis, w.matrix3.z_axis]
+            .iter()
+            .all(|a| (a.length_squared() - 1.0).abs() < 1e-5);
+        let to_world = |(o, d): (Vec3, Vec3)| {
+            let d = w.transform_vector3(d);
+            (w.transform_point3(o), if unit { d } else { d.normalize() })
+        };
+        Some(Differentials { rx: to_world(offset(step[0])), ry: to_world(offset(step[1])) })
+    }
+
     /// pbrt-v4's `SphericalCamera::GenerateRay`: the film is a map of all directions (no lens,
     /// no screen window), then y and z swap so that the map's pole is camera +y.
     fn spherical_ray(&self, p_film: Vec2, equal_area: bool, time: f32) -> Ray {

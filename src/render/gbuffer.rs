@@ -80,6 +80,8 @@ fn visible_surface(
     let mut medium = scene.camera_medium;
     let mut transmittance = 1.0f32;
     let mut rng = Pcg32::new(hash_vec3(ray.o), hash_vec3(ray.d));
+    // Textures filter over the camera ray's footprint, as in the render.
+    let diff = scene.footprint.as_ref().and_then(|f| f.camera_differentials(&scene.camera, &ray));
     // A bounded number of boundaries: a ray caught between coincident interfaces gives up.
     for _ in 0..256 {
         let hit = scene.surfaces.intersect(&ray, f32::INFINITY);
@@ -103,7 +105,7 @@ fn visible_surface(
         }
         let mut hit = hit?;
         let wo = -ray.d;
-        let (material, tex_ctx) = scene.surface_material(&mut hit, wo);
+        let (material, tex_ctx) = scene.surface_material(&mut hit, wo, diff.as_ref());
         let s = hit.surface;
         let Some(bxdf) = material.bxdf::<Rgb>(&scene.textures, &tex_ctx, &mut ()) else {
             medium = medium_after(scene, &hit, ray.d, medium);

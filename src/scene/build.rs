@@ -27,7 +27,7 @@ use super::textures::{Mapping, TexInput, TextureKind, TextureSettings};
 use super::transport::{SpectralMode, Transport, TransportChoice};
 use super::values::{FloatInput, SpectrumInput, SpectrumSpec};
 use crate::accel::{Accel, Geometry, Instance, NONE, Primitive, ShapeStore, Surfaces};
-use crate::camera::Camera;
+use crate::camera::{Camera, Differentials};
 use crate::color::{Rgb, pack_voxel};
 use crate::film::filter::Filter;
 use crate::geometry::ply::read_ply;
@@ -158,14 +158,20 @@ impl Scene {
     /// The material that scatters at `hit` seen from `wo` (`mix` resolved), with the hit's
     /// shading normal and tangents replaced by the material's bump or normal map, and the
     /// texture lookup there: its screen-space footprint when a texture or a bump needs one
-    /// (computed once per hit, with the surface derivatives at most once).
+    /// (computed once per hit, with the surface derivatives at most once), from the ray's
+    /// differentials `diff` where it has them, else from the camera's smallest ones.
     #[inline]
-    pub fn surface_material(&self, hit: &mut crate::accel::Hit, wo: Vec3) -> (&Material, TexContext) {
+    pub fn surface_material(
+        &self,
+        hit: &mut crate::accel::Hit,
+        wo: Vec3,
+        diff: Option<&Differentials>,
+    ) -> (&Material, TexContext) {
         let s = &hit.surface;
         let mut ctx = TexContext::at(s.p, s.uv, s.n);
         let mut derivatives = None;
         if let Some(f) = &self.footprint {
-            (ctx.dpdx, ctx.dpdy) = f.dp_dxy(s.p, s.n);
+            (ctx.dpdx, ctx.dpdy) = diff.and_then(|d| d.dp_dxy(s.p, s.n)).unwrap_or_else(|| f.dp_dxy(s.p, s.n));
             if self.uv_footprint {
                 let d = self.surfaces.derivatives(hit);
                 (ctx.duvdx, ctx.duvdy) = uv_footprint(d.dpdu, d.dpdv, ctx.dpdx, ctx.dpdy);
@@ -183,6 +189,29 @@ impl Scene {
             shading.apply(&self.textures, &mut hit.surface, &d, &ctx);
         }
         (&self.materials[id as usize], ctx)
+    }
+
+    /// The differentials of the ray leaving `hit` (its material looked up in `ctx`) along `wi`
+    /// after a perfectly specular reflection or transmission (relative index `eta`) of a ray
+    /// that arrived along −`wo` with differentials `diff` (pbrt-v4's `SpawnRay` with specular
+    /// flags; the shading normal's change across the footprint from the shape's ∂n/∂u, ∂n/∂v).
+    #[allow(clippy::too_many_arguments)]
+    pub fn specular_differentials(
+        &self,
+        hit: &crate::accel::Hit,
+        ctx: &TexContext,
+        diff: &Differentials,
+        wo: Vec3,
+        wi: Vec3,
+        transmission: bool,
+        eta: f32,
+    ) -> Option<Differentials> {
+        let d = self.surfaces.derivatives(hit);
+        let (duvdx, duvdy) = uv_footprint(d.dpdu, d.dpdv, ctx.dpdx, ctx.dpdy);
+        let dndx = d.dndu * duvdx.x + d.dndv * duvdx.y;
+        let dndy = d.dndu * duvdy.x + d.dndv * duvdy.y;
+        let s = &hit.surface;
+        diff.specular(s.p, (ctx.dpdx, ctx.dpdy), s.ns, (dndx, dndy), wo, wi, transmission.then_some(eta))
     }
 
     /// The matrix from what the film accumulates to output RGB: for RGB transport samples are

@@ -163,6 +163,13 @@ pub fn trace_path<C: Channels, O: PathObserver<C>>(
     // The camera line's area lights have been estimated (`PathConfig::camera_line`): the
     // area lights the path reaches at depth 0 are then already counted.
     let mut line_done = false;
+    // The ray's differentials while it has them (pbrt-v4's `RayDifferential`): the camera
+    // ray's, found at its first surface (from the camera ray: crossing an `interface` keeps
+    // them), then reflected or refracted ones after perfectly specular bounces; textures
+    // filter over the footprint they give.
+    let camera_ray = ray;
+    let mut camera_diff = scene.footprint.is_some();
+    let mut diff = None;
 
     loop {
         stats.bounce += 1;
@@ -249,6 +256,7 @@ pub fn trace_path<C: Channels, O: PathObserver<C>>(
                 return l;
             }
             if scattered {
+                (camera_diff, diff) = (false, None);
                 if per_segment {
                     end_segment(&mut st, sampler);
                 }
@@ -380,7 +388,11 @@ pub fn trace_path<C: Channels, O: PathObserver<C>>(
             }
         }
 
-        let (material, tex_ctx) = scene.surface_material(&mut hit, wo);
+        if camera_diff {
+            camera_diff = false;
+            diff = scene.footprint.as_ref().and_then(|f| f.camera_differentials(&scene.camera, &camera_ray));
+        }
+        let (material, tex_ctx) = scene.surface_material(&mut hit, wo, diff.as_ref());
         let s = &hit.surface;
         let Some(mut bxdf) = material.bxdf::<C>(&scene.textures, &tex_ctx, lambda) else {
             // An interface: cross it without counting a bounce.
@@ -456,6 +468,12 @@ pub fn trace_path<C: Channels, O: PathObserver<C>>(
             st.r_u / bxdf.pdf(wo_local, bs.wi, TransportMode::Radiance, ReflTransFlags::ALL)
         } else {
             st.r_u / bs.pdf
+        };
+        diff = match diff {
+            Some(d) if bs.is_specular() => {
+                scene.specular_differentials(&hit, &tex_ctx, &d, wo, wi, bs.is_transmission(), bs.eta)
+            }
+            _ => None,
         };
         specular_bounce = bs.is_specular();
         any_non_specular |= !bs.is_specular();

@@ -318,7 +318,7 @@ pub fn trace<C: Channels>(
             }
         }
         let Some(mut hit) = hit else { return };
-        let (material, _) = scene.surface_material(&mut hit, -ray.d);
+        let (material, _) = scene.surface_material(&mut hit, -ray.d, None);
         let s = &hit.surface;
         // Light paths carry no camera footprint (pbrt-v4 has none there either).
         let tex_ctx = TexContext::at(s.p, s.uv, s.n);

@@ -189,6 +189,9 @@ pub fn trace<C: Channels>(
     let mut path = Path { beta: C::ONE, r_u: C::ONE, hero, depth: 0, eta_scale: 1.0, time: ray.time };
     let mut l = C::ZERO;
     let seed = Seed::draw(scene, sampler);
+    // The camera ray's differentials, for textures at the first event (pbrt-v4's SimpleVolPath
+    // spawns later rays without any).
+    let camera_diff = scene.footprint.as_ref().and_then(|f| f.camera_differentials(&scene.camera, &ray));
     let mut isect =
         intersect::<C>(scene, ray, scene.camera_medium, f32::INFINITY, seed, hero, lambda, &mut stats.bounce);
     path.carry(&isect);
@@ -213,7 +216,8 @@ pub fn trace<C: Channels>(
                         &scene.surfaces,
                     ));
                 }
-                let (material, tex_ctx) = scene.surface_material(&mut hit, wo);
+                let (material, tex_ctx) =
+                    scene.surface_material(&mut hit, wo, camera_diff.as_ref().filter(|_| path.depth == 0));
                 let s = &hit.surface;
                 let Some(b) = material.bxdf::<C>(&scene.textures, &tex_ctx, lambda) else {
                     // An emissive `interface`: its light is counted; the ray goes on.

@@ -8,7 +8,8 @@
 //! tangent plane. Where a path still carries ray differentials — the camera ray's own, up to
 //! its first hit, and reflected or refracted ones after perfectly specular bounces — it
 //! intersects those instead ([`Differentials`]), as nimbus does for perspective and
-//! orthographic cameras (spherical and realistic ones use the approximation everywhere).
+//! orthographic cameras and, numerically as pbrt-v4, spherical ones (realistic cameras use the
+//! approximation everywhere).
 
 use glam::{Affine3A, Mat3, Vec2, Vec3};
 
@@ -71,7 +72,7 @@ impl Footprint {
     }
 
     /// The differentials of camera ray `ray` from `camera` (whose footprint this is), scaled
-    /// by max(1/8, 1/√spp) as pbrt-v4 scales them; `None` for spherical and realistic cameras.
+    /// by max(1/8, 1/√spp) as pbrt-v4 scales them; `None` for realistic cameras.
     pub fn camera_differentials(&self, camera: &Camera, ray: &Ray) -> Option<Differentials> {
         let d = camera.differentials(ray)?;
         let s = self.spp_scale;
@@ -245,7 +246,8 @@ mod tests {
 
     /// A projective camera ray's differentials are the rays through the film positions one
     /// pixel over with the same lens point, as pbrt-v4's cameras compute them: for pinhole and
-    /// thin-lens perspective cameras and a pinhole orthographic one.
+    /// thin-lens perspective cameras and a pinhole orthographic one; a spherical camera's
+    /// numerically, as pbrt-v4's generic camera does.
     #[test]
     fn camera_differentials_are_the_next_pixels_rays() {
         let ortho = CameraSettings {
@@ -267,13 +269,24 @@ mod tests {
                 }
             }
         }
-        // Spherical cameras keep the approximation.
-        let sph = CameraSettings {
-            projection: crate::scene::camera::Projection::Spherical { equal_area: true },
-            ..CameraSettings::perspective(0.0)
-        };
-        let cam = camera(&sph);
-        assert!(cam.differentials(&cam.generate_ray(Vec2::new(10.0, 10.0), Vec2::ZERO, 0.5).unwrap().ray).is_none());
+        // Spherical cameras: pbrt-v4's numerical differentials, 0.05 pixel over scaled up,
+        // from the film position the direction maps back to.
+        for equal_area in [true, false] {
+            let sph = CameraSettings {
+                projection: crate::scene::camera::Projection::Spherical { equal_area },
+                ..CameraSettings::perspective(0.0)
+            };
+            let cam = camera(&sph);
+            let p = Vec2::new(13.3, 21.7);
+            let ray = cam.generate_ray(p, Vec2::ZERO, 0.5).unwrap().ray;
+            let d = cam.differentials(&ray).unwrap();
+            for (got, offset) in [(d.rx, Vec2::X), (d.ry, Vec2::Y)] {
+                let r = cam.generate_ray(p + offset * 0.05, Vec2::ZERO, 0.5).unwrap().ray;
+                let want = ray.d + (r.d - ray.d) / 0.05;
+                assert!(close(got.1, want, 2e-3 * (want - ray.d).length()), "{equal_area}: {got:?} vs {want}");
+                assert!(close(got.0, ray.o, 1e-5));
+            }
+        }
     }
 
     /// A camera ray's footprint on a plane facing a pinhole perspective camera is one pixel's

@@ -14,7 +14,7 @@ pub use realistic::RealisticLens;
 
 use crate::geometry::{MotionTransform, Ray};
 use crate::sampling::warp::concentric_disk;
-use crate::sampling::warp::equal_area_square_to_sphere;
+use crate::sampling::warp::{equal_area_sphere_to_square, equal_area_square_to_sphere};
 use crate::scene::camera::{CameraSettings, Projection};
 
 /// A camera that turns film positions into world-space rays.
@@ -179,15 +179,19 @@ impl Camera {
     /// The unscaled differentials of `ray`, a ray this camera generated: the rays through the
     /// film positions one pixel over in x and in y with the same lens point and time, as
     /// pbrt-v4's perspective and orthographic cameras compute them. A projective ray determines
-    /// its film position (and its lens point), so they follow from the ray alone. `None` for
-    /// spherical and realistic cameras, whose rays pbrt-v4 differentiates numerically from the
-    /// film sample.
+    /// its film position (and its lens point), so they follow from the ray alone. A spherical
+    /// camera's are pbrt-v4's numerical ones (`CameraBase::GenerateRayDifferential`: the rays
+    /// 0.05 pixel over, scaled up), its film position found from the direction. `None` for
+    /// realistic cameras, whose rays do not give back their film position.
     pub fn differentials(&self, ray: &Ray) -> Option<Differentials> {
-        if self.spherical.is_some() || self.realistic.is_some() {
+        if self.realistic.is_some() {
             return None;
         }
         let w = self.world_from_camera_at(ray.time);
         let c = if self.motion.is_some() { w.inverse() } else { self.camera_from_world };
+        if let Some(equal_area) = self.spherical {
+            return Some(self.spherical_differentials(ray, c.transform_vector3(ray.d).normalize(), equal_area));
+        }
         let (o, d) = (c.transform_point3(ray.o), c.transform_vector3(ray.d));
         if d.z <= 0.0 {
             return None;
@@ -226,6 +230,27 @@ impl Camera {
             (w.transform_point3(o), if unit { d } else { d.normalize() })
         };
         Some(Differentials { rx: to_world(offset(step[0])), ry: to_world(offset(step[1])) })
+    }
+
+    /// pbrt-v4's numerical differentials of a spherical camera's `ray`, whose camera-space
+    /// direction is `d`.
+    fn spherical_differentials(&self, ray: &Ray, d: Vec3, equal_area: bool) -> Differentials {
+        // Undo the y/z swap, then the mapping.
+        let m = Vec3::new(d.x, d.z, d.y);
+        let uv = if equal_area {
+            equal_area_sphere_to_square(m)
+        } else {
+            let phi = m.y.atan2(m.x).rem_euclid(2.0 * std::f32::consts::PI);
+            Vec2::new(phi / (2.0 * std::f32::consts::PI), m.z.clamp(-1.0, 1.0).acos() / std::f32::consts::PI)
+        };
+        let p_film = uv * self.resolution;
+        let offset = |axis: Vec2| {
+            // pbrt-v4 tries +0.05 first and −0.05 where that fails; a spherical ray never fails.
+            let eps = 0.05;
+            let r = self.spherical_ray(p_film + axis * eps, equal_area, ray.time);
+            (ray.o + (r.o - ray.o) / eps, ray.d + (r.d - ray.d) / eps)
+        };
+        Differentials { rx: offset(Vec2::X), ry: offset(Vec2::Y) }
     }
 
     /// pbrt-v4's `SphericalCamera::GenerateRay`: the film is a map of all directions (no lens,

@@ -564,3 +564,26 @@ fn measured_brdf_reflects_its_tabulated_value() {
     let e = nimbus::scene::build_scene(&desc, &Default::default()).err().expect("refused");
     assert!(e.to_string().contains("m.pbrt:") && e.to_string().contains("bad.bsdf"), "{e}");
 }
+
+/// The `ewa` filter's `maxanisotropy` must be positive (pbrt-v4 would divide by it); the
+/// error names the parameter's place.
+#[test]
+fn ewa_max_anisotropy_must_be_positive() {
+    let dir = crate::common::scratch_dir("ewa-anisotropy");
+    let path = dir.as_ref().join("t.exr");
+    nimbus::imageio::write_image(&path, &nimbus::imageio::Image::new(2, 2)).unwrap();
+    for (v, ok) in [("0.5", true), ("0", false), ("-2", false)] {
+        let text = format!(
+            "WorldBegin\nTexture \"t\" \"spectrum\" \"imagemap\" \"string filename\" \"{}\" \"string filter\" \"ewa\" \"float maxanisotropy\" {v}\nMaterial \"diffuse\" \"texture reflectance\" \"t\"\nShape \"sphere\"",
+            path.display()
+        );
+        let desc = nimbus::parser::load_str(&text, "ewa.pbrt").unwrap();
+        match nimbus::scene::build_scene(&desc, &transport(false)) {
+            Ok(_) => assert!(ok, "maxanisotropy {v} accepted"),
+            Err(e) => {
+                let e = e.to_string();
+                assert!(!ok && e.contains("ewa.pbrt:2:") && e.contains("maxanisotropy"), "{v}: {e}");
+            }
+        }
+    }
+}

@@ -424,7 +424,7 @@ impl TextureBuilder<'_> {
                 // A texture-space direction, taken to world space (pbrt-v4's renderFromTexture).
                 dir: texture_from_world.inverse().transform_vector3(Vec3::from(*dir)).normalize_or_zero(),
             },
-            TextureKind::ImageMap { filename, filter, scale, invert, wrap, encoding, mapping: m } => {
+            TextureKind::ImageMap { filename, filter, max_anisotropy, scale, invert, wrap, encoding, mapping: m } => {
                 let image = load_texture_image(filename, encoding).map_err(|m| err(&e.loc, m))?;
                 let wrap = match wrap.as_str() {
                     "repeat" => Wrap::Repeat,
@@ -451,7 +451,7 @@ impl TextureBuilder<'_> {
                     }
                 };
                 TexNode::Image {
-                    image: Arc::new(MipMap::new(image, wrap, filter)),
+                    image: Arc::new(MipMap::new(image, wrap, filter).with_max_anisotropy(*max_anisotropy)),
                     mapping: mapping(m),
                     scale: *scale,
                     invert: *invert,

@@ -144,6 +144,8 @@ pub enum TextureKind {
         /// pbrt-v4's filter (`bilinear`, `point`, `trilinear`, `ewa`): which of an image's
         /// channels a float texture reads depends on it.
         filter: String,
+        /// The `ewa` filter's largest ratio of the footprint's axes (`maxanisotropy`, 8).
+        max_anisotropy: f32,
         /// Multiplier.
         scale: f32,
         /// 1 - value.
@@ -302,10 +304,18 @@ impl TextureSettings {
                     ));
                 }
                 let filter = p.get_one_string("filter", "bilinear")?.to_string();
-                p.get_one_float("maxanisotropy", 8.0)?;
+                let max_anisotropy = p.get_one_float("maxanisotropy", 8.0)?;
+                if max_anisotropy.is_nan() || max_anisotropy <= 0.0 {
+                    let loc = p.loc("maxanisotropy").unwrap_or(&e.loc);
+                    return Err(Error::new(
+                        loc,
+                        format!("imagemap: \"maxanisotropy\" must be positive (got {max_anisotropy})"),
+                    ));
+                }
                 TextureKind::ImageMap {
                     filename,
                     filter,
+                    max_anisotropy,
                     scale: p.get_one_float("scale", 1.0)?,
                     invert: p.get_one_bool("invert", false)?,
                     wrap: p.get_one_string("wrap", "repeat")?.to_string(),

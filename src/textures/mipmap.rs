@@ -1,7 +1,7 @@
 //! pbrt-v4's MIP map for image textures: the image resized up to powers of two with a
 //! windowed sinc, a pyramid of 2×2 box-filtered levels, and a lookup whose level follows the
-//! footprint of the shading point in (s, t) (`MIPMap::Filter` for its point, bilinear and
-//! trilinear filters; `ewa` reads the finest level bilinearly in nimbus).
+//! footprint of the shading point in (s, t) (`MIPMap::Filter` for its point, bilinear,
+//! trilinear and elliptically weighted average filters).
 
 use glam::Vec2;
 
@@ -18,7 +18,8 @@ pub enum MipFilter {
     Bilinear,
     /// Bilinear at the two levels around the footprint, blended.
     Trilinear,
-    /// pbrt-v4's elliptical weighted average; nimbus reads the finest level bilinearly.
+    /// pbrt-v4's elliptically weighted average (Heckbert's EWA with a Gaussian), over the
+    /// footprint's ellipse at the two levels around its shorter axis, blended.
     Ewa,
 }
 
@@ -29,6 +30,8 @@ pub struct MipMap {
     alpha: Option<Vec<Image>>,
     wrap: Wrap,
     filter: MipFilter,
+    /// The `ewa` filter's largest ratio of the ellipse's axes (pbrt-v4's `maxanisotropy`).
+    max_anisotropy: f32,
 }
 
 /// A lookup's result, with what pbrt-v4 makes of it for a float texture.
@@ -63,7 +66,13 @@ impl MipMap {
             img.pixels = a.iter().map(|&v| Rgb::splat(v)).collect();
             pyramid(img, wrap)
         });
-        MipMap { levels: pyramid(image, wrap), alpha, wrap, filter }
+        MipMap { levels: pyramid(image, wrap), alpha, wrap, filter, max_anisotropy: 8.0 }
+    }
+
+    /// The same with another `maxanisotropy` for the `ewa` filter (pbrt-v4's default: 8).
+    pub fn with_max_anisotropy(mut self, max_anisotropy: f32) -> MipMap {
+        self.max_anisotropy = max_anisotropy;
+        self
     }
 
     /// Whether the pyramid has levels above the finest (an image larger than one texel).
@@ -86,6 +95,18 @@ impl MipMap {
                 (1.0 - t) * bilerp(&levels[i], st, self.wrap) + t * bilerp(&levels[i + 1], st, self.wrap)
             }
         };
+        if self.filter == MipFilter::Ewa {
+            if let Some(rgb) = self.ewa(st, dst0, dst1) {
+                // pbrt-v4's EWA sums texels: a float texture reads their first channel.
+                return MipSample { rgb, alpha: None, texel: true };
+            }
+            let how = Read::Bilerp(0);
+            return MipSample {
+                rgb: read(&self.levels, how),
+                alpha: self.alpha.as_ref().map(|a| read(a, how).x),
+                texel: false,
+            };
+        }
         let how = self.read(st, dst0, dst1);
         MipSample {
             rgb: read(&self.levels, how),
@@ -94,11 +115,73 @@ impl MipMap {
         }
     }
 
-    /// Which texels pbrt-v4's `MIPMap::Filter` reads.
-    fn read(&self, st: Vec2, dst0: Vec2, dst1: Vec2) -> Read {
-        if self.filter == MipFilter::Ewa {
-            return Read::Bilerp(0);
+    /// pbrt-v4's EWA branch of `MIPMap::Filter`: the ellipse spanned by the footprint's (s, t)
+    /// derivatives, its shorter axis stretched to at least 1/`max_anisotropy` of the longer,
+    /// filtered at the two levels around the shorter axis's length and blended; `None` for a
+    /// degenerate footprint, which pbrt-v4 reads bilinearly at the finest level.
+    fn ewa(&self, st: Vec2, mut dst0: Vec2, mut dst1: Vec2) -> Option<Rgb> {
+        if dst0.length_squared() < dst1.length_squared() {
+            std::mem::swap(&mut dst0, &mut dst1);
         }
+        let longer = dst0.length();
+        let mut shorter = dst1.length();
+        if shorter * self.max_anisotropy < longer && shorter > 0.0 {
+            let scale = longer / (shorter * self.max_anisotropy);
+            dst1 *= scale;
+            shorter *= scale;
+        }
+        if shorter == 0.0 || !shorter.is_finite() {
+            return None;
+        }
+        let lod = ((self.levels.len() - 1) as f32 + shorter.log2()).max(0.0);
+        let i = lod.floor() as usize;
+        let t = lod - i as f32;
+        Some((1.0 - t) * self.ewa_level(i, st, dst0, dst1) + t * self.ewa_level(i + 1, st, dst0, dst1))
+    }
+
+    /// pbrt-v4's `MIPMap::EWA` at one level: texels inside the ellipse weighted by a Gaussian
+    /// of their squared radius (its 128-entry table, e^(−2r²) − e^(−2), read by truncation).
+    fn ewa_level(&self, level: usize, st: Vec2, dst0: Vec2, dst1: Vec2) -> Rgb {
+        let n = self.levels.len();
+        if level >= n {
+            return texel(&self.levels[n - 1], 0, 0, self.wrap);
+        }
+        let img = &self.levels[level];
+        let res = Vec2::new(img.width as f32, img.height as f32);
+        let (st, d0, d1) = (st * res - 0.5, dst0 * res, dst1 * res);
+        // The ellipse A s² + B s t + C t² < 1 (Heckbert), widened by a texel.
+        let (mut a, mut b, mut c) =
+            (d0.y * d0.y + d1.y * d1.y + 1.0, -2.0 * (d0.x * d0.y + d1.x * d1.y), d0.x * d0.x + d1.x * d1.x + 1.0);
+        let inv_f = 1.0 / (a * c - b * b * 0.25);
+        (a, b, c) = (a * inv_f, b * inv_f, c * inv_f);
+        // Its bounding box.
+        let det = -b * b + 4.0 * a * c;
+        let inv_det = 1.0 / det;
+        let (u_sqrt, v_sqrt) = ((det * c).max(0.0).sqrt(), (a * det).max(0.0).sqrt());
+        let s0 = (st.x - 2.0 * inv_det * u_sqrt).ceil() as i64;
+        let s1 = (st.x + 2.0 * inv_det * u_sqrt).floor() as i64;
+        let t0 = (st.y - 2.0 * inv_det * v_sqrt).ceil() as i64;
+        let t1 = (st.y + 2.0 * inv_det * v_sqrt).floor() as i64;
+        let lut = &*EWA_WEIGHTS;
+        let (mut sum, mut weights) = (Rgb::ZERO, 0.0f32);
+        for it in t0..=t1 {
+            let tt = it as f32 - st.y;
+            for is in s0..=s1 {
+                let ss = is as f32 - st.x;
+                let r2 = a * ss * ss + b * ss * tt + c * tt * tt;
+                if r2 < 1.0 {
+                    let w = lut[((r2 * lut.len() as f32) as usize).min(lut.len() - 1)];
+                    sum += w * texel(img, is, it, self.wrap);
+                    weights += w;
+                }
+            }
+        }
+        // The ellipse, a texel wider than the footprint, always holds a texel centre.
+        if weights > 0.0 { sum / weights } else { Rgb::ZERO }
+    }
+
+    /// Which texels pbrt-v4's `MIPMap::Filter` reads (other filters than `ewa`).
+    fn read(&self, st: Vec2, dst0: Vec2, dst1: Vec2) -> Read {
         let width = 2.0 * dst0.abs().max_element().max(dst1.abs().max_element());
         let n = self.levels.len();
         let level = (n - 1) as f32 + width.max(1e-8).log2();
@@ -117,10 +200,14 @@ impl MipMap {
             MipFilter::Bilinear | MipFilter::Trilinear if i == 0 => Read::Bilerp(0),
             MipFilter::Bilinear => Read::Bilerp(i),
             MipFilter::Trilinear => Read::Trilinear(i, level - i as f32),
-            MipFilter::Ewa => unreachable!("handled above"),
+            MipFilter::Ewa => unreachable!("read by MipMap::ewa"),
         }
     }
 }
+
+/// pbrt-v4's `MIPFilterLUT`: e^(−2 r²) − e^(−2) at r² = i/127.
+static EWA_WEIGHTS: std::sync::LazyLock<[f32; 128]> =
+    std::sync::LazyLock::new(|| std::array::from_fn(|i| ((-2.0 * i as f64 / 127.0).exp() - (-2.0f64).exp()) as f32));
 
 /// What a lookup reads: one texel of a level, a level bilinearly, or two levels blended.
 #[derive(Clone, Copy, Debug)]
@@ -260,5 +347,36 @@ mod tests {
         img.channels.push(("A".into(), vec![0.25; 4]));
         let a = MipMap::new(img, Wrap::Clamp, MipFilter::Bilinear);
         assert_eq!(a.lookup(st, Vec2::ZERO, Vec2::ZERO).float(), 0.25);
+    }
+
+    /// EWA is a normalised weighted average: a constant image gives its constant for any
+    /// footprint (round, elongated past `maxanisotropy`, wider than the image, degenerate);
+    /// a float lookup reads the texels' first channel, as pbrt-v4's `EWA<Float>` does.
+    #[test]
+    fn ewa_averages_over_the_footprint() {
+        let mut img = Image::new(16, 8);
+        img.pixels = vec![Rgb::new(0.9, 0.3, 0.0); 16 * 8];
+        let m = MipMap::new(img, Wrap::Repeat, MipFilter::Ewa).with_max_anisotropy(4.0);
+        let st = Vec2::new(0.37, 0.61);
+        for (d0, d1) in [
+            (Vec2::new(0.01, 0.0), Vec2::new(0.0, 0.01)),
+            (Vec2::new(0.2, 0.05), Vec2::new(-0.001, 0.004)),
+            (Vec2::new(3.0, 0.0), Vec2::new(0.0, 2.0)),
+            (Vec2::new(0.003, 0.002), Vec2::new(0.0, 0.0)),
+        ] {
+            let v = m.lookup(st, d0, d1);
+            assert!((v.rgb - Rgb::new(0.9, 0.3, 0.0)).abs().max_element() < 1e-5, "{d0} {d1}: {}", v.rgb);
+        }
+        assert!((m.lookup(st, Vec2::new(0.01, 0.0), Vec2::new(0.0, 0.01)).float() - 0.9).abs() < 1e-5);
+        // A checkerboard of single texels averages to its mean over a footprint of many
+        // texels, and keeps its contrast under one much smaller than a texel.
+        let mut img = Image::new(64, 64);
+        img.pixels = (0..64 * 64).map(|i| Rgb::splat(((i % 64 + i / 64) % 2) as f32)).collect();
+        let m = MipMap::new(img, Wrap::Repeat, MipFilter::Ewa);
+        let wide = m.lookup(st, Vec2::new(0.1, 0.0), Vec2::new(0.0, 0.1)).rgb.x;
+        assert!((wide - 0.5).abs() < 0.02, "{wide}");
+        let centre = Vec2::new(10.5, 20.5) / 64.0;
+        let sharp = m.lookup(centre, Vec2::new(1e-4, 0.0), Vec2::new(0.0, 1e-4)).rgb.x;
+        assert!((sharp - 0.5).abs() > 0.3, "{sharp}");
     }
 }

@@ -96,6 +96,7 @@ fn own_parity_scenes_match_pbrt_v4() {
         "procedural",
         "differentials",
         "ewa",
+        "displacement",
     ] {
         let reference = nimbus::imageio::read_exr(&dir().join(format!("references/{name}.exr"))).unwrap();
         let images = renders(&dir().join(format!("{name}.pbrt")), 32, 1..9);

@@ -2,6 +2,7 @@
 //! refinement.
 
 mod bounds;
+pub mod displace;
 pub mod gltf;
 pub mod loop_subdiv;
 mod motion;

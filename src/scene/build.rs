@@ -903,8 +903,17 @@ impl ShapeBuilder<'_> {
                 let mesh = Mesh::new(&world, rev, &sub.positions, &sub.normals, &[], sub.indices);
                 self.add_mesh(mesh, [material, interface, alpha], prims, bounds);
             }
-            ShapeKind::PlyMesh(path) => {
-                let ply = read_ply(path).map_err(|m| err(&e.loc, format!("plymesh: {m}")))?;
+            ShapeKind::PlyMesh(path, displacement) => {
+                let mut ply = read_ply(path).map_err(|m| err(&e.loc, format!("plymesh: {m}")))?;
+                if let Some((name, edge)) = displacement {
+                    // pbrt-v4 evaluates the texture at the mesh's own (p, uv), nothing else.
+                    let tex = self.textures.float(&FloatInput::Texture(name.clone()), &e.loc)?;
+                    let textures = &self.textures.textures;
+                    ply = crate::geometry::displace::displace(&ply, &world, *edge, |p, uv| {
+                        textures.eval_float(tex, &TexContext::at(p, uv, Vec3::ZERO))
+                    })
+                    .map_err(|m| err(&e.loc, format!("plymesh \"{}\": {m}", path.display())))?;
+                }
                 if !ply.quads.is_empty() {
                     let quads = BilinearMesh::new(&world, rev, &ply.positions, &ply.normals, &ply.uvs, ply.quads);
                     self.add_bilinear(quads, [material, interface, alpha], prims, bounds);

@@ -75,7 +75,7 @@ fn shape_triangles(shape: &ShapeEntity, settings: &ShapeSettings<'_>) -> Result<
     Ok(match &settings.kind {
         ShapeKind::TriangleMesh(m) => m.indices.len() as u64 / 3,
         ShapeKind::BilinearMesh(m) => m.indices.len() as u64 / 2,
-        ShapeKind::PlyMesh(path) => {
+        ShapeKind::PlyMesh(path, _) => {
             let mesh = read_ply(path).map_err(|e| Error::new(&shape.entity.loc, format!("plymesh: {e}")))?;
             mesh.indices.len() as u64 / 3
         }

@@ -84,8 +84,9 @@ pub enum ShapeKind<'a> {
         /// Subdivision levels.
         levels: u32,
     },
-    /// `plymesh`
-    PlyMesh(PathBuf),
+    /// `plymesh`, with pbrt-v4's displacement: the float texture and the `edgelength` the
+    /// mesh is refined to first.
+    PlyMesh(PathBuf, Option<(String, f32)>),
     /// `objmesh` (nimbus extension: a Wavefront OBJ file)
     ObjMesh(PathBuf),
     /// `gltfmesh` (nimbus extension: a glTF 2.0 file)
@@ -322,14 +323,9 @@ impl<'a> ShapeSettings<'a> {
                 levels: checked_int(p, "levels", 3, |v| (0..=12).contains(&v), "must be between 0 and 12")? as u32,
             },
             "plymesh" => {
-                if let Some(d) = p.get_texture("displacement")? {
-                    return Err(Error::new(
-                        p.loc("displacement").unwrap_or(&e.loc),
-                        format!("plymesh displacement (texture \"{d}\") is not supported by nimbus"),
-                    ));
-                }
-                p.get_one_float("edgelength", 1.0)?;
-                ShapeKind::PlyMesh(file_param(shape, "plymesh")?)
+                let edge = checked_float(p, "edgelength", 1.0, positive, "the edge length must be positive")?;
+                let displacement = p.get_texture("displacement")?.map(|d| (d.to_string(), edge));
+                ShapeKind::PlyMesh(file_param(shape, "plymesh")?, displacement)
             }
             "objmesh" => ShapeKind::ObjMesh(file_param(shape, "objmesh")?),
             "gltfmesh" => ShapeKind::GltfMesh(file_param(shape, "gltfmesh")?),

@@ -133,7 +133,8 @@ impl MipMap {
         if shorter == 0.0 || !shorter.is_finite() {
             return None;
         }
-        let lod = ((self.levels.len() - 1) as f32 + shorter.log2()).max(0.0);
+        // Past the coarsest level both reads are its single texel (and the index stays small).
+        let lod = ((self.levels.len() - 1) as f32 + shorter.log2()).clamp(0.0, self.levels.len() as f32);
         let i = lod.floor() as usize;
         let t = lod - i as f32;
         Some((1.0 - t) * self.ewa_level(i, st, dst0, dst1) + t * self.ewa_level(i + 1, st, dst0, dst1))
@@ -363,6 +364,7 @@ mod tests {
             (Vec2::new(0.2, 0.05), Vec2::new(-0.001, 0.004)),
             (Vec2::new(3.0, 0.0), Vec2::new(0.0, 2.0)),
             (Vec2::new(0.003, 0.002), Vec2::new(0.0, 0.0)),
+            (Vec2::new(1e30, 0.0), Vec2::new(0.0, 1e30)),
         ] {
             let v = m.lookup(st, d0, d1);
             assert!((v.rgb - Rgb::new(0.9, 0.3, 0.0)).abs().max_element() < 1e-5, "{d0} {d1}: {}", v.rgb);

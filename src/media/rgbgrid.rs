@@ -48,10 +48,10 @@ pub struct RgbGridMedium {
 /// a path comes back to the same voxels: 41 % of lookups on the parity suite's smoke land in
 /// the cell before them (the next tentative collision of the same ray), and about two thirds
 /// of the other lookups' corners were converted before on the same path (by its earlier
-/// collisions and its shadow rays through the same cells): 6 % of the render's time. So the last cell's corners are kept,
-/// and every voxel converted for the current medium and wavelengths in a direct-mapped cache.
-/// Both are exact: the values are a function of the medium, the voxel and the wavelengths,
-/// all in the keys.
+/// collisions and its shadow rays through the same cells). So the last cell's corners are
+/// kept, and every voxel converted for the current medium and wavelengths sits in a
+/// direct-mapped cache (6 % of the smoke's render time saved). Both are exact: the values are
+/// a function of the medium, the voxel and the wavelengths, all in the keys.
 struct Memo {
     /// [`RgbGridMedium::id`] of the medium the values belong to (0: none yet).
     grid: u64,

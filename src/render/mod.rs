@@ -176,17 +176,25 @@ impl ImagePass<'_> {
         self.sample
     }
 
+    /// The number of pixels the pass traces (one camera ray each).
+    pub fn pixel_count(&self) -> usize {
+        self.tiles.iter().map(|t| (t[2] - t[0]) as usize * (t[3] - t[1]) as usize).sum()
+    }
+
     /// Traces every pixel's camera ray with `f`, in parallel over tiles. Each tile starts a
-    /// `T` with `init(tile index)` (so a caller can hand each tile storage kept from an
-    /// earlier pass) and the results come in tile order, pixels in scanline order within a
-    /// tile, whatever the thread count. `f` gets the pixel's sampler positioned after the
-    /// camera sample's dimensions, as a per-ray integrator's `li` does.
-    pub fn trace_pixels<C: FilmChannels, T: Send>(
+    /// `T` with `init(tile index)` and ends with `done(tile index, T)`, which runs on the
+    /// tile's thread as soon as the tile is traced (so a caller can hand each tile storage from
+    /// a pool and give it back, or move a tile's results out while other tiles are running);
+    /// `done`'s results come in tile order, pixels in scanline order within a tile, whatever
+    /// the thread count. `f` gets the pixel's sampler positioned after the camera sample's
+    /// dimensions, as a per-ray integrator's `li` does.
+    pub fn trace_pixels<C: FilmChannels, T, U: Send>(
         &self,
         init: impl Fn(usize) -> T + Sync,
         f: impl Fn(&mut T, PixelRay, &mut C::Lambda, &mut Sampler, &mut RayStats) + Sync,
-    ) -> (Vec<T>, RayStats) {
-        let results: Vec<(T, RayStats)> = self
+        done: impl Fn(usize, T) -> U + Sync,
+    ) -> (Vec<U>, RayStats) {
+        let results: Vec<(U, RayStats)> = self
             .tiles
             .par_iter()
             .enumerate()
@@ -203,7 +211,7 @@ impl ImagePass<'_> {
                         f(&mut t, PixelRay { index, weight, ray }, &mut lambda, &mut sampler, &mut stats);
                     }
                 }
-                (t, stats)
+                (done(i, t), stats)
             })
             .collect();
         let mut stats = RayStats::default();
@@ -218,36 +226,32 @@ impl ImagePass<'_> {
     }
 }
 
-/// One whole-image sample from `method`, as per-pixel sums.
+/// One whole-image sample from `method`, added to the film's pixels (straight from the
+/// method's values: a per-pixel copy of the sums was 96 bytes a pixel at the process's peak).
 fn image_sample(
     scene: &Scene,
     method: &dyn ImageIntegrator,
     sampler: &Sampler,
     tiles: &[[u32; 4]],
-    acc: &Accumulator,
+    acc: &mut Accumulator,
     sample: u32,
-) -> (Vec<(u32, PixelSum)>, RayStats) {
+) -> RayStats {
     let pass = ImagePass { scene, sampler, tiles, origin: acc.origin, width: acc.width, sample };
     let (values, stats) = method.sample_image(scene, &pass);
     let max = scene.film.max_component_value;
     let gbuffer = matches!(scene.film.kind, FilmKind::GBuffer { .. });
     // One sampler to replay the camera samples with (not a clone per pixel).
     let mut replay = sampler.clone();
-    let sums = values
-        .into_iter()
-        .map(|PixelValue { index, weight, l }| {
-            let mut sum = PixelSum::default();
-            // The variance channels count samples whose camera ray (recomputed) sees a surface.
-            let counted = !gbuffer || {
-                let pixel = acc.origin + UVec2::new(index % acc.width, index / acc.width);
-                let (ray, _, _) = camera_ray::<Rgb>(scene, &mut replay, pixel, sample);
-                ray.is_some_and(|c| gbuffer::sees_surface(scene, c.ray))
-            };
-            sum.add(l, weight, max, counted);
-            (index, sum)
-        })
-        .collect();
-    (sums, stats)
+    for PixelValue { index, weight, l } in values {
+        // The variance channels count samples whose camera ray (recomputed) sees a surface.
+        let counted = !gbuffer || {
+            let pixel = acc.origin + UVec2::new(index % acc.width, index / acc.width);
+            let (ray, _, _) = camera_ray::<Rgb>(scene, &mut replay, pixel, sample);
+            ray.is_some_and(|c| gbuffer::sees_surface(scene, c.ray))
+        };
+        acc.pixels[index as usize].add(l, weight, max, counted);
+    }
+    stats
 }
 
 /// What rendering one tile (or one whole-image sample) returns: per pixel its index and
@@ -595,15 +599,12 @@ pub fn render_with_passes(
             // added to the film before the next is taken (holding a pass's samples until its
             // end held up to 64 images' sums: memory growing with the pass length).
             for s in spp_done..spp_done + count {
-                let (sums, stats) = image_sample(scene, method, &base_sampler, &tiles, &acc, s);
+                let stats = image_sample(scene, method, &base_sampler, &tiles, &mut acc, s);
                 if let Some(pb) = &progress {
                     pb.inc(tiles.len() as u64);
                 }
                 rays.fetch_add(stats.total(), Ordering::Relaxed);
                 total_stats.add(&stats);
-                for (i, v) in &sums {
-                    acc.pixels[*i as usize].merge(v);
-                }
             }
             Vec::new()
         } else {

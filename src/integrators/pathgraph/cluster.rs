@@ -27,23 +27,32 @@ impl Clusters {
     }
 
     /// The range of cluster `c` in `order`.
+    #[cfg(test)]
     pub fn range(&self, c: usize) -> std::ops::Range<usize> {
         self.offsets[c] as usize..self.offsets[c + 1] as usize
     }
 }
 
-/// Clusters the points `p` by kind (`kind` 1, 2, ...: points of one kind only share clusters
-/// with each other), about `k(kind)` per cluster; points of kind 0 are clusters of their own
-/// (after the others). `seed` picks the centres.
-pub fn cluster(p: &[Vec3], kind: impl Fn(usize) -> u32, k: impl Fn(u32) -> u32, seed: u64) -> Clusters {
-    let mut out = Clusters { order: Vec::with_capacity(p.len()), offsets: vec![0] };
+/// Clusters the points 0..n, point i at `p(i)`, by kind (`kind` 1, 2, ...: points of one
+/// kind only share clusters with each other), about `k(kind)` per cluster; points of kind 0
+/// are clusters of their own (after the others). `seed` picks the centres. The clusters
+/// depend on the points' indices (the centres are picked by index, members are in index
+/// order), not on where the caller keeps them.
+pub fn cluster<P: Fn(u32) -> Vec3 + Sync>(
+    n: usize,
+    p: P,
+    kind: impl Fn(usize) -> u32,
+    k: impl Fn(u32) -> u32,
+    seed: u64,
+) -> Clusters {
+    let mut out = Clusters { order: Vec::with_capacity(n), offsets: vec![0] };
     // Kinds in increasing order, each kind's points in index order.
     let mut kinds: std::collections::BTreeMap<u32, Vec<u32>> = std::collections::BTreeMap::new();
-    for i in 0..p.len() {
+    for i in 0..n {
         kinds.entry(kind(i)).or_default().push(i as u32);
     }
     for (&kd, idx) in kinds.range(1..) {
-        cluster_kind(p, idx, k(kd), seed ^ u64::from(kd), &mut out);
+        cluster_kind(&p, idx, k(kd), seed ^ u64::from(kd), &mut out);
     }
     for &i in kinds.get(&0).map_or(&[][..], Vec::as_slice) {
         out.order.push(i);
@@ -53,7 +62,7 @@ pub fn cluster(p: &[Vec3], kind: impl Fn(usize) -> u32, k: impl Fn(u32) -> u32, 
 }
 
 /// Appends the clusters of the points `idx`.
-fn cluster_kind(p: &[Vec3], idx: &[u32], k: u32, seed: u64, out: &mut Clusters) {
+fn cluster_kind<P: Fn(u32) -> Vec3 + Sync>(p: &P, idx: &[u32], k: u32, seed: u64, out: &mut Clusters) {
     if idx.is_empty() {
         return;
     }
@@ -70,7 +79,7 @@ fn cluster_kind(p: &[Vec3], idx: &[u32], k: u32, seed: u64, out: &mut Clusters) 
         centres.push(idx[0]);
     }
     let tree = CentreTree::new(p, &centres);
-    let nearest: Vec<u32> = idx.par_iter().map(|&i| tree.nearest(p[i as usize])).collect();
+    let nearest: Vec<u32> = idx.par_iter().map(|&i| tree.nearest(p(i))).collect();
     // Counting sort by centre: members stay in index order within a cluster.
     let mut count = vec![0u32; centres.len() + 1];
     for &c in &nearest {
@@ -93,7 +102,7 @@ fn cluster_kind(p: &[Vec3], idx: &[u32], k: u32, seed: u64, out: &mut Clusters) 
 
 /// Appends `members` as one cluster, or halves it at the median of its longest axis until
 /// the pieces hold at most `max` points.
-fn split(p: &[Vec3], members: &mut [u32], max: usize, out: &mut Clusters) {
+fn split<P: Fn(u32) -> Vec3>(p: &P, members: &mut [u32], max: usize, out: &mut Clusters) {
     if members.is_empty() {
         return;
     }
@@ -102,13 +111,12 @@ fn split(p: &[Vec3], members: &mut [u32], max: usize, out: &mut Clusters) {
         out.offsets.push(out.order.len() as u32);
         return;
     }
-    let (lo, hi) = members
-        .iter()
-        .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), &i| (lo.min(p[i as usize]), hi.max(p[i as usize])));
+    let (lo, hi) =
+        members.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), &i| (lo.min(p(i)), hi.max(p(i))));
     let axis = (hi - lo).max_position();
     let mid = members.len() / 2;
     // Ties broken by index, so the split does not depend on the input order.
-    members.select_nth_unstable_by(mid, |&a, &b| p[a as usize][axis].total_cmp(&p[b as usize][axis]).then(a.cmp(&b)));
+    members.select_nth_unstable_by(mid, |&a, &b| p(a)[axis].total_cmp(&p(b)[axis]).then(a.cmp(&b)));
     let (a, b) = members.split_at_mut(mid);
     a.sort_unstable();
     b.sort_unstable();
@@ -132,8 +140,8 @@ fn mix(seed: u64, i: u64) -> u64 {
 struct CentreTree(ImmutableKdTree<f32, u32, 3, 32>);
 
 impl CentreTree {
-    fn new(p: &[Vec3], centres: &[u32]) -> CentreTree {
-        let raw: Vec<[f32; 3]> = centres.iter().map(|&c| p[c as usize].to_array()).collect();
+    fn new(p: impl Fn(u32) -> Vec3, centres: &[u32]) -> CentreTree {
+        let raw: Vec<[f32; 3]> = centres.iter().map(|&c| p(c).to_array()).collect();
         CentreTree(ImmutableKdTree::new_from_slice(&raw))
     }
 
@@ -160,7 +168,7 @@ mod tests {
     #[test]
     fn every_point_once_and_clusters_near_k() {
         let p = points(20_000);
-        let c = cluster(&p, |i| u32::from(i % 10 != 0), |_| 16, 3);
+        let c = cluster(p.len(), |i| p[i as usize], |i| u32::from(i % 10 != 0), |_| 16, 3);
         let mut seen = c.order.clone();
         seen.sort_unstable();
         assert_eq!(seen, (0..20_000).collect::<Vec<u32>>());
@@ -176,7 +184,7 @@ mod tests {
     fn members_are_assigned_to_their_nearest_centre() {
         let p = points(3_000);
         let centres: Vec<u32> = (0..3_000u32).filter(|&i| mix(5, i as u64) < u64::MAX / 30).collect();
-        let tree = CentreTree::new(&p, &centres);
+        let tree = CentreTree::new(|i| p[i as usize], &centres);
         for (i, &q) in p.iter().enumerate() {
             let dist = |rank: u32| p[centres[rank as usize] as usize].distance_squared(q);
             let brute = (0..centres.len() as u32).map(dist).fold(f32::INFINITY, f32::min);
@@ -187,7 +195,7 @@ mod tests {
     #[test]
     fn k_one_is_one_point_per_cluster() {
         let p = points(100);
-        let c = cluster(&p, |_| 1, |_| 1, 0);
+        let c = cluster(p.len(), |i| p[i as usize], |_| 1, |_| 1, 0);
         assert_eq!(c.len(), 100);
     }
 }

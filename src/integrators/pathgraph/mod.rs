@@ -47,16 +47,18 @@ pub struct PathGraph {
 /// Arrays a graph sample fills and the next one reuses.
 #[derive(Default)]
 struct Stores {
-    /// Each tile's recording, emptied into the merged store but not freed.
-    tiles: Vec<Mutex<(Vertices, Paths)>>,
+    /// The graph: each tile's vertices and paths, appended as soon as the tile is traced (so
+    /// the image's graph exists once, not also as per-tile parts), in the order tiles finish.
     vertices: Vertices,
     paths: Paths,
-    spare: record::Spare,
+    /// Per running tile, the vertices and paths of its pixels until the tile is done.
+    staging: Vec<(Vertices, Paths)>,
 }
 
-/// Bytes per vertex the solve adds to the recorded arrays: L⁺, L̄, the marginal, the aggregated
-/// direct light, the technique index and the cluster index.
-const SOLVE_BYTES_PER_VERTEX: usize = 12 + 12 + 4 + 12 + 4 + 4;
+/// Bytes per vertex the solve adds to the recorded arrays: L̄, the marginal and the technique
+/// index (L⁺ takes the place of the positions, the aggregated direct light that of
+/// `direct_scatter`).
+const SOLVE_BYTES_PER_VERTEX: usize = 12 + 4 + 4;
 
 /// What the graph samples cost, for `--stats`.
 #[derive(Clone, Copy, Debug, Default)]
@@ -68,6 +70,12 @@ struct Report {
     record_seconds: f64,
     solve_seconds: f64,
     peak_bytes: usize,
+    /// The process's resident memory before the first graph sample, and its peak after the
+    /// latest one: what the graph really costs, allocator and temporaries included.
+    resident_before: Option<usize>,
+    resident_peak: Option<usize>,
+    /// The most vertices one sample recorded.
+    max_vertices: usize,
 }
 
 /// Creates the integrator.
@@ -88,12 +96,29 @@ pub fn create(settings: &PathGraphSettings, scene: &Scene) -> Result<PathGraph, 
 
 impl PathGraph {
     /// Records one 1-spp pass in the channels `C` into `stores`: graph vertices (in film RGB)
-    /// and one path per pixel.
-    fn record<C: FilmChannels>(&self, scene: &Scene, pass: &ImagePass<'_>, stores: &mut Stores) -> RayStats {
-        let tiles = std::mem::take(&mut stores.tiles);
-        let (parts, stats) = pass.trace_pixels::<C, _>(
-            |i| {
-                let (v, p) = tiles.get(i).map(|t| std::mem::take(&mut *lock(t))).unwrap_or_default();
+    /// and one path per pixel, each tile's in one block. Returns the blocks (start and length
+    /// in the vertex store) in tile order: the canonical vertex order, which does not depend
+    /// on the thread count, while the store's order does.
+    fn record<C: FilmChannels>(
+        &self,
+        scene: &Scene,
+        pass: &ImagePass<'_>,
+        stores: &mut Stores,
+    ) -> (RayStats, Vec<(u32, u32)>) {
+        let (mut vertices, mut paths) = (std::mem::take(&mut stores.vertices), std::mem::take(&mut stores.paths));
+        vertices.clear();
+        paths.clear();
+        // One path per pixel and at least as many vertices, reserved before the first tile
+        // appends: arrays grown from small sizes left their earlier, smaller copies behind in
+        // the heap (7 MiB at 512x384).
+        let pixels = pass.pixel_count();
+        vertices.reserve_total(pixels);
+        paths.reserve_total(pixels);
+        let graph = Mutex::new((vertices, paths));
+        let staging = Mutex::new(std::mem::take(&mut stores.staging));
+        let (blocks, stats) = pass.trace_pixels::<C, _, _>(
+            |_| {
+                let (v, p) = lock(&staging).pop().unwrap_or_default();
                 (Recorder::<C>::default(), v, p)
             },
             |(rec, v, p), px, lambda, sampler, stats| {
@@ -119,24 +144,25 @@ impl PathGraph {
                     p.scale_last(c.weight);
                 }
             },
+            |_, (_, mut v, mut p)| {
+                let len = v.len() as u32;
+                let start = {
+                    let mut g = lock(&graph);
+                    let (gv, gp) = &mut *g;
+                    let start = gv.len() as u32;
+                    gp.append(&mut p, start);
+                    gv.append(&mut v);
+                    start
+                };
+                lock(&staging).push((v, p));
+                (start, len)
+            },
         );
-        // Sized once: growing by doubling copied the vertex store again and faulted in fresh
-        // pages for every copy.
-        let Stores { vertices, paths, .. } = stores;
-        vertices.clear();
-        paths.clear();
-        vertices.reserve(parts.iter().map(|(_, v, _)| v.len()).sum());
-        paths.reserve(parts.iter().map(|(_, _, p)| p.len()).sum());
-        stores.tiles = parts
-            .into_iter()
-            .map(|(_, mut v, mut p)| {
-                let path_base = paths.len() as u32;
-                paths.append(&mut p, vertices.len() as u32);
-                vertices.append(&mut v, path_base);
-                Mutex::new((v, p))
-            })
-            .collect();
-        stats
+        let (vertices, paths) = graph.into_inner().unwrap_or_else(|e| e.into_inner());
+        stores.vertices = vertices;
+        stores.paths = paths;
+        stores.staging = staging.into_inner().unwrap_or_else(|e| e.into_inner());
+        (stats, blocks)
     }
 }
 
@@ -169,41 +195,61 @@ fn truncation_binds(depth: &[u32], max_depth: u32) -> bool {
     last * 100 >= first
 }
 
-/// The path-traced L⁺ of every vertex (the iteration's start, Sec. 4): a backward sweep, as
-/// each path's vertices are recorded in order.
-fn path_traced(v: &Vertices) -> Vec<Rgb> {
+/// The path-traced L⁺ of every vertex (the iteration's start, Sec. 4), into `out`: a backward
+/// sweep, as each path's vertices are recorded in order.
+fn path_traced(v: &Vertices, out: &mut Vec<Rgb>) {
     let n = v.len();
-    let mut l_plus = vec![Rgb::ZERO; n];
-    let mut scattered = vec![Rgb::ZERO; n];
+    out.clear();
+    out.resize(n, Rgb::ZERO);
+    let mut scattered = Rgb::ZERO;
     for i in (0..n).rev() {
         let next = v.next[i];
-        let lp = if next == NONE { v.edge_const[i] } else { v.edge_const[i] + v.edge[i] * scattered[next as usize] };
-        l_plus[i] = lp;
-        scattered[i] = v.direct_light[i] + v.direct_scatter[i] + v.w[i] * lp;
+        // The next vertex is i + 1 when there is one (a path's vertices are stored together).
+        debug_assert!(next == NONE || next as usize == i + 1);
+        let lp = if next == NONE { v.edge_const[i] } else { v.edge_const[i] + v.edge[i] * scattered };
+        out[i] = lp;
+        scattered = v.direct_light[i] + v.direct_scatter[i] + v.w[i] * lp;
     }
-    l_plus
+}
+
+/// A memory figure of the process from `/proc/self/status` in bytes: `VmRSS` (resident
+/// now) or `VmHWM` (resident at the peak so far). None where there is no such file.
+fn resident_bytes(field: &str) -> Option<usize> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with(field))?;
+    let kb: usize = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024)
 }
 
 impl ImageIntegrator for PathGraph {
     fn sample_image(&self, scene: &Scene, pass: &ImagePass<'_>) -> (Vec<PixelValue>, RayStats) {
+        if let Ok(mut r) = self.report.lock()
+            && r.samples == 0
+        {
+            r.resident_before = resident_bytes("VmRSS:");
+        }
         let start = Instant::now();
         // Taken, not held: a concurrent sample (none today) would record into fresh arrays.
         let mut stores = std::mem::take(&mut *lock(&self.stores));
-        let stats = match scene.transport.transport {
+        let (stats, blocks) = match scene.transport.transport {
             Transport::Rgb => self.record::<Rgb>(scene, pass, &mut stores),
             Transport::Spectral => self.record::<SampledSpectrum>(scene, pass, &mut stores),
         };
-        let (v, paths) = (&mut stores.vertices, &mut stores.paths);
+        let Stores { vertices: v, paths, .. } = &mut stores;
         let recorded = Instant::now();
 
         let seed = (scene.sampler.seed as u32 as u64) << 32 | pass.sample_index() as u64;
         // Medium vertices cluster with medium vertices, Lambertian surface vertices with
         // Lambertian ones; other surface vertices are clusters of one. Within a class,
-        // vertices cluster by their place along the path (README: depth classes).
+        // vertices cluster by their place along the path (README: depth classes). Clustering
+        // sees the vertices in canonical order (tile by tile), so that the graph does not
+        // depend on which tile finished first.
+        let canon: Vec<u32> = blocks.iter().flat_map(|&(s, n)| s..s + n).collect();
         let depth = path_positions(v, paths);
         let iterations = self.settings.iterations;
         let binding = truncation_binds(&depth, self.settings.max_depth);
-        let kind = |i: usize| {
+        let kind = |j: usize| {
+            let i = canon[j] as usize;
             let class = if !v.g[i].is_nan() {
                 1
             } else if v.n[i] != glam::Vec3::ZERO {
@@ -222,35 +268,63 @@ impl ImageIntegrator for PathGraph {
         };
         let k = self.settings.cluster_size;
         let first_k = (k / 2).max(1);
-        let mut clusters = cluster::cluster(&v.p, kind, |kd| if kd <= 2 { first_k } else { k }, seed);
+        let mut clusters = cluster::cluster(
+            canon.len(),
+            |j| v.p[canon[j as usize] as usize],
+            kind,
+            |kd| if kd <= 2 { first_k } else { k },
+            seed,
+        );
         drop(depth);
-        let mut rank = vec![0u32; clusters.order.len()];
-        for (new, &old) in clusters.order.iter().enumerate() {
+        for o in clusters.order.iter_mut() {
+            *o = canon[*o as usize];
+        }
+        drop(canon);
+        let order = std::mem::take(&mut clusters.order);
+        let mut rank = vec![0u32; order.len()];
+        for (new, &old) in order.iter().enumerate() {
             rank[old as usize] = new as u32;
         }
-        let l_plus_recorded = path_traced(v);
-        let mut l_plus: Vec<Rgb> = clusters.order.iter().map(|&i| l_plus_recorded[i as usize]).collect();
-        drop(l_plus_recorded);
-        v.permute(&clusters.order, &rank, &mut stores.spare);
+        // The positions have done their work: their array holds L⁺ from here on (and is given
+        // back at the end), so the solve allocates no 12-byte array of its own.
+        let mut l_plus = std::mem::take(&mut v.p);
+        path_traced(v, &mut l_plus);
+        // The permutation's spare arrays, which the solve then uses for L̄, the marginals and
+        // each vertex's earliest technique. Not kept from one sample to the next: kept, they
+        // were idle through the next sample's recording and clustering (20 bytes per vertex
+        // more at the process's peak), and allocating them costs a few milliseconds.
+        let mut spare = record::Spare::default();
+        v.permute(&mut l_plus, &order, &rank, &mut spare);
         for f in paths.first.iter_mut() {
             if *f != NONE {
                 *f = rank[*f as usize];
             }
         }
         drop(rank);
-        clusters.order = Vec::new();
-        let mut cluster_of = vec![0u32; v.len()];
-        for c in 0..clusters.len() {
-            cluster_of[clusters.range(c)].fill(c as u32);
+        drop(order);
+        // Each vertex's path, to find the techniques (a path's earliest vertex in a cluster).
+        let mut path = vec![0u32; v.len()];
+        for (k, &f) in paths.first.iter().enumerate() {
+            let mut i = f;
+            while i != NONE {
+                path[i as usize] = k as u32;
+                i = v.next[i as usize];
+            }
         }
-        // The solve's peak: the vertex arrays, L⁺, L̄, the solver's marginal, aggregated direct
-        // light and techniques, each vertex's cluster; the paths; the cluster offsets.
+        let mut earliest = std::mem::take(&mut spare.u);
+        solve::earliest(&clusters.offsets, |i| path[i], &mut earliest);
+        drop(path);
+        // The solve's peak: the vertex arrays, L⁺, L̄, the solver's marginal and techniques;
+        // the paths; the cluster offsets.
         let peak = (Vertices::BYTES_PER_VERTEX + SOLVE_BYTES_PER_VERTEX) * v.len()
             + Paths::BYTES_PER_PATH * paths.len()
             + 4 * clusters.offsets.len();
 
-        let solver = solve::Solver::new(v, &clusters.offsets);
-        let mut scattered = vec![Rgb::ZERO; v.len()];
+        let direct = std::mem::take(&mut v.direct_scatter);
+        let solver = solve::Solver::new(v, &clusters.offsets, earliest, std::mem::take(&mut spare.f), direct);
+        let mut scattered = std::mem::take(&mut spare.v3);
+        scattered.clear();
+        scattered.resize(v.len(), Rgb::ZERO);
         for _ in 0..self.settings.iterations {
             solver.aggregate(&l_plus, &mut scattered);
             solver.propagate(&scattered, &mut l_plus);
@@ -263,26 +337,27 @@ impl ImageIntegrator for PathGraph {
                 let l = if f == NONE {
                     paths.before[k]
                 } else {
-                    let f = f as usize;
-                    let extra = paths.extra[k];
-                    let direct = if extra.is_nan() { v.direct_light[f] + v.direct_scatter[f] } else { extra };
-                    let indirect = solver.indirect_at(cluster_of[f] as usize, f, &l_plus);
-                    paths.before[k] + paths.beta[k] * (direct + indirect)
+                    paths.before[k] + paths.beta[k] * solver.indirect_at(f as usize, &l_plus)
                 };
                 PixelValue { index: paths.pixel[k], weight: paths.weight[k], l }
             })
             .collect();
         let solved = Instant::now();
-        let (vertices, npaths) = (v.len(), paths.len());
+        let (earliest, marginal, direct) = solver.into_storage();
+        drop((earliest, marginal, scattered));
+        (v.direct_scatter, v.p) = (direct, l_plus);
+        let (vertices, npaths, clusters) = (v.len(), paths.len(), clusters.len());
         *lock(&self.stores) = stores;
         if let Ok(mut r) = self.report.lock() {
             r.samples += 1;
             r.vertices += vertices as u64;
-            r.clusters += clusters.len() as u64;
+            r.clusters += clusters as u64;
             r.paths += npaths as u64;
             r.record_seconds += (recorded - start).as_secs_f64();
             r.solve_seconds += (solved - recorded).as_secs_f64();
             r.peak_bytes = r.peak_bytes.max(peak);
+            r.max_vertices = r.max_vertices.max(vertices);
+            r.resident_peak = resident_bytes("VmHWM:");
         }
         (values, stats)
     }
@@ -334,7 +409,7 @@ impl Integrator for PathGraph {
         }
         let n = r.samples as f64;
         let verts = r.vertices as f64 / n;
-        vec![
+        let mut lines = vec![
             format!(
                 "pathgraph   {} graph samples (K {}, {} iterations, extradirect {}): {:.0} vertices and {:.0} clusters \
                  per sample ({:.2} vertices per path)",
@@ -347,8 +422,8 @@ impl Integrator for PathGraph {
                 r.vertices as f64 / r.paths.max(1) as f64
             ),
             format!(
-                "pathgraph   record {:.3} s, solve {:.3} s per sample; peak {:.1} MiB: {} bytes per vertex ({} recorded + {} \
-                 solving), {} per path",
+                "pathgraph   record {:.3} s, solve {:.3} s per sample; arrays {:.1} MiB at the peak: {} bytes per vertex \
+                 ({} recorded + {} solving), {} per path",
                 r.record_seconds / n,
                 r.solve_seconds / n,
                 r.peak_bytes as f64 / (1 << 20) as f64,
@@ -357,6 +432,17 @@ impl Integrator for PathGraph {
                 SOLVE_BYTES_PER_VERTEX,
                 Paths::BYTES_PER_PATH
             ),
-        ]
+        ];
+        if let (Some(before), Some(peak)) = (r.resident_before, r.resident_peak) {
+            let added = peak.saturating_sub(before);
+            lines.push(format!(
+                "pathgraph   process resident peak {:.1} MiB, {:.1} MiB above its size before the first graph sample: \
+                 {:.0} bytes per vertex of the largest graph",
+                peak as f64 / (1 << 20) as f64,
+                added as f64 / (1 << 20) as f64,
+                added as f64 / r.max_vertices.max(1) as f64
+            ));
+        }
+        lines
     }
 }

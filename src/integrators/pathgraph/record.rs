@@ -27,7 +27,7 @@ use crate::integrators::common::{EmissionEvent, NeeEvent, PathObserver, VertexEv
 /// Graph vertices, struct of arrays.
 #[derive(Debug, Default)]
 pub struct Vertices {
-    /// Position.
+    /// Position. Only clustering reads it: the solve takes the array to hold L⁺.
     pub p: Vec<Vec3>,
     /// Direction back along the incoming ray.
     pub wo: Vec<Vec3>,
@@ -58,37 +58,35 @@ pub struct Vertices {
     pub edge: Vec<Rgb>,
     /// The next graph vertex on the path, or NONE.
     pub next: Vec<u32>,
-    /// The path the vertex belongs to.
-    pub path: Vec<u32>,
 }
 
 impl Vertices {
     /// Number of vertices.
     pub fn len(&self) -> usize {
-        self.p.len()
+        self.wo.len()
     }
 
     /// Bytes per vertex of these arrays.
-    pub const BYTES_PER_VERTEX: usize = 3 * 12 + 4 + 12 + 12 + 12 + 12 + 4 + 4 + 12 + 4 + 12 + 12 + 4 + 4;
+    pub const BYTES_PER_VERTEX: usize = 3 * 12 + 4 + 12 + 12 + 12 + 12 + 4 + 4 + 12 + 4 + 12 + 12 + 4;
 
-    /// Room for `n` more vertices in every array.
-    pub fn reserve(&mut self, n: usize) {
-        self.p.reserve_exact(n);
-        self.wo.reserve_exact(n);
-        self.wi.reserve_exact(n);
-        self.g.reserve_exact(n);
-        self.n.reserve_exact(n);
-        self.w.reserve_exact(n);
-        self.direct_light.reserve_exact(n);
-        self.light_wi.reserve_exact(n);
-        self.light_pdf.reserve_exact(n);
-        self.light_pdf_scatter.reserve_exact(n);
-        self.direct_scatter.reserve_exact(n);
-        self.scatter_pdf_light.reserve_exact(n);
-        self.edge_const.reserve_exact(n);
-        self.edge.reserve_exact(n);
-        self.next.reserve_exact(n);
-        self.path.reserve_exact(n);
+    /// Room for at least `n` vertices in every array.
+    pub fn reserve_total(&mut self, n: usize) {
+        let more = n.saturating_sub(self.len());
+        self.p.reserve(more);
+        self.wo.reserve(more);
+        self.wi.reserve(more);
+        self.g.reserve(more);
+        self.n.reserve(more);
+        self.w.reserve(more);
+        self.direct_light.reserve(more);
+        self.light_wi.reserve(more);
+        self.light_pdf.reserve(more);
+        self.light_pdf_scatter.reserve(more);
+        self.direct_scatter.reserve(more);
+        self.scatter_pdf_light.reserve(more);
+        self.edge_const.reserve(more);
+        self.edge.reserve(more);
+        self.next.reserve(more);
     }
 
     /// Removes every vertex, keeping the arrays' memory for the next sample.
@@ -108,12 +106,11 @@ impl Vertices {
         self.edge_const.clear();
         self.edge.clear();
         self.next.clear();
-        self.path.clear();
     }
 
-    /// Appends `o`, whose `next` indices are relative to its own start and whose paths are
-    /// numbered from `path_base` in the combined paths. `o` is left empty with its memory.
-    pub fn append(&mut self, o: &mut Vertices, path_base: u32) {
+    /// Appends `o`, whose `next` indices are relative to its own start. `o` is left empty
+    /// with its memory.
+    pub fn append(&mut self, o: &mut Vertices) {
         let base = self.len() as u32;
         self.p.append(&mut o.p);
         self.wo.append(&mut o.wo);
@@ -130,21 +127,23 @@ impl Vertices {
         self.edge_const.append(&mut o.edge_const);
         self.edge.append(&mut o.edge);
         self.next.extend(o.next.drain(..).map(|n| if n == NONE { NONE } else { n + base }));
-        self.path.extend(o.path.drain(..).map(|p| p + path_base));
     }
 
-    /// Reorders the vertices to `order` (a permutation; `rank` its inverse), renumbering
-    /// `next`. One array at a time through `spare`, which ends holding the arrays' old
-    /// memory, so the reordering needs one array's worth of memory extra and, from the
-    /// second sample on, allocates none.
-    pub fn permute(&mut self, order: &[u32], rank: &[u32], spare: &mut Spare) {
+    /// Reorders the vertices (all but their positions, which the caller has taken: only
+    /// clustering needs them) and `extra` (one more value per vertex) to `order` (a
+    /// permutation; `rank` its inverse), renumbering `next`. One array at a time through
+    /// `spare`, which ends holding old arrays' memory (one array of each element size, free
+    /// for the solve to use), so the reordering needs one array's worth of memory extra and,
+    /// from the second sample on, allocates none.
+    pub fn permute(&mut self, extra: &mut Vec<Rgb>, order: &[u32], rank: &[u32], spare: &mut Spare) {
+        assert!(self.p.is_empty(), "positions are not reordered");
         fn gather<T: Copy + Send + Sync>(v: &mut Vec<T>, spare: &mut Vec<T>, order: &[u32]) {
             spare.clear();
             spare.par_extend(order.par_iter().with_min_len(4096).map(|&i| v[i as usize]));
             std::mem::swap(v, spare);
         }
         let Spare { v3, f, u } = spare;
-        gather(&mut self.p, v3, order);
+        gather(extra, v3, order);
         gather(&mut self.wo, v3, order);
         gather(&mut self.wi, v3, order);
         gather(&mut self.g, f, order);
@@ -158,7 +157,6 @@ impl Vertices {
         gather(&mut self.scatter_pdf_light, f, order);
         gather(&mut self.edge_const, v3, order);
         gather(&mut self.edge, v3, order);
-        gather(&mut self.path, u, order);
         u.clear();
         u.par_extend(order.par_iter().with_min_len(4096).map(|&i| {
             let n = self.next[i as usize];
@@ -168,12 +166,13 @@ impl Vertices {
     }
 }
 
-/// One spare array per element type, for [`Vertices::permute`].
+/// One spare array per element size, for [`Vertices::permute`]; between permutations the
+/// solve borrows them.
 #[derive(Debug, Default)]
 pub struct Spare {
-    v3: Vec<Vec3>,
-    f: Vec<f32>,
-    u: Vec<u32>,
+    pub v3: Vec<Vec3>,
+    pub f: Vec<f32>,
+    pub u: Vec<u32>,
 }
 
 /// Recorded paths, one per camera ray, struct of arrays.
@@ -183,31 +182,29 @@ pub struct Paths {
     pub pixel: Vec<u32>,
     /// The camera sample's filter weight.
     pub weight: Vec<f32>,
-    /// Radiance found before the first graph vertex (seen emitters, and everything when the
-    /// path has no graph vertex).
+    /// Radiance the graph does not refine: what the path found before its first graph vertex
+    /// (seen emitters, and everything when the path has no graph vertex) and the
+    /// non-aggregated direct light there (Sec. 4; the extra light samples' when `extradirect`
+    /// asked for them), times the throughput arriving there.
     pub before: Vec<Rgb>,
     /// The first graph vertex, or NONE.
     pub first: Vec<u32>,
     /// Throughput arriving at the first graph vertex.
     pub beta: Vec<Rgb>,
-    /// The extra light samples' direct light at the first graph vertex, per unit of β, when
-    /// `extradirect` asked for them (NaN when the path has none: its first light-sampling
-    /// vertex was not its first graph vertex, or no extra samples were taken).
-    pub extra: Vec<Rgb>,
 }
 
 impl Paths {
     /// Bytes per path of these arrays.
-    pub const BYTES_PER_PATH: usize = 4 + 4 + 12 + 4 + 12 + 12;
+    pub const BYTES_PER_PATH: usize = 4 + 4 + 12 + 4 + 12;
 
-    /// Room for `n` more paths in every array.
-    pub fn reserve(&mut self, n: usize) {
-        self.pixel.reserve_exact(n);
-        self.weight.reserve_exact(n);
-        self.before.reserve_exact(n);
-        self.first.reserve_exact(n);
-        self.beta.reserve_exact(n);
-        self.extra.reserve_exact(n);
+    /// Room for at least `n` paths in every array.
+    pub fn reserve_total(&mut self, n: usize) {
+        let more = n.saturating_sub(self.len());
+        self.pixel.reserve(more);
+        self.weight.reserve(more);
+        self.before.reserve(more);
+        self.first.reserve(more);
+        self.beta.reserve(more);
     }
 
     /// Removes every path, keeping the arrays' memory.
@@ -217,7 +214,6 @@ impl Paths {
         self.before.clear();
         self.first.clear();
         self.beta.clear();
-        self.extra.clear();
     }
 
     /// Appends `o`, whose vertex indices start at `vertex_base` in the combined vertices.
@@ -228,7 +224,6 @@ impl Paths {
         self.before.append(&mut o.before);
         self.first.extend(o.first.drain(..).map(|f| if f == NONE { NONE } else { f + vertex_base }));
         self.beta.append(&mut o.beta);
-        self.extra.append(&mut o.extra);
     }
 
     /// Number of paths.
@@ -236,9 +231,9 @@ impl Paths {
         self.pixel.len()
     }
 
-    /// Scales the last path's radiance by `w` (a realistic camera's ray weight): what it found
-    /// before its first graph vertex and the throughput arriving there, which every other
-    /// quantity of the path is relative to.
+    /// Scales the last path's radiance by `w` (a realistic camera's ray weight): what the graph
+    /// does not refine and the throughput arriving at its first graph vertex, which every
+    /// other quantity of the path is relative to.
     pub fn scale_last(&mut self, w: f32) {
         if let (Some(before), Some(beta)) = (self.before.last_mut(), self.beta.last_mut()) {
             *before *= w;
@@ -466,7 +461,6 @@ impl<C: Channels> Recorder<C> {
             let (sw, swp) = self.scatter_weights[k];
             vertices.scatter_pdf_light.push(if sw > 0.0 { swp / sw } else { 0.0 });
             vertices.edge_const.push(to_rgb(self.c[k]));
-            vertices.path.push(paths.len() as u32);
             if k + 1 < n {
                 vertices.edge.push(rgb_factor(self.edge[k], self.scattered[k + 1], &to_rgb, one));
                 vertices.next.push(base + k as u32 + 1);
@@ -477,19 +471,22 @@ impl<C: Channels> Recorder<C> {
         }
         paths.pixel.push(pixel);
         paths.weight.push(weight);
-        paths.before.push(to_rgb(before));
         if n == 0 {
+            paths.before.push(to_rgb(before));
             paths.first.push(NONE);
             paths.beta.push(Rgb::ZERO);
-            paths.extra.push(Rgb::NAN);
         } else {
             let beta = vs[self.depth[0]].beta;
-            paths.first.push(base);
-            paths.beta.push(rgb_factor(beta, self.scattered[0], &to_rgb, one));
-            paths.extra.push(match self.extra {
+            let beta_rgb = rgb_factor(beta, self.scattered[0], &to_rgb, one);
+            // The pixel's own direct light at its first graph vertex (E + R as the vertex
+            // stores them), or the extra light samples' taken there.
+            let direct = match self.extra {
                 Some((depth, c)) if depth as usize == self.depth[0] => to_rgb(div(c, beta)),
-                _ => Rgb::NAN,
-            });
+                _ => to_rgb(self.e[0]) + to_rgb(self.r[0]),
+            };
+            paths.before.push(to_rgb(before) + beta_rgb * direct);
+            paths.first.push(base);
+            paths.beta.push(beta_rgb);
         }
         self.extra = None;
         self.vertices.clear();

@@ -43,24 +43,25 @@ pub struct Solver<'a> {
 
 impl<'a> Solver<'a> {
     /// The first aggregation pass: techniques, marginal densities and the aggregated direct
-    /// light.
-    pub fn new(v: &'a Vertices, offsets: &'a [u32]) -> Solver<'a> {
+    /// light. `earliest` is [`earliest`]'s answer; `marginal` is storage to fill (its
+    /// contents do not matter); `direct` comes in as the vertices' `direct_scatter` (which
+    /// `v` no longer holds: no later pass needs it) and is replaced by the aggregated direct
+    /// light A⁰L⁰, so the graph needs no array of its own for it. [`Solver::into_storage`]
+    /// gives all three back.
+    pub fn new(
+        v: &'a Vertices,
+        offsets: &'a [u32],
+        earliest: Vec<u32>,
+        mut marginal: Vec<f32>,
+        mut direct: Vec<Rgb>,
+    ) -> Solver<'a> {
         let n = v.len();
+        assert_eq!(direct.len(), n, "direct: one value per vertex");
         let clusters = offsets.len() - 1;
         let batches: Vec<(usize, usize)> =
             (0..clusters).step_by(BATCH).map(|c| (c, (c + BATCH).min(clusters))).collect();
-        let mut earliest: Vec<u32> = (0..n as u32).collect();
-        // Members of a cluster are in recording order, so a path's first member is its earliest.
-        for c in 0..clusters {
-            let r = offsets[c] as usize..offsets[c + 1] as usize;
-            for i in r.clone() {
-                if let Some(e) = (r.start..i).find(|&e| v.path[e] == v.path[i]) {
-                    earliest[i] = earliest[e];
-                }
-            }
-        }
-        let mut marginal = vec![0.0f32; n];
-        let mut direct = vec![Rgb::ZERO; n];
+        marginal.clear();
+        marginal.resize(n, 0.0);
         {
             let parts = split_by_batches(&batches, offsets, &mut marginal, &mut direct);
             parts.into_par_iter().for_each(|(range, marginal, direct)| {
@@ -74,6 +75,11 @@ impl<'a> Solver<'a> {
             });
         }
         Solver { v, offsets, earliest, marginal, direct, batches }
+    }
+
+    /// The storage `new` was given, for the next graph: `earliest`, `marginal` and `direct`.
+    pub fn into_storage(self) -> (Vec<u32>, Vec<f32>, Vec<Rgb>) {
+        (self.earliest, self.marginal, self.direct)
     }
 
     /// Aggregated scattered radiance L̄ = A⁰L⁰ + A⁺L⁺ (Eq. 25) of every vertex, into `out`.
@@ -174,7 +180,9 @@ impl<'a> Solver<'a> {
     }
 
     /// The aggregated scattered indirect light A⁺L⁺ at vertex `i` alone.
-    pub fn indirect_at(&self, cluster: usize, i: usize, l_plus: &[Rgb]) -> Rgb {
+    pub fn indirect_at(&self, i: usize, l_plus: &[Rgb]) -> Rgb {
+        // The cluster holding i: the last one starting at or before it.
+        let cluster = self.offsets.partition_point(|&o| o as usize <= i) - 1;
         let r = self.offsets[cluster] as usize..self.offsets[cluster + 1] as usize;
         self.indirect_in(r, i, l_plus)
     }
@@ -189,6 +197,29 @@ impl<'a> Solver<'a> {
     }
 }
 
+/// Each vertex's path's earliest vertex in its cluster (itself when it is that vertex), into
+/// `out`: the vertices are in cluster order (clusters start at `offsets`), each cluster's
+/// members in recording order, and `path(i)` names vertex i's path.
+pub fn earliest(offsets: &[u32], path: impl Fn(usize) -> u32 + Sync, out: &mut Vec<u32>) {
+    let n = *offsets.last().unwrap_or(&0) as usize;
+    out.clear();
+    out.par_extend((0..n as u32).into_par_iter().with_min_len(4096));
+    let clusters = offsets.len().saturating_sub(1);
+    // Members of a cluster are in recording order, so a path's first member is its earliest.
+    let batches: Vec<(usize, usize)> = (0..clusters).step_by(BATCH).map(|c| (c, (c + BATCH).min(clusters))).collect();
+    split_one(&batches, offsets, out).into_par_iter().for_each(|((c0, c1), out)| {
+        let base = offsets[c0] as usize;
+        for c in c0..c1 {
+            let r = offsets[c] as usize..offsets[c + 1] as usize;
+            for i in r.clone() {
+                if let Some(e) = (r.start..i).find(|&e| path(e) == path(i)) {
+                    out[i - base] = e as u32;
+                }
+            }
+        }
+    });
+}
+
 /// Per-batch scratch of the first pass.
 #[derive(Default)]
 struct Scratch {
@@ -201,7 +232,8 @@ struct Scratch {
     scatter_samples: Samples,
 }
 
-/// Marginals and Eq. 22 for the cluster `r` (outputs indexed from the cluster's start).
+/// Marginals and Eq. 22 for the cluster `r` (outputs indexed from the cluster's start;
+/// `direct` holds the cluster's `direct_scatter` on the way in).
 fn first_pass(
     v: &Vertices,
     earliest: &[u32],
@@ -213,11 +245,11 @@ fn first_pass(
     let i0 = r.start;
     if v.g[i0].is_nan() {
         if v.n[i0] != Vec3::ZERO {
-            return lambertian_first_pass(v, earliest, r, marginal, direct, &mut s.light_marginal);
+            return lambertian_first_pass(v, earliest, r, marginal, direct, &mut s.light_marginal, &mut s.scatter);
         }
         for (k, i) in r.enumerate() {
             marginal[k] = f32::NAN;
-            direct[k] = v.direct_light[i] + v.direct_scatter[i];
+            direct[k] += v.direct_light[i];
         }
         return;
     }
@@ -243,11 +275,11 @@ fn first_pass(
         marginal[k] = p_phase;
         // Incoming direct radiance L⁰ recovered from the path's MIS-weighted value (so that a
         // cluster of one gives the path-traced value back exactly).
-        let scatter = if v.direct_scatter[j] == Rgb::ZERO {
+        let scatter = if direct[k] == Rgb::ZERO {
             Rgb::ZERO
         } else {
             let f = own.eval(v.wi[j]);
-            v.direct_scatter[j] * ((f + v.scatter_pdf_light[j]) / f)
+            direct[k] * ((f + v.scatter_pdf_light[j]) / f)
         };
         s.scatter.push(scatter);
         // Light-sampled directions (Eq. 22's first sum); a delta light (phase density 0) can
@@ -359,6 +391,7 @@ fn lambertian_indirect(
 
 /// Marginals and Eq. 22 for a cluster of Lambertian vertices (f = R·p, p the cosine density):
 /// the direct light each sample brought, per unit of its own R and p, over the marginal.
+/// `direct` holds the cluster's `direct_scatter` on the way in.
 fn lambertian_first_pass(
     v: &Vertices,
     earliest: &[u32],
@@ -366,7 +399,19 @@ fn lambertian_first_pass(
     marginal: &mut [f32],
     direct: &mut [Rgb],
     light_marginal: &mut Vec<f32>,
+    scatter: &mut Vec<Rgb>,
 ) {
+    // The direct light each phase sample found, per unit of its own R and p (zero where it
+    // found none), before `direct` is overwritten.
+    scatter.clear();
+    scatter.extend(r.clone().enumerate().map(|(m, j)| {
+        let own = cosine_pdf(v.n[j], v.wi[j]);
+        if direct[m] == Rgb::ZERO || own <= 0.0 {
+            Rgb::ZERO
+        } else {
+            div(direct[m] * ((own + v.scatter_pdf_light[j]) / own), v.w[j])
+        }
+    }));
     let technique = |j: usize| earliest[j] as usize == j;
     let count = r.clone().filter(|&j| technique(j)).count() as f32;
     let sum_pdf = |w: Vec3| -> f32 { r.clone().filter(|&l| technique(l)).map(|l| cosine_pdf(v.n[l], w)).sum() };
@@ -396,14 +441,12 @@ fn lambertian_first_pass(
                     sum += p_i / p_m * l0;
                 }
             }
-            if v.direct_scatter[j] != Rgb::ZERO {
+            if scatter[m] != Rgb::ZERO {
                 let w = v.wi[j];
-                let own = cosine_pdf(v.n[j], w);
-                let l0 = div(v.direct_scatter[j] * ((own + v.scatter_pdf_light[j]) / own), v.w[j]);
                 let p_i = cosine_pdf(v.n[i], w);
                 let p_m = marginal[m] + swap(w, p_i) + count * v.scatter_pdf_light[j];
-                if p_i > 0.0 && p_m > 0.0 && own > 0.0 {
-                    sum += p_i / p_m * l0;
+                if p_i > 0.0 && p_m > 0.0 {
+                    sum += p_i / p_m * scatter[m];
                 }
             }
         }
@@ -464,14 +507,15 @@ mod tests {
         v.edge_const.push(Rgb::ZERO);
         v.edge.push(Rgb::ZERO);
         v.next.push(NONE);
-        v.path.push(v.path.len() as u32);
     }
 
     /// Aggregates `l_plus` over `v` as one cluster.
     fn aggregate_one_cluster(v: &Vertices, l_plus: &[Rgb]) -> Vec<Rgb> {
         let offsets = [0u32, v.len() as u32];
         let mut out = vec![Rgb::ZERO; v.len()];
-        Solver::new(v, &offsets).aggregate(l_plus, &mut out);
+        // Every vertex is its own path.
+        let earliest = (0..v.len() as u32).collect();
+        Solver::new(v, &offsets, earliest, Vec::new(), v.direct_scatter.clone()).aggregate(l_plus, &mut out);
         out
     }
 

@@ -206,8 +206,14 @@ pub trait Integrator: Sync {
 /// camera rays (see [`crate::render::ImagePass`]).
 pub trait ImageIntegrator: Sync {
     /// One sample of every pixel: (accumulator index, filter weight, RGB radiance) for each
-    /// camera ray of `pass`, and the rays traced.
-    fn sample_image(&self, scene: &Scene, pass: &crate::render::ImagePass<'_>) -> (Vec<PixelValue>, RayStats);
+    /// camera ray of `pass`, handed to `out` in any order (no image-sized list of them is
+    /// needed); returns the rays traced.
+    fn sample_image(
+        &self,
+        scene: &Scene,
+        pass: &crate::render::ImagePass<'_>,
+        out: &mut dyn FnMut(PixelValue),
+    ) -> RayStats;
 }
 
 /// One camera sample's value for the film, from an [`ImageIntegrator`].

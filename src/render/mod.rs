@@ -226,8 +226,8 @@ impl ImagePass<'_> {
     }
 }
 
-/// One whole-image sample from `method`, added to the film's pixels (straight from the
-/// method's values: a per-pixel copy of the sums was 96 bytes a pixel at the process's peak).
+/// One whole-image sample from `method`, added to the film's pixels as the method hands
+/// them over (a per-pixel copy of the sums was 96 bytes a pixel at the process's peak).
 fn image_sample(
     scene: &Scene,
     method: &dyn ImageIntegrator,
@@ -237,21 +237,21 @@ fn image_sample(
     sample: u32,
 ) -> RayStats {
     let pass = ImagePass { scene, sampler, tiles, origin: acc.origin, width: acc.width, sample };
-    let (values, stats) = method.sample_image(scene, &pass);
     let max = scene.film.max_component_value;
     let gbuffer = matches!(scene.film.kind, FilmKind::GBuffer { .. });
     // One sampler to replay the camera samples with (not a clone per pixel).
     let mut replay = sampler.clone();
-    for PixelValue { index, weight, l } in values {
+    let (origin, width) = (acc.origin, acc.width);
+    let pixels = &mut acc.pixels;
+    method.sample_image(scene, &pass, &mut |PixelValue { index, weight, l }| {
         // The variance channels count samples whose camera ray (recomputed) sees a surface.
         let counted = !gbuffer || {
-            let pixel = acc.origin + UVec2::new(index % acc.width, index / acc.width);
+            let pixel = origin + UVec2::new(index % width, index / width);
             let (ray, _, _) = camera_ray::<Rgb>(scene, &mut replay, pixel, sample);
             ray.is_some_and(|c| gbuffer::sees_surface(scene, c.ray))
         };
-        acc.pixels[index as usize].add(l, weight, max, counted);
-    }
-    stats
+        pixels[index as usize].add(l, weight, max, counted);
+    })
 }
 
 /// What rendering one tile (or one whole-image sample) returns: per pixel its index and

@@ -1,15 +1,15 @@
 //! Neighbour edges: nearest-centre clustering of the shading points (Sec. 3.1, Sec. 4).
 //!
 //! About N/K points are chosen as centres by hashing their index with the sample's seed (so
-//! the choice does not depend on the thread count), a k-d tree over the centres (kiddo's
-//! immutable tree) answers nearest-centre queries, and clusters larger than 2K are halved at
+//! the choice does not depend on the thread count), a k-d tree over the centres
+//! ([`super::nearest`]) answers nearest-centre queries, and clusters larger than 2K are halved at
 //! the median of their longest axis until they are not ("repeated for large clusters until the
 //! number of shading points per cluster is relatively even").
 
 use glam::Vec3;
-use kiddo::SquaredEuclidean;
-use kiddo::immutable::float::kdtree::ImmutableKdTree;
 use rayon::prelude::*;
+
+use super::nearest::CentreTree;
 
 /// Clusters as ranges of a permutation of the points.
 #[derive(Debug, Default)]
@@ -78,7 +78,7 @@ fn cluster_kind<P: Fn(u32) -> Vec3 + Sync>(p: &P, idx: &[u32], k: u32, seed: u64
     if centres.is_empty() {
         centres.push(idx[0]);
     }
-    let tree = CentreTree::new(p, &centres);
+    let tree = CentreTree::new(&centres.iter().map(|&c| p(c)).collect::<Vec<_>>());
     let nearest: Vec<u32> = idx.par_iter().map(|&i| tree.nearest(p(i))).collect();
     // Counting sort by centre: members stay in index order within a cluster.
     let mut count = vec![0u32; centres.len() + 1];
@@ -133,25 +133,6 @@ fn mix(seed: u64, i: u64) -> u64 {
     z ^ (z >> 31)
 }
 
-/// A k-d tree over the cluster centres. Points gather where paths scatter most (near a
-/// camera, an emitter, a dense core), which a uniform hash grid handled with crowded or empty
-/// cells: its nearest-centre search was 22 % of a fog-emitter render, the tree's takes 20 %
-/// less solve time there.
-struct CentreTree(ImmutableKdTree<f32, u32, 3, 32>);
-
-impl CentreTree {
-    fn new(p: impl Fn(u32) -> Vec3, centres: &[u32]) -> CentreTree {
-        let raw: Vec<[f32; 3]> = centres.iter().map(|&c| p(c).to_array()).collect();
-        CentreTree(ImmutableKdTree::new_from_slice(&raw))
-    }
-
-    /// Rank of a centre nearest to `q`.
-    #[inline]
-    fn nearest(&self, q: Vec3) -> u32 {
-        self.0.nearest_one::<SquaredEuclidean>(&q.to_array()).item
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -184,7 +165,7 @@ mod tests {
     fn members_are_assigned_to_their_nearest_centre() {
         let p = points(3_000);
         let centres: Vec<u32> = (0..3_000u32).filter(|&i| mix(5, i as u64) < u64::MAX / 30).collect();
-        let tree = CentreTree::new(|i| p[i as usize], &centres);
+        let tree = CentreTree::new(&centres.iter().map(|&c| p[c as usize]).collect::<Vec<_>>());
         for (i, &q) in p.iter().enumerate() {
             let dist = |rank: u32| p[centres[rank as usize] as usize].distance_squared(q);
             let brute = (0..centres.len() as u32).map(dist).fold(f32::INFINITY, f32::min);

@@ -7,6 +7,7 @@
 
 mod cluster;
 mod lanes;
+mod nearest;
 mod record;
 mod settings;
 mod solve;
@@ -222,7 +223,7 @@ fn resident_bytes(field: &str) -> Option<usize> {
 }
 
 impl ImageIntegrator for PathGraph {
-    fn sample_image(&self, scene: &Scene, pass: &ImagePass<'_>) -> (Vec<PixelValue>, RayStats) {
+    fn sample_image(&self, scene: &Scene, pass: &ImagePass<'_>, out: &mut dyn FnMut(PixelValue)) -> RayStats {
         if let Ok(mut r) = self.report.lock()
             && r.samples == 0
         {
@@ -281,6 +282,16 @@ impl ImageIntegrator for PathGraph {
         }
         drop(canon);
         let order = std::mem::take(&mut clusters.order);
+        // The techniques (a path's earliest vertex in each cluster), found while each path's
+        // vertices are still stored together: a vertex continues the path of the one before
+        // it exactly when that one's next is it, so a path is named by its first vertex.
+        let mut path = vec![0u32; v.len()];
+        for i in 0..v.len() {
+            path[i] = if i > 0 && v.next[i - 1] as usize == i { path[i - 1] } else { i as u32 };
+        }
+        let mut earliest = Vec::new();
+        solve::earliest(&clusters.offsets, |i| path[order[i] as usize], &mut earliest);
+        drop(path);
         let mut rank = vec![0u32; order.len()];
         for (new, &old) in order.iter().enumerate() {
             rank[old as usize] = new as u32;
@@ -289,10 +300,10 @@ impl ImageIntegrator for PathGraph {
         // back at the end), so the solve allocates no 12-byte array of its own.
         let mut l_plus = std::mem::take(&mut v.p);
         path_traced(v, &mut l_plus);
-        // The permutation's spare arrays, which the solve then uses for L̄, the marginals and
-        // each vertex's earliest technique. Not kept from one sample to the next: kept, they
-        // were idle through the next sample's recording and clustering (20 bytes per vertex
-        // more at the process's peak), and allocating them costs a few milliseconds.
+        // The permutation's spare arrays, which the solve then uses for L̄ and the marginals.
+        // Not kept from one sample to the next: kept, they were idle through the next
+        // sample's recording and clustering (20 bytes per vertex more at the process's peak),
+        // and allocating them costs a few milliseconds.
         let mut spare = record::Spare::default();
         v.permute(&mut l_plus, &order, &rank, &mut spare);
         for f in paths.first.iter_mut() {
@@ -302,18 +313,7 @@ impl ImageIntegrator for PathGraph {
         }
         drop(rank);
         drop(order);
-        // Each vertex's path, to find the techniques (a path's earliest vertex in a cluster).
-        let mut path = vec![0u32; v.len()];
-        for (k, &f) in paths.first.iter().enumerate() {
-            let mut i = f;
-            while i != NONE {
-                path[i as usize] = k as u32;
-                i = v.next[i as usize];
-            }
-        }
-        let mut earliest = std::mem::take(&mut spare.u);
-        solve::earliest(&clusters.offsets, |i| path[i], &mut earliest);
-        drop(path);
+        spare.u = Vec::new();
         // The solve's peak: the vertex arrays, L⁺, L̄, the solver's marginal and techniques;
         // the paths; the cluster offsets.
         let peak = (Vertices::BYTES_PER_VERTEX + SOLVE_BYTES_PER_VERTEX) * v.len()
@@ -329,19 +329,18 @@ impl ImageIntegrator for PathGraph {
             solver.aggregate(&l_plus, &mut scattered);
             solver.propagate(&scattered, &mut l_plus);
         }
-        let values: Vec<PixelValue> = (0..paths.len())
-            .into_par_iter()
-            .with_min_len(1024)
-            .map(|k| {
-                let f = paths.first[k];
-                let l = if f == NONE {
-                    paths.before[k]
-                } else {
-                    paths.before[k] + paths.beta[k] * solver.indirect_at(f as usize, &l_plus)
-                };
-                PixelValue { index: paths.pixel[k], weight: paths.weight[k], l }
-            })
-            .collect();
+        // Each pixel's value replaces its path's unrefined radiance (no image-sized list).
+        let Paths { before, first, beta, .. } = &mut *paths;
+        before.par_iter_mut().zip(first.par_iter().zip(beta.par_iter())).with_min_len(1024).for_each(
+            |(l, (&f, &beta))| {
+                if f != NONE {
+                    *l += beta * solver.indirect_at(f as usize, &l_plus);
+                }
+            },
+        );
+        for ((&index, &weight), &l) in paths.pixel.iter().zip(&paths.weight).zip(&paths.before) {
+            out(PixelValue { index, weight, l });
+        }
         let solved = Instant::now();
         let (earliest, marginal, direct) = solver.into_storage();
         drop((earliest, marginal, scattered));
@@ -359,7 +358,7 @@ impl ImageIntegrator for PathGraph {
             r.max_vertices = r.max_vertices.max(vertices);
             r.resident_peak = resident_bytes("VmHWM:");
         }
-        (values, stats)
+        stats
     }
 }
 

@@ -8,8 +8,7 @@
 //! tangent plane. Where a path still carries ray differentials — the camera ray's own, up to
 //! its first hit, and reflected or refracted ones after perfectly specular bounces — it
 //! intersects those instead ([`Differentials`]), as nimbus does for perspective and
-//! orthographic cameras and, numerically as pbrt-v4, spherical ones (realistic cameras use the
-//! approximation everywhere).
+//! orthographic cameras and, numerically as pbrt-v4, spherical and realistic ones.
 
 use glam::{Affine3A, Mat3, Vec2, Vec3};
 
@@ -72,7 +71,8 @@ impl Footprint {
     }
 
     /// The differentials of camera ray `ray` from `camera` (whose footprint this is), scaled
-    /// by max(1/8, 1/√spp) as pbrt-v4 scales them; `None` for realistic cameras.
+    /// by max(1/8, 1/√spp) as pbrt-v4 scales them; `None` where the camera cannot give them
+    /// (a realistic camera's ray its lens would not trace back).
     pub fn camera_differentials(&self, camera: &Camera, ray: &Ray) -> Option<Differentials> {
         let d = camera.differentials(ray)?;
         let s = self.spp_scale;
@@ -287,6 +287,36 @@ mod tests {
                 assert!(close(got.0, ray.o, 1e-5));
             }
         }
+    }
+
+    /// A realistic camera's differentials are pbrt-v4's numerical ones: the rays 0.05 pixel
+    /// over with the same pupil sample, scaled up (the film position and pupil sample found
+    /// by tracing the ray back through the lens).
+    #[test]
+    fn realistic_differentials_are_the_shifted_rays() {
+        let settings = CameraSettings {
+            projection: crate::scene::camera::Projection::Realistic(crate::scene::camera::RealisticSettings {
+                elements: crate::camera::realistic::tests::DGAUSS.to_vec(),
+                aperture_diameter: 20.0,
+                focus_distance: 3.0,
+                aperture: None,
+            }),
+            ..CameraSettings::perspective(0.0)
+        };
+        let cam = camera(&settings);
+        let mut checked = 0;
+        for (p, u) in [(Vec2::new(40.3, 30.2), Vec2::new(0.5, 0.5)), (Vec2::new(12.6, 50.3), Vec2::new(0.3, 0.7))] {
+            let Some(ray) = cam.generate_ray(p, u, 0.5).map(|c| c.ray) else { continue };
+            let d = cam.differentials(&ray).expect("differentials");
+            for (got, axis) in [(d.rx, Vec2::X), (d.ry, Vec2::Y)] {
+                let r = cam.generate_ray(p + axis * 0.05, u, 0.5).unwrap().ray;
+                let (want_o, want_d) = (ray.o + (r.o - ray.o) / 0.05, ray.d + (r.d - ray.d) / 0.05);
+                assert!(close(got.0, want_o, 0.02 * (want_o - ray.o).length() + 1e-5), "{p}: {got:?} vs {want_o}");
+                assert!(close(got.1, want_d, 0.02 * (want_d - ray.d).length() + 1e-6), "{p}: {got:?} vs {want_d}");
+            }
+            checked += 1;
+        }
+        assert_eq!(checked, 2);
     }
 
     /// A camera ray's footprint on a plane facing a pinhole perspective camera is one pixel's

@@ -181,11 +181,12 @@ impl Camera {
     /// pbrt-v4's perspective and orthographic cameras compute them. A projective ray determines
     /// its film position (and its lens point), so they follow from the ray alone. A spherical
     /// camera's are pbrt-v4's numerical ones (`CameraBase::GenerateRayDifferential`: the rays
-    /// 0.05 pixel over, scaled up), its film position found from the direction. `None` for
-    /// realistic cameras, whose rays do not give back their film position.
+    /// 0.05 pixel over, scaled up), its film position found from the direction; a realistic
+    /// camera's too, its film position and pupil sample found by tracing the ray back
+    /// through the lens (`None` where that fails or the lens stops both offset rays).
     pub fn differentials(&self, ray: &Ray) -> Option<Differentials> {
-        if self.realistic.is_some() {
-            return None;
+        if let Some(lens) = &self.realistic {
+            return self.realistic_differentials(lens, ray);
         }
         let w = self.world_from_camera_at(ray.time);
         let c = if self.motion.is_some() { w.inverse() } else { self.camera_from_world };
@@ -230,6 +231,28 @@ impl Camera {
             (w.transform_point3(o), if unit { d } else { d.normalize() })
         };
         Some(Differentials { rx: to_world(offset(step[0])), ry: to_world(offset(step[1])) })
+    }
+
+    /// pbrt-v4's numerical differentials of a realistic camera's `ray`
+    /// (`CameraBase::GenerateRayDifferential`): the rays through the film positions 0.05 pixel
+    /// over (−0.05 where the lens stops that one) with the same exit-pupil sample, their
+    /// offsets scaled up by 20. The film position and pupil sample are found by tracing the
+    /// ray back through the lens; the offsets are taken from the ray regenerated from them,
+    /// so that rounding in the back-trace does not enter the 20× scaling.
+    fn realistic_differentials(&self, lens: &RealisticLens, ray: &Ray) -> Option<Differentials> {
+        let w = self.world_from_camera_at(ray.time);
+        let c = if self.motion.is_some() { w.inverse() } else { self.camera_from_world };
+        let (p_film, u_lens) =
+            lens.film_sample(c.transform_point3(ray.o), c.transform_vector3(ray.d), self.resolution)?;
+        let world = |(o, d, _): (Vec3, Vec3, f32)| (w.transform_point3(o), w.transform_vector3(d).normalize());
+        let centre = world(lens.generate(p_film, self.resolution, u_lens)?);
+        let offset = |axis: Vec2| {
+            [0.05f32, -0.05].into_iter().find_map(|eps| {
+                let (o, d) = world(lens.generate(p_film + axis * eps, self.resolution, u_lens)?);
+                Some((ray.o + (o - centre.0) / eps, ray.d + (d - centre.1) / eps))
+            })
+        };
+        Some(Differentials { rx: offset(Vec2::X)?, ry: offset(Vec2::Y)? })
     }
 
     /// pbrt-v4's numerical differentials of a spherical camera's `ray`, whose camera-space

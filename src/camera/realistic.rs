@@ -217,6 +217,32 @@ impl RealisticLens {
         Some((out.o, out.d, weight))
     }
 
+    /// The film position (raster, for a film of `resolution`) and exit-pupil sample of a
+    /// camera-space ray `o + t·d` that [`RealisticLens::generate`] made, found by tracing it
+    /// back through the lens to the film: what pbrt-v4's numerical differentials shift and
+    /// regenerate. `None` where the ray does not go back through the lens (rounding at an
+    /// element's rim) or falls outside the pupil bounds it came from.
+    pub fn film_sample(&self, o: Vec3, d: Vec3, resolution: Vec2) -> Option<(Vec2, Vec2)> {
+        // Back along the ray from a point just outside the front element.
+        let back = LensRay { o: o + d.normalize() * (0.1 * self.rear_z()), d: -d };
+        let r = self.trace_from_scene(back)?;
+        if r.d.z >= 0.0 {
+            return None;
+        }
+        let film = r.at(-r.o.z / r.d.z);
+        let pupil = r.at((self.rear_z() - r.o.z) / r.d.z);
+        // Undo generate's film mapping and sample_exit_pupil's bounds and rotation.
+        let p = Vec2::new(-film.x, film.y);
+        let raster = (p + self.half_extent) / (2.0 * self.half_extent) * resolution;
+        let r_film = Vec2::new(film.x, film.y).length();
+        let ring = ((r_film / (self.diagonal / 2.0) * PUPIL_RINGS as f32) as usize).min(PUPIL_RINGS - 1);
+        let [lo, hi] = self.pupil_bounds[ring]?;
+        let (sin, cos) = if r_film != 0.0 { (film.y / r_film, film.x / r_film) } else { (0.0, 1.0) };
+        let p_lens = Vec2::new(cos * pupil.x + sin * pupil.y, -sin * pupil.x + cos * pupil.y);
+        let u_lens = (p_lens - lo) / (hi - lo);
+        (raster.is_finite() && u_lens.is_finite()).then_some((raster, u_lens.clamp(Vec2::ZERO, Vec2::ONE)))
+    }
+
     /// A point on the rear element's plane within the exit-pupil bounds of the film ring at
     /// `p_film`, rotated to `p_film`'s angle, and its density.
     fn sample_exit_pupil(&self, p_film: Vec2, u_lens: Vec2) -> Option<(Vec3, f32)> {
@@ -468,12 +494,12 @@ fn rasterize(vert: &[Vec2], n: usize) -> Vec<f32> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     /// pbrt-v4-scenes' `lenses/dgauss.50mm.dat`: a double-Gauss f/2 lens of 50 mm focal
     /// length (Tronnier, US patent 2,673,491), scene side first.
-    const DGAUSS: [[f32; 4]; 11] = [
+    pub(crate) const DGAUSS: [[f32; 4]; 11] = [
         [29.475, 3.76, 1.67, 25.2],
         [84.83, 0.12, 1.0, 25.2],
         [19.275, 4.025, 1.67, 23.0],
@@ -495,6 +521,28 @@ mod tests {
             aperture: None,
         };
         RealisticLens::with_pupil_samples(&settings, [96, 64], 35.0, 1 << 16).unwrap()
+    }
+
+    /// Tracing a generated ray back through the lens finds the film position and pupil
+    /// sample it was generated from (what the camera's numerical differentials regenerate).
+    #[test]
+    fn film_sample_inverts_generate() {
+        let l = lens(20.0, 3.0);
+        let res = Vec2::new(96.0, 64.0);
+        let mut found = 0;
+        for (p, u) in [
+            (Vec2::new(48.3, 31.7), Vec2::new(0.5, 0.5)),
+            (Vec2::new(10.2, 5.9), Vec2::new(0.3, 0.8)),
+            (Vec2::new(80.5, 50.1), Vec2::new(0.7, 0.2)),
+            (Vec2::new(60.0, 12.0), Vec2::new(0.45, 0.6)),
+        ] {
+            let Some((o, d, _)) = l.generate(p, res, u) else { continue };
+            let (p2, u2) = l.film_sample(o, d, res).expect("the ray traces back");
+            assert!((p2 - p).abs().max_element() < 2e-3, "film {p} came back as {p2}");
+            assert!((u2 - u).abs().max_element() < 2e-3, "pupil sample {u} came back as {u2}");
+            found += 1;
+        }
+        assert!(found >= 3, "{found} rays got through the lens");
     }
 
     /// Rays from the film's centre through every part of the pupil meet the optical axis at

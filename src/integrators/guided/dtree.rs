@@ -164,6 +164,56 @@ impl DTree {
         }
     }
 
+    /// [`DTree::pdf`] of each of `dirs` into `out` (the same values), the descents taken
+    /// level by level side by side: each level's loads of the different directions do not
+    /// wait on each other, where one descent after another waits on every load in turn
+    /// (resampling asks for several candidates' densities at once).
+    pub fn pdf_batch(&self, dirs: &[Vec3], out: &mut [f32]) {
+        const LANES: usize = 8;
+        assert_eq!(dirs.len(), out.len());
+        let total = self.total();
+        for (dirs, out) in dirs.chunks(LANES).zip(out.chunks_mut(LANES)) {
+            if total <= 0.0 {
+                out.fill(0.0);
+                continue;
+            }
+            let mut p = [Vec2::ZERO; LANES];
+            let mut node = [0usize; LANES];
+            let mut live = [false; LANES];
+            for k in 0..dirs.len() {
+                p[k] = sphere_to_square(dirs[k]);
+                out[k] = 1.0;
+                live[k] = true;
+            }
+            let mut any = true;
+            while any {
+                any = false;
+                for k in 0..dirs.len() {
+                    if !live[k] {
+                        continue;
+                    }
+                    let n = &self.nodes[node[k]];
+                    let sum: f32 = n.sums.iter().sum();
+                    let (q, pq) = quadrant(p[k]);
+                    if sum <= 0.0 {
+                        out[k] = 0.0;
+                        live[k] = false;
+                        continue;
+                    }
+                    out[k] *= 4.0 * n.sums[q] / sum;
+                    if n.children[q] == 0 || out[k] == 0.0 {
+                        out[k] /= 4.0 * PI;
+                        live[k] = false;
+                        continue;
+                    }
+                    node[k] = n.children[q] as usize;
+                    p[k] = pq;
+                    any = true;
+                }
+            }
+        }
+    }
+
     /// A direction drawn in proportion to the energy (the tree must have some), from `u` in
     /// [0, 1)², and its density.
     pub fn sample(&self, mut u: Vec2) -> Option<(Vec3, f32)> {
@@ -281,6 +331,22 @@ mod tests {
     }
 
     /// The density integrates to one over the sphere and concentrates where the energy is.
+    /// The batched densities are the one-at-a-time ones, bit for bit, for any batch size.
+    #[test]
+    fn batched_density_is_the_density() {
+        let t = cone_tree();
+        let mut rng = Pcg32::new(5, 6);
+        let dirs: Vec<Vec3> = (0..37).map(|_| square_to_sphere(Vec2::new(rng.uniform(), rng.uniform()))).collect();
+        let mut out = vec![f32::NAN; dirs.len()];
+        t.pdf_batch(&dirs, &mut out);
+        for (d, got) in dirs.iter().zip(&out) {
+            assert_eq!(*got, t.pdf(*d));
+        }
+        let mut none = [1.0f32; 3];
+        DTree::new().pdf_batch(&dirs[..3], &mut none);
+        assert_eq!(none, [0.0; 3]);
+    }
+
     #[test]
     fn density_integrates_to_one() {
         let t = cone_tree();

@@ -87,29 +87,66 @@ pub fn sample(
     // (a streaming choice, so nothing is stored); the estimator's factor is p·W/target with
     // W the mean weight (Eqs. 5–6), i.e. W / guide.
     let lambda = s.lambda;
+    // The candidates first (direction, phase value, guide density or NaN where the tree's
+    // density is still to be looked up, and the uniform number that decides whether it
+    // replaces the choice so far), then the phase-sampled ones' guide densities in one
+    // batch, then the weights and the streaming choice. The random numbers are drawn in the
+    // order of one candidate after another, choice included (with ε > 0 every candidate's
+    // weight is positive, so each draws its choice number), so the images are those of
+    // drawing and choosing each candidate in turn.
+    const MAX: usize = 16;
+    let mut dirs = [Vec3::ZERO; MAX];
+    let mut phases = [0.0f32; MAX];
+    let mut guides = [0.0f32; MAX];
+    let mut choice = [0.0f32; MAX];
     let mut w_sum = 0.0f32;
     let mut chosen: Option<(Vec3, f32, f32)> = None;
-    for _ in 0..s.candidates {
-        // (direction, phase value, guide density), each computed once.
-        let (wi, p, gp) = if rng.uniform() < lambda {
-            match phase.sample_p(wo, Vec2::new(rng.uniform(), rng.uniform())) {
-                Some(ps) => (ps.wi, ps.p, guide_pdf(tree, eps, ps.wi)),
-                None => continue,
-            }
-        } else {
-            match sample_guide(tree, eps, rng) {
-                Some((d, gp)) => (d, phase.p(wo, d), gp),
-                None => continue,
-            }
-        };
-        let source = lambda * p + (1.0 - lambda) * gp;
-        if source <= 0.0 {
-            continue;
+    let mut left = s.candidates as usize;
+    while left > 0 {
+        let m = left.min(MAX);
+        left -= m;
+        let mut n = 0;
+        for _ in 0..m {
+            let (wi, p, gp) = if rng.uniform() < lambda {
+                match phase.sample_p(wo, Vec2::new(rng.uniform(), rng.uniform())) {
+                    Some(ps) => (ps.wi, ps.p, f32::NAN),
+                    None => continue,
+                }
+            } else {
+                match sample_guide(tree, eps, rng) {
+                    Some((d, gp)) => (d, phase.p(wo, d), gp),
+                    None => continue,
+                }
+            };
+            (dirs[n], phases[n], guides[n], choice[n]) = (wi, p, gp, rng.uniform());
+            n += 1;
         }
-        let w = p * gp / source;
-        w_sum += w;
-        if w > 0.0 && rng.uniform() * w_sum < w {
-            chosen = Some((wi, gp, source));
+        // The tree's densities of the phase-sampled candidates, gathered for one batch.
+        let mut lookup = [Vec3::ZERO; MAX];
+        let mut at = [0usize; MAX];
+        let mut k = 0;
+        for j in 0..n {
+            if guides[j].is_nan() {
+                (lookup[k], at[k]) = (dirs[j], j);
+                k += 1;
+            }
+        }
+        let mut tree_pdf = [0.0f32; MAX];
+        tree.pdf_batch(&lookup[..k], &mut tree_pdf[..k]);
+        for (&j, &t) in at[..k].iter().zip(&tree_pdf[..k]) {
+            guides[j] = (1.0 - eps) * t + eps * UNIFORM_SPHERE_PDF;
+        }
+        for j in 0..n {
+            let (wi, p, gp) = (dirs[j], phases[j], guides[j]);
+            let source = lambda * p + (1.0 - lambda) * gp;
+            if source <= 0.0 {
+                continue;
+            }
+            let w = p * gp / source;
+            w_sum += w;
+            if w > 0.0 && choice[j] * w_sum < w {
+                chosen = Some((wi, gp, source));
+            }
         }
     }
     let (wi, gp, source) = chosen?;

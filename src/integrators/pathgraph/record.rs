@@ -185,7 +185,8 @@ pub struct Paths {
     /// Radiance the graph does not refine: what the path found before its first graph vertex
     /// (seen emitters, and everything when the path has no graph vertex) and the
     /// non-aggregated direct light there (Sec. 4; the extra light samples' when `extradirect`
-    /// asked for them), times the throughput arriving there.
+    /// asked for them), times the throughput arriving there. The solve ends by adding the
+    /// refined indirect light, leaving each pixel's value here.
     pub before: Vec<Rgb>,
     /// The first graph vertex, or NONE.
     pub first: Vec<u32>,

@@ -342,9 +342,8 @@ impl ImageIntegrator for PathGraph {
             out(PixelValue { index, weight, l });
         }
         let solved = Instant::now();
-        let (earliest, marginal, direct) = solver.into_storage();
-        drop((earliest, marginal, scattered));
-        (v.direct_scatter, v.p) = (direct, l_plus);
+        drop(scattered);
+        (v.direct_scatter, v.p) = (solver.into_direct(), l_plus);
         let (vertices, npaths, clusters) = (v.len(), paths.len(), clusters.len());
         *lock(&self.stores) = stores;
         if let Ok(mut r) = self.report.lock() {

@@ -46,8 +46,8 @@ impl<'a> Solver<'a> {
     /// light. `earliest` is [`earliest`]'s answer; `marginal` is storage to fill (its
     /// contents do not matter); `direct` comes in as the vertices' `direct_scatter` (which
     /// `v` no longer holds: no later pass needs it) and is replaced by the aggregated direct
-    /// light A⁰L⁰, so the graph needs no array of its own for it. [`Solver::into_storage`]
-    /// gives all three back.
+    /// light A⁰L⁰, so the graph needs no array of its own for it. [`Solver::into_direct`]
+    /// gives that array back.
     pub fn new(
         v: &'a Vertices,
         offsets: &'a [u32],
@@ -77,9 +77,10 @@ impl<'a> Solver<'a> {
         Solver { v, offsets, earliest, marginal, direct, batches }
     }
 
-    /// The storage `new` was given, for the next graph: `earliest`, `marginal` and `direct`.
-    pub fn into_storage(self) -> (Vec<u32>, Vec<f32>, Vec<Rgb>) {
-        (self.earliest, self.marginal, self.direct)
+    /// The array `new` took as `direct` (now holding A⁰L⁰), for the vertices to keep as
+    /// their `direct_scatter` storage.
+    pub fn into_direct(self) -> Vec<Rgb> {
+        self.direct
     }
 
     /// Aggregated scattered radiance L̄ = A⁰L⁰ + A⁺L⁺ (Eq. 25) of every vertex, into `out`.

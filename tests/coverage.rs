@@ -57,7 +57,8 @@ fn scene(kind: &str, name: &str) -> (String, &'static str) {
         }
         "texture" => {
             let params = match name {
-                "imagemap" | "ptex" => r#""string filename" "tex.exr""#,
+                "imagemap" => r#""string filename" "tex.exr""#,
+                "ptex" => r#""string filename" "tex.ptx""#,
                 "directionmix" => r#""vector3 dir" [0 1 0]"#,
                 _ => "",
             };
@@ -150,7 +151,7 @@ const ENTITIES: &[(&str, &str, Outcome)] = &[
     ("texture", "wrinkled", Rendered),
     ("texture", "windy", Rendered),
     ("texture", "marble", Rendered),
-    ("texture", "ptex", Replaced),
+    ("texture", "ptex", Rendered),
     ("medium", "homogeneous", Rendered),
     ("medium", "uniformgrid", Rendered),
     ("medium", "rgbgrid", Rendered),
@@ -207,6 +208,8 @@ fn every_pbrt_v4_entity_type_is_rendered_refused_or_replaced_by_name() {
         let text = text.replace("\"lens.dat\"", &format!("\"{}\"", lens.display()));
         let text = text.replace("\"brdf.bsdf\"", &format!("\"{}\"", bsdf.display()));
         let text = text.replace("\"light.exr\"", &format!("\"{}\"", map.display()));
+        let ptex = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/fixtures/ptex/grid-rgb8.ptx");
+        let text = text.replace("\"tex.ptx\"", &format!("\"{ptex}\""));
         let line = text.lines().position(|l| l.starts_with(directive)).expect("the directive") + 1;
         let at = format!("coverage.pbrt:{line}:");
         let desc = match nimbus::parser::load_str(&text, "coverage.pbrt") {

@@ -97,12 +97,14 @@ fn own_parity_scenes_match_pbrt_v4() {
         "differentials",
         "ewa",
         "displacement",
+        "ptex",
     ] {
         let reference = nimbus::imageio::read_exr(&dir().join(format!("references/{name}.exr"))).unwrap();
         let images = renders(&dir().join(format!("{name}.pbrt")), 32, 1..9);
         let (mean_rel, excess) = judge(&images, 32, &reference);
         // Unbiased renders score about 1 here (0.4–1.9 over four seed sets at 32 spp); the curve
         // spawn offset these scenes found (twice pbrt-v4's) scored 2.2–3.0.
+        eprintln!("{name}: mean_rel {mean_rel:.4}, excess {excess:.2}");
         assert!(mean_rel < 0.01 && excess < 2.0, "{name}: mean_rel {mean_rel:.4}, excess {excess:.2}");
     }
 }

@@ -23,3 +23,4 @@ mod shapes;
 mod simplevolpath;
 mod stress;
 mod suite;
+mod textures;

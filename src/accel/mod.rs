@@ -91,6 +91,17 @@ pub struct ShapeStore {
 }
 
 impl ShapeStore {
+    /// Primitive `g`'s Ptex face id (pbrt-v4's `faceIndex`: the mesh's `faceIndices` entry,
+    /// else 0).
+    #[inline]
+    pub fn face_index(&self, g: Geometry) -> i32 {
+        match g {
+            Geometry::Triangle { mesh, tri } => self.meshes[mesh as usize].face_index(tri),
+            Geometry::Bilinear { mesh, patch } => self.bilinear_meshes[mesh as usize].face_index(patch),
+            _ => 0,
+        }
+    }
+
     /// Texture coordinates of the point `p` of primitive `g` (a point on it, e.g. a light
     /// sample), with `from` a point it is seen from (for bilinear patches, whose parameters
     /// are found along the ray between them); `None` where they cannot be found.
@@ -466,7 +477,8 @@ impl Surfaces {
     #[inline(never)]
     fn alpha_passes(&self, prim: Primitive, instance: u32, detail: Detail, ray: &Ray, t: f32) -> bool {
         let s = self.surface(&Candidate { t, prim, instance, detail }, ray, instance != NONE);
-        let alpha = self.textures.eval_float(self.alphas[prim.alpha as usize], &TexContext::at(s.p, s.uv, s.n));
+        let ctx = TexContext { face: self.shapes.face_index(prim.geometry), ..TexContext::at(s.p, s.uv, s.n) };
+        let alpha = self.textures.eval_float(self.alphas[prim.alpha as usize], &ctx);
         alpha_passes(alpha, ray, t)
     }
 

@@ -91,7 +91,7 @@ pub fn displace(
         normals: normals.iter().map(|v| v.to_array()).collect(),
         uvs: uv.iter().map(|v| v.to_array()).collect(),
         indices: out,
-        quads: Vec::new(),
+        ..Default::default()
     })
 }
 
@@ -122,6 +122,7 @@ mod tests {
             uvs: vec![[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [1.0, 1.0]],
             indices: Vec::new(),
             quads: vec![0, 1, 2, 3],
+            ..Default::default()
         }
     }
 

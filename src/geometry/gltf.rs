@@ -41,7 +41,7 @@ pub fn read_gltf(path: &Path) -> Result<Vec<MeshData>, String> {
                     Some(i) => i.into_u32().collect(),
                     None => (0..positions.len() as u32).collect(),
                 };
-                let data = MeshData { positions, normals, uvs, indices, quads: Vec::new() };
+                let data = MeshData { positions, normals, uvs, indices, ..Default::default() };
                 data.validate(&format!("gltfmesh: {}", path.display()))?;
                 out.push(data);
             }

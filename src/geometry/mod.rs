@@ -28,6 +28,10 @@ pub struct MeshData {
     /// Quads as bilinear patches, four indices each in pbrt-v4's patch order p00, p10, p01,
     /// p11 (a PLY face a b c d becomes a b d c); only PLY files have them.
     pub quads: Vec<u32>,
+    /// Per triangle, its `face_indices` value (a Ptex face id); empty if the file has none.
+    pub triangle_faces: Vec<i32>,
+    /// Per quad, its `face_indices` value; empty if the file has none.
+    pub quad_faces: Vec<i32>,
 }
 
 impl MeshData {

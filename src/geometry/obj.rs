@@ -17,7 +17,7 @@ pub fn read_obj(path: &Path) -> Result<Vec<MeshData>, String> {
             normals: mesh.normals.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect(),
             uvs: mesh.texcoords.chunks_exact(2).map(|c| [c[0], c[1]]).collect(),
             indices: mesh.indices,
-            quads: Vec::new(),
+            ..Default::default()
         };
         data.validate(&format!("objmesh: {}: object \"{}\"", path.display(), m.name))?;
         out.push(data);

@@ -247,8 +247,10 @@ fn read_vertices(body: &mut Body<'_>, el: &Element, mesh: &mut MeshData) -> Resu
 fn read_faces(body: &mut Body<'_>, el: &Element, mesh: &mut MeshData) -> Result<(), String> {
     mesh.indices.reserve(el.count * 3);
     let mut face = Vec::with_capacity(4);
+    let has_face_index = el.properties.iter().any(|p| matches!(p, Property::Scalar(name, _) if name == "face_indices"));
     for f in 0..el.count {
         face.clear();
+        let mut face_index = 0;
         for p in &el.properties {
             match p {
                 Property::List(name, ct, it) if name == "vertex_indices" || name == "vertex_index" => {
@@ -267,15 +269,29 @@ fn read_faces(body: &mut Body<'_>, el: &Element, mesh: &mut MeshData) -> Result<
                         body.value(*it)?;
                     }
                 }
+                // pbrt-v4's per-face Ptex face ids.
+                Property::Scalar(name, t) if name == "face_indices" => {
+                    face_index = body.value(*t)? as i32;
+                }
                 Property::Scalar(_, t) => {
                     body.value(*t)?;
                 }
             }
         }
         match face.len() {
-            3 => mesh.indices.extend_from_slice(&face),
+            3 => {
+                mesh.indices.extend_from_slice(&face);
+                if has_face_index {
+                    mesh.triangle_faces.push(face_index);
+                }
+            }
             // pbrt-v4 makes a quad a bilinear patch: p00 = a, p10 = b, p01 = d, p11 = c.
-            4 => mesh.quads.extend_from_slice(&[face[0], face[1], face[3], face[2]]),
+            4 => {
+                mesh.quads.extend_from_slice(&[face[0], face[1], face[3], face[2]]);
+                if has_face_index {
+                    mesh.quad_faces.push(face_index);
+                }
+            }
             n => {
                 return Err(format!("face {f} has {n} vertices; plymesh supports triangles and quads"));
             }
@@ -316,6 +332,19 @@ mod tests {
         assert_eq!(m.positions.len(), 4);
         assert!(m.indices.is_empty());
         assert_eq!(m.quads, vec![0, 1, 3, 2]);
+    }
+
+    /// pbrt-v4's per-face `face_indices` (Ptex face ids) reach both triangles and quads.
+    #[test]
+    fn face_indices_are_kept_per_face() {
+        let text = "ply\nformat ascii 1.0\nelement vertex 5\nproperty float x\nproperty float y\nproperty float z\n\
+                    element face 2\nproperty list uchar int vertex_indices\nproperty int face_indices\nend_header\n\
+                    0 0 0\n1 0 0\n1 1 0\n0 1 0\n2 0 0\n4 0 1 2 3 7\n3 1 4 2 3\n";
+        let m = parse_ply(text.as_bytes()).unwrap();
+        assert_eq!((m.quad_faces, m.triangle_faces), (vec![7], vec![3]));
+        let without = text.replace("property int face_indices\n", "").replace("3 7\n3 1 4 2 3\n", "3\n3 1 4 2\n");
+        let without = parse_ply(without.as_bytes()).unwrap();
+        assert!(without.quad_faces.is_empty() && without.triangle_faces.is_empty());
     }
 
     #[test]

@@ -44,7 +44,9 @@ use crate::media::{Density, Emission, Field, Medium};
 use crate::shapes::{BilinearMesh, Curve, CurveCommon, Cylinder, Disk, Mesh, Sphere, uniform_scale};
 use crate::spectra::RgbRole;
 use crate::spectra::{BlackbodyRgbTable, PixelSensor, SpectrumValue};
-use crate::textures::{MipFilter, MipMap, Tex, TexContext, TexMapping, TexNode, Textures, Wrap};
+use crate::textures::{
+    MipFilter, MipMap, PtexEncoding, PtexTexture, Tex, TexContext, TexMapping, TexNode, Textures, Wrap,
+};
 
 /// Command-line choices that override the scene file (pbrt-v4's flags).
 #[derive(Clone, Debug, Default)]
@@ -169,6 +171,7 @@ impl Scene {
     ) -> (&Material, TexContext) {
         let s = &hit.surface;
         let mut ctx = TexContext::at(s.p, s.uv, s.n);
+        ctx.face = self.surfaces.shapes.face_index(hit.prim.geometry);
         let mut derivatives = None;
         if let Some(f) = &self.footprint {
             (ctx.dpdx, ctx.dpdy) = diff.and_then(|d| d.dp_dxy(s.p, s.n)).unwrap_or_else(|| f.dp_dxy(s.p, s.n));
@@ -352,9 +355,9 @@ impl TextureBuilder<'_> {
         }
     }
 
-    fn add(&mut self, t: &nimbus_parser::TextureEntity, warnings: &mut Vec<Warning>) -> Result<(), Error> {
+    fn add(&mut self, t: &nimbus_parser::TextureEntity) -> Result<(), Error> {
         let e = &t.entity;
-        let settings = TextureSettings::from_entity(t, warnings)?;
+        let settings = TextureSettings::from_entity(t)?;
         let texture_from_world = affine(&t.world_from_texture.start, &e.loc)?.inverse();
         let mapping = |m: &Mapping| match m {
             Mapping::Uv { su, sv, du, dv } => TexMapping::Uv { s: Vec2::new(*su, *sv), d: Vec2::new(*du, *dv) },
@@ -460,10 +463,13 @@ impl TextureBuilder<'_> {
                     float: t.value == TextureValue::Float,
                 }
             }
-            TextureKind::Unsupported(_) => TexNode::Scale {
-                tex: Tex::Const(SpectrumValue::constant(0.5)),
-                scale: Tex::Const(SpectrumValue::constant(1.0)),
-            },
+            TextureKind::Ptex { filename, encoding, scale } => {
+                let encoding = PtexEncoding::parse(encoding)
+                    .map_err(|m| err(t.entity.params.loc("encoding").unwrap_or(&e.loc), format!("ptex: {m}")))?;
+                let texture =
+                    PtexTexture::open(filename, encoding, *scale).map_err(|m| err(&e.loc, format!("ptex: {m}")))?;
+                TexNode::Ptex { texture: Arc::new(texture), float: t.value == TextureValue::Float }
+            }
         };
         let id = self.textures.nodes.len() as u32;
         self.textures.nodes.push(node);
@@ -874,11 +880,13 @@ impl ShapeBuilder<'_> {
                 push(Geometry::Cylinder(self.store.cylinders.len() as u32 - 1), &self.store);
             }
             ShapeKind::TriangleMesh(m) => {
-                let mesh = Mesh::new(&world, rev, m.positions, m.normals, m.uvs, m.indices.clone());
+                let mesh = Mesh::new(&world, rev, m.positions, m.normals, m.uvs, m.indices.clone())
+                    .with_face_indices(m.face_indices.clone());
                 self.add_mesh(mesh, [material, interface, alpha], prims, bounds);
             }
             ShapeKind::BilinearMesh(m) => {
-                let mesh = BilinearMesh::new(&world, rev, m.positions, m.normals, m.uvs, m.indices.clone());
+                let mesh = BilinearMesh::new(&world, rev, m.positions, m.normals, m.uvs, m.indices.clone())
+                    .with_face_indices(m.face_indices.clone());
                 self.add_bilinear(mesh, [material, interface, alpha], prims, bounds);
             }
             ShapeKind::Curve { segments, widths, normals, kind, split_depth } => {
@@ -915,11 +923,13 @@ impl ShapeBuilder<'_> {
                     .map_err(|m| err(&e.loc, format!("plymesh \"{}\": {m}", path.display())))?;
                 }
                 if !ply.quads.is_empty() {
-                    let quads = BilinearMesh::new(&world, rev, &ply.positions, &ply.normals, &ply.uvs, ply.quads);
+                    let quads = BilinearMesh::new(&world, rev, &ply.positions, &ply.normals, &ply.uvs, ply.quads)
+                        .with_face_indices(ply.quad_faces);
                     self.add_bilinear(quads, [material, interface, alpha], prims, bounds);
                 }
                 if !ply.indices.is_empty() {
-                    let mesh = Mesh::new(&world, rev, &ply.positions, &ply.normals, &ply.uvs, ply.indices);
+                    let mesh = Mesh::new(&world, rev, &ply.positions, &ply.normals, &ply.uvs, ply.indices)
+                        .with_face_indices(ply.triangle_faces);
                     self.add_mesh(mesh, [material, interface, alpha], prims, bounds);
                 }
             }
@@ -1399,7 +1409,7 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions) -> Result<Scene
         spectra,
     };
     for t in &desc.textures {
-        tb.add(t, &mut warnings)?;
+        tb.add(t)?;
     }
 
     // Materials: anonymous ones by index, then named ones.

@@ -198,11 +198,8 @@ pub fn check_scene(scene: &SceneDescription) -> Result<SceneCheck, Error> {
 
     let mut textures = BTreeMap::new();
     for t in &scene.textures {
-        let before = warnings.len();
-        TextureSettings::from_entity(t, &mut warnings)?;
-        if warnings.len() == before {
-            unused(&t.entity.params, &mut warnings);
-        }
+        TextureSettings::from_entity(t)?;
+        unused(&t.entity.params, &mut warnings);
         *textures.entry(t.entity.name.clone()).or_insert(0) += 1;
     }
 

@@ -21,6 +21,8 @@ pub struct InlineMesh<'a> {
     pub normals: &'a [[f32; 3]],
     /// Per-vertex texture coordinates (empty if none).
     pub uvs: &'a [[f32; 2]],
+    /// Per face, its Ptex face id (`faceIndices`; empty if none).
+    pub face_indices: Vec<i32>,
 }
 
 /// What a shape is.
@@ -176,7 +178,7 @@ fn inline_mesh<'a>(shape: &'a ShapeEntity, per_face: usize) -> Result<InlineMesh
             format!("{}: {} face indices for {} faces", e.name, face_indices.len(), indices.len() / per_face),
         ));
     }
-    Ok(InlineMesh { positions, indices, normals, uvs })
+    Ok(InlineMesh { positions, indices, normals, uvs, face_indices: face_indices.to_vec() })
 }
 
 /// pbrt-v4's `Curve::Create`: degree 2 or 3, Bézier or uniform B-spline control points, every

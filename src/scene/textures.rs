@@ -4,7 +4,7 @@
 use std::path::PathBuf;
 
 use nimbus_parser::loc_shown as shown;
-use nimbus_parser::{Error, TextureEntity, TextureValue, Warning};
+use nimbus_parser::{Error, TextureEntity, TextureValue};
 
 use super::values::{FloatInput, SpectrumInput, SpectrumSpec, float_input, spectrum_input};
 
@@ -157,8 +157,15 @@ pub enum TextureKind {
         /// Mapping.
         mapping: Mapping,
     },
-    /// A texture class nimbus lacks; evaluates to 0.5.
-    Unsupported(String),
+    /// `ptex`
+    Ptex {
+        /// The Ptex file.
+        filename: PathBuf,
+        /// Decoding of the filtered values (`gamma 2.2` unless given: pbrt-v4's default here).
+        encoding: String,
+        /// Multiplier.
+        scale: f32,
+    },
 }
 
 /// Everything a texture entity specifies.
@@ -215,7 +222,7 @@ fn checked_octaves(t: &TextureEntity) -> Result<u32, Error> {
 
 impl TextureSettings {
     /// Reads a texture entity.
-    pub fn from_entity(t: &TextureEntity, warnings: &mut Vec<Warning>) -> Result<TextureSettings, Error> {
+    pub fn from_entity(t: &TextureEntity) -> Result<TextureSettings, Error> {
         let e = &t.entity;
         let p = &e.params;
         let kind = match e.name.as_str() {
@@ -323,12 +330,32 @@ impl TextureSettings {
                     mapping: mapping(t)?,
                 }
             }
+            "ptex" => {
+                let Some(name) = p.get_opt_string("filename")? else {
+                    return Err(Error::new(&e.loc, "ptex: missing \"string filename\""));
+                };
+                let loc = p.loc("filename").unwrap_or(&e.loc);
+                let filename = loc.resolve(name);
+                if !filename.is_file() {
+                    return Err(Error::new(
+                        loc,
+                        format!("ptex: cannot find file \"{name}\" (tried {})", shown(&filename)),
+                    ));
+                }
+                TextureKind::Ptex {
+                    filename,
+                    encoding: p.get_one_string("encoding", "gamma 2.2")?.to_string(),
+                    scale: p.get_one_float("scale", 1.0)?,
+                }
+            }
             other => {
-                warnings.push(Warning::new(
+                return Err(Error::new(
                     &e.loc,
-                    format!("texture \"{other}\" is not supported by nimbus; it evaluates to 0.5"),
+                    format!(
+                        "texture type \"{other}\" is unknown (pbrt-v4's are bilerp, checkerboard, constant, \
+                         directionmix, dots, fbm, imagemap, marble, mix, ptex, scale, windy and wrinkled)"
+                    ),
                 ));
-                TextureKind::Unsupported(other.to_string())
             }
         };
         Ok(TextureSettings { kind })

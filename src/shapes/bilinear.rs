@@ -22,6 +22,8 @@ pub struct BilinearMesh {
     pub indices: Vec<u32>,
     /// ReverseOrientation xor a handedness-swapping transform.
     pub flip_normals: bool,
+    /// Per patch, its Ptex face id (pbrt-v4's `faceIndices`); empty: 0 for all.
+    pub face_indices: Vec<i32>,
 }
 
 /// pbrt-v4's `SampleLinear`: a sample of the density ∝ lerp(x, a, b) on [0, 1].
@@ -71,7 +73,27 @@ impl BilinearMesh {
         indices: Vec<u32>,
     ) -> BilinearMesh {
         let v = WorldVertices::new(world_from_object, reverse_orientation, positions, normals, uvs);
-        BilinearMesh { positions: v.positions, normals: v.normals, uvs: v.uvs, indices, flip_normals: v.flip_normals }
+        BilinearMesh {
+            positions: v.positions,
+            normals: v.normals,
+            uvs: v.uvs,
+            indices,
+            flip_normals: v.flip_normals,
+            face_indices: Vec::new(),
+        }
+    }
+
+    /// The mesh with per-patch Ptex face ids (one per patch, or none).
+    pub fn with_face_indices(mut self, face_indices: Vec<i32>) -> BilinearMesh {
+        debug_assert!(face_indices.is_empty() || face_indices.len() == self.indices.len() / 4);
+        self.face_indices = face_indices;
+        self
+    }
+
+    /// Patch `patch`'s Ptex face id.
+    #[inline]
+    pub fn face_index(&self, patch: u32) -> i32 {
+        self.face_indices.get(patch as usize).copied().unwrap_or(0)
     }
 
     /// Number of patches.

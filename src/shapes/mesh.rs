@@ -19,6 +19,8 @@ pub struct Mesh {
     pub indices: Vec<u32>,
     /// ReverseOrientation xor a handedness-swapping transform.
     pub flip_normals: bool,
+    /// Per triangle, its Ptex face id (pbrt-v4's `faceIndices`); empty: 0 for all.
+    pub face_indices: Vec<i32>,
 }
 
 impl Mesh {
@@ -32,7 +34,27 @@ impl Mesh {
         indices: Vec<u32>,
     ) -> Mesh {
         let v = WorldVertices::new(world_from_object, reverse_orientation, positions, normals, uvs);
-        Mesh { positions: v.positions, normals: v.normals, uvs: v.uvs, indices, flip_normals: v.flip_normals }
+        Mesh {
+            positions: v.positions,
+            normals: v.normals,
+            uvs: v.uvs,
+            indices,
+            flip_normals: v.flip_normals,
+            face_indices: Vec::new(),
+        }
+    }
+
+    /// The mesh with per-triangle Ptex face ids (one per triangle, or none).
+    pub fn with_face_indices(mut self, face_indices: Vec<i32>) -> Mesh {
+        debug_assert!(face_indices.is_empty() || face_indices.len() == self.triangle_count());
+        self.face_indices = face_indices;
+        self
+    }
+
+    /// Triangle `tri`'s Ptex face id.
+    #[inline]
+    pub fn face_index(&self, tri: u32) -> i32 {
+        self.face_indices.get(tri as usize).copied().unwrap_or(0)
     }
 
     /// Number of triangles.

@@ -1,13 +1,16 @@
-//! Textures as pbrt-v4 evaluates them (without ray-differential filtering): constants,
-//! scale, mix, 2D and 3D checkerboards, image maps and noise, over uv, spherical, cylindrical or planar
-//! mappings. Float textures evaluate to gray RGB and are read from the first channel.
+//! Textures as pbrt-v4 evaluates them, filtered over the hit's footprint where pbrt-v4
+//! filters: constants, scale, mix, 2D and 3D checkerboards, image maps, Ptex files and noise,
+//! over uv, spherical, cylindrical or planar mappings. Float textures evaluate to gray RGB
+//! and are read from the first channel.
 //! Spectrum textures evaluate in the path's channels: constants are scene spectra, and image
 //! texels become spectra (for spectral transport) only after filtering, as in pbrt-v4's
 //! `RGBImageTexture`.
 
 mod mipmap;
+mod ptex;
 
 pub use mipmap::{MipFilter, MipMap, MipSample};
+pub use ptex::{Encoding as PtexEncoding, PtexTexture};
 
 use std::f32::consts::PI;
 use std::sync::Arc;
@@ -48,12 +51,14 @@ pub struct TexContext {
     pub duvdx: Vec2,
     /// ∂(u, v)/∂y.
     pub duvdy: Vec2,
+    /// The hit primitive's Ptex face id (pbrt-v4's `faceIndex`; 0 where there is none).
+    pub face: i32,
 }
 
 impl TexContext {
     /// A lookup at a point without a footprint.
     pub fn at(p: Vec3, uv: Vec2, n: Vec3) -> TexContext {
-        TexContext { p, uv, n, dpdx: Vec3::ZERO, dpdy: Vec3::ZERO, duvdx: Vec2::ZERO, duvdy: Vec2::ZERO }
+        TexContext { p, uv, n, dpdx: Vec3::ZERO, dpdy: Vec3::ZERO, duvdx: Vec2::ZERO, duvdy: Vec2::ZERO, face: 0 }
     }
 }
 
@@ -273,6 +278,13 @@ pub enum TexNode {
         /// A float texture: its lookups read what pbrt-v4 reads for one ([`MipSample::float`]).
         float: bool,
     },
+    /// pbrt-v4's `ptex`: per-face textures read at the hit's face id and (u, v).
+    Ptex {
+        /// The file, its encoding and scale.
+        texture: Arc<PtexTexture>,
+        /// A float texture: the mean of a three-channel file's channels, as in pbrt-v4.
+        float: bool,
+    },
 }
 
 /// All texture nodes of a scene.
@@ -296,6 +308,7 @@ impl Textures {
                     | TexNode::Checkerboard3D { .. }
                     | TexNode::Checkerboard { .. }
                     | TexNode::Image { .. }
+                    | TexNode::Ptex { .. }
             )
         })
     }
@@ -305,6 +318,7 @@ impl Textures {
     pub fn uses_uv_footprint(&self) -> bool {
         self.nodes.iter().any(|n| {
             matches!(n, TexNode::Image { image, .. } if image.has_levels())
+                || matches!(n, TexNode::Ptex { .. })
                 || matches!(n, TexNode::Checkerboard { mapping: TexMapping::Uv { .. }, .. })
         })
     }
@@ -352,6 +366,7 @@ impl Textures {
                     self.is_chromatic(*a) || self.is_chromatic(*b)
                 }
                 TexNode::Image { gray, .. } => !gray,
+                TexNode::Ptex { texture, .. } => !texture.is_gray(),
             },
         }
     }
@@ -438,6 +453,20 @@ impl Textures {
                 let v = if *float { Rgb::splat(sample.float()) } else { sample.rgb } * *scale;
                 let v = if *invert { (Rgb::ONE - v).max(Rgb::ZERO) } else { v.max(Rgb::ZERO) };
                 C::from_rgb(v, role, *space, lambda)
+            }
+            TexNode::Ptex { texture, float } => {
+                let v = texture.lookup(ctx.face, ctx.uv, ctx.duvdx, ctx.duvdy);
+                if texture.channels() == 1 {
+                    return C::splat(v[0]);
+                }
+                if *float {
+                    return C::splat((v[0] + v[1] + v[2]) / 3.0);
+                }
+                // pbrt-v4 reads a ptex file's RGB in sRGB whatever the scene's colour space,
+                // clamped to [0, 1] for albedos.
+                let rgb = Rgb::from(v);
+                let rgb = if matches!(role, RgbRole::Albedo) { rgb.clamp(Rgb::ZERO, Rgb::ONE) } else { rgb };
+                C::from_rgb(rgb, role, ColorSpace::Srgb, lambda)
             }
         }
     }

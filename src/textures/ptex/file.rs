@@ -244,6 +244,9 @@ pub struct PtexFile {
     pub v_mode: BorderMode,
     /// Whether the first two channels are tangent-space vectors (rotated across edges).
     pub tangent_vectors: bool,
+    /// A triangle mesh's file: each face a triangle, its texels in a square array (the
+    /// library's `mt_triangle`), filtered by [`super::triangle`].
+    pub triangles: bool,
     /// Per face.
     pub faces: Vec<FaceInfo>,
     /// Per face, its average (its value if constant), `channels` texels each.
@@ -449,11 +452,11 @@ impl PtexFile {
         let meta_zip_size = h.u32()? as usize;
         let _meta_mem_size = h.u32()?;
         debug_assert_eq!(h.pos, HEADER_SIZE);
-        match mesh_type {
-            1 => {}
-            0 => return Err("triangle-mesh Ptex files are not supported by nimbus (only quad meshes)".into()),
+        let triangles = match mesh_type {
+            0 => true,
+            1 => false,
             other => return Err(format!("unknown mesh type {other}")),
-        }
+        };
         if channels == 0 {
             return Err("no channels".into());
         }
@@ -511,6 +514,9 @@ impl PtexFile {
             }
             if f.adjfaces.iter().any(|&a| a < -1 || a >= nfaces as i32) {
                 return Err(format!("face {i} names a neighbour that does not exist ({:?})", f.adjfaces));
+            }
+            if triangles && f.res.ulog2 != f.res.vlog2 {
+                return Err(format!("triangle face {i} has a resolution that is not square"));
             }
             if f.flags & FaceInfo::HAS_EDITS != 0 {
                 return Err(format!("face {i} has edits, which nimbus does not support"));
@@ -584,6 +590,7 @@ impl PtexFile {
             u_mode,
             v_mode,
             tangent_vectors,
+            triangles,
             faces,
             constant,
             levels,
@@ -615,12 +622,19 @@ impl PtexFile {
         if let Some(d) = self.reductions.read().unwrap_or_else(|e| e.into_inner()).get(&key) {
             return FaceRef::Reduced(d.clone());
         }
-        let half_u = if redu == redv { res.ulog2 & 1 != 0 } else { redu > redv };
-        let finer = if half_u { Res::new(res.ulog2 + 1, res.vlog2) } else { Res::new(res.ulog2, res.vlog2 + 1) };
+        // Triangles halve both ways at once; quads along one axis, alternating for square
+        // reductions.
+        let (how, finer) = if self.triangles {
+            (Reduction::Triangle, Res::new(res.ulog2 + 1, res.vlog2 + 1))
+        } else if (redu == redv && res.ulog2 & 1 != 0) || redu > redv {
+            (Reduction::U, Res::new(res.ulog2 + 1, res.vlog2))
+        } else {
+            (Reduction::V, Res::new(res.ulog2, res.vlog2 + 1))
+        };
         let reduced = match self.data(face, finer) {
             FaceRef::Constant(_) => unreachable!("a finer resolution than 1×1 of a face with data"),
-            FaceRef::Stored(d) => reduce_face(d, finer, self.channels, half_u),
-            FaceRef::Reduced(d) => reduce_face(&d, finer, self.channels, half_u),
+            FaceRef::Stored(d) => reduce_face(d, finer, self.channels, how),
+            FaceRef::Reduced(d) => reduce_face(&d, finer, self.channels, how),
         };
         let d = Arc::new(reduced);
         self.reductions.write().unwrap_or_else(|e| e.into_inner()).entry(key).or_insert(d).clone().into()
@@ -635,12 +649,64 @@ impl PtexFile {
     }
 }
 
-/// `d` (at `res`) halved along u or v.
-fn reduce_face(d: &FaceData, res: Res, channels: usize, half_u: bool) -> FaceData {
+/// How a face is halved.
+#[derive(Clone, Copy)]
+enum Reduction {
+    /// Along u.
+    U,
+    /// Along v.
+    V,
+    /// A triangle, both ways.
+    Triangle,
+}
+
+/// `d` (at `res`) halved.
+fn reduce_face(d: &FaceData, res: Res, channels: usize, how: Reduction) -> FaceData {
     if d.constant {
         return d.clone();
     }
-    FaceData { constant: false, texels: reduce(&d.texels, res, channels, half_u) }
+    let texels = match how {
+        Reduction::U => reduce(&d.texels, res, channels, true),
+        Reduction::V => reduce(&d.texels, res, channels, false),
+        Reduction::Triangle => reduce_triangle(&d.texels, res.u() as usize, channels),
+    };
+    FaceData { constant: false, texels }
+}
+
+/// Halves a triangle face of `w`×`w` texels (the library's `PtexUtils::reduceTri`): each new
+/// texel averages the even texels (2y, 2x), (2y, 2x + 1), (2y + 1, 2x) and the odd one
+/// stored at (w − 1 − 2x, w − 1 − 2y), in the stored type.
+fn reduce_triangle(src: &Texels, w: usize, channels: usize) -> Texels {
+    fn go<T: Copy>(src: &[T], w: usize, channels: usize, avg: fn(T, T, T, T) -> T) -> Box<[T]> {
+        let h = w / 2;
+        let at = |row: usize, col: usize, c: usize| src[(row * w + col) * channels + c];
+        let mut out = Vec::with_capacity(h * h * channels);
+        for y in 0..h {
+            for x in 0..h {
+                for c in 0..channels {
+                    out.push(avg(
+                        at(2 * y, 2 * x, c),
+                        at(2 * y, 2 * x + 1, c),
+                        at(2 * y + 1, 2 * x, c),
+                        at(w - 1 - 2 * x, w - 1 - 2 * y, c),
+                    ));
+                }
+            }
+        }
+        out.into()
+    }
+    match src {
+        Texels::U8(t) => {
+            Texels::U8(go(t, w, channels, |a, b, c, d| ((a as u32 + b as u32 + c as u32 + d as u32) >> 2) as u8))
+        }
+        Texels::U16(t) => {
+            Texels::U16(go(t, w, channels, |a, b, c, d| ((a as u32 + b as u32 + c as u32 + d as u32) >> 2) as u16))
+        }
+        Texels::Half(t) => Texels::Half(go(t, w, channels, |a, b, c, d| {
+            Half::from_f32(0.25 * (a.to_f32() + b.to_f32() + c.to_f32() + d.to_f32()))
+        })),
+        Texels::F32(t) => Texels::F32(go(t, w, channels, |a, b, c, d| 0.25 * (a + b + c + d))),
+    }
 }
 
 /// Where a face's texels are.
@@ -852,7 +918,7 @@ mod tests {
         };
         assert!(PtexFile::parse(b"PNG not ptex").is_err());
         assert!(PtexFile::parse(&[]).is_err());
-        for name in ["grid-rgb8.ptx", "cube-half.ptx", "fan-float.ptx"] {
+        for name in ["grid-rgb8.ptx", "cube-half.ptx", "fan-float.ptx", "subfaces-rgb8.ptx", "tri-rgb8.ptx"] {
             let good = fixture(name);
             for trial in 0..300 {
                 let mut bytes = good.clone();
@@ -869,17 +935,8 @@ mod tests {
                 for _ in 0..20 {
                     let f = |n: u64| (n % 3000) as f32 / 1000.0 - 1.0;
                     let face = (next() % (file.faces.len() as u64 + 1)) as i32;
-                    let v = super::super::filter::eval(
-                        &file,
-                        3,
-                        face,
-                        f(next()),
-                        f(next()),
-                        f(next()),
-                        0.0,
-                        0.0,
-                        f(next()),
-                    );
+                    let v =
+                        super::super::filtered(&file, 3, face, f(next()), f(next()), f(next()), 0.0, 0.0, f(next()));
                     assert!(v.iter().all(|x| !x.is_nan()), "{name} trial {trial}: {v:?}");
                 }
             }

@@ -161,8 +161,11 @@ pub fn load(path: &Path, scene: &Scene, settings: &GuidedSettings) -> Result<Gui
                         streethreshold, dtreethreshold, maxmemory or refractedshare)"
             .into()));
     }
+    let photons = r.u64().map_err(bad)?;
     let stats = TrainingStats {
-        photons: r.u64().map_err(bad)?,
+        photons,
+        // Round k traces photons·2^k after the pilot.
+        rounds: ((photons.saturating_sub(super::train::PILOT) / settings.photons.max(1) as u64) + 1).ilog2(),
         deposits: r.u64().map_err(bad)?,
         seconds: f64::from_le_bytes(r.take(8).map_err(bad)?.try_into().unwrap()),
     };

@@ -147,8 +147,8 @@ impl RayIntegrator for Guided {
         let bytes = self.guide.memory_bytes();
         vec![
             format!(
-                "guide       {} ({} photons, {} deposits, {:.3} s training)",
-                self.source, s.photons, s.deposits, s.seconds
+                "guide       {} ({} photons in {} rounds, {} deposits, {:.3} s training)",
+                self.source, s.photons, s.rounds, s.deposits, s.seconds
             ),
             format!(
                 "guide media {}",

@@ -26,11 +26,14 @@ use crate::spectra::SampledSpectrum;
 
 /// Photons per parallel batch (deposits of one batch are held in memory at once).
 const BATCH: u64 = 1 << 14;
+
+/// Most rounds a time budget can add up to (the 16th traces 2¹⁵ times the first's photons).
+const MAX_ROUNDS: u32 = 16;
 /// Photons per task within a batch.
 const CHUNK: u64 = 256;
 /// Photons traced first, only to find where each medium's photons scatter (the trees'
 /// bounds).
-const PILOT: u64 = 1 << 13;
+pub(super) const PILOT: u64 = 1 << 13;
 
 /// The trained trees: one SD-tree per medium that photons scattered in.
 #[derive(Clone, Debug, PartialEq)]
@@ -51,6 +54,8 @@ pub struct Guide {
 pub struct TrainingStats {
     /// Photons traced over all rounds (pilot included).
     pub photons: u64,
+    /// Rounds traced (after the pilot).
+    pub rounds: u32,
     /// Scattering events deposited.
     pub deposits: u64,
     /// Seconds spent.
@@ -213,7 +218,8 @@ pub fn train(scene: &Scene, settings: &GuidedSettings) -> Guide {
     // Energy deposited per medium: (all, through a refractive boundary).
     let mut energy = vec![(0.0f64, 0.0f64); scene.media.len()];
     let share = |&(all, r): &(f64, f64)| if all > 0.0 { (r / all) as f32 } else { 0.0 };
-    for k in 0..settings.training_iterations {
+    for k in 0..MAX_ROUNDS {
+        let round_start = Instant::now();
         let n = settings.photons as u64 * (1u64 << k);
         let mut done = 0u64;
         while done < n {
@@ -248,23 +254,33 @@ pub fn train(scene: &Scene, settings: &GuidedSettings) -> Guide {
             done += b;
         }
         stats.photons += n;
+        stats.rounds += 1;
         // Once no medium's light comes mostly through a refractive boundary, none will be
         // guided: the remaining rounds would be wasted.
         if settings.refracted_share > 0.0 && energy.iter().all(|e| share(e) < settings.refracted_share) {
             break;
         }
-        if k + 1 < settings.training_iterations {
-            let threshold = (settings.stree_threshold as f64 * 2f64.powf(k as f64 / 2.0)) as u64;
-            for tree in trees.iter_mut().flatten() {
-                tree.split(threshold, max_bytes);
-                tree.refine(settings.dtree_threshold);
-            }
+        let (elapsed, last) = (t0.elapsed().as_secs_f64(), round_start.elapsed().as_secs_f64());
+        if !another_round(k + 1, settings.training_iterations, settings.training_budget, elapsed, last) {
+            break;
+        }
+        let threshold = (settings.stree_threshold as f64 * 2f64.powf(k as f64 / 2.0)) as u64;
+        for tree in trees.iter_mut().flatten() {
+            tree.split(threshold, max_bytes);
+            tree.refine(settings.dtree_threshold);
         }
     }
     stats.seconds = t0.elapsed().as_secs_f64();
     let refracted = energy.iter().map(share).collect();
     let active = trees.iter().map(Option::is_some).collect();
     Guide { trees, refracted, active, stats }
+}
+
+/// Whether training goes on after `done` rounds: while the count asks for more, or, with a
+/// budget, while the next round is expected to end within it (photons double, so about twice
+/// the `last` round's time after the `elapsed` so far), up to [`MAX_ROUNDS`].
+fn another_round(done: u32, count: u32, budget: Option<f64>, elapsed: f64, last: f64) -> bool {
+    done < count || (done < MAX_ROUNDS && budget.is_some_and(|b| elapsed + 2.0 * last <= b))
 }
 
 #[cfg(test)]
@@ -279,6 +295,10 @@ mod tests {
     const LIGHT: Vec3 = Vec3::new(1.4, 1.8, 0.9);
 
     fn trained(threads: usize) -> Guide {
+        trained_with(threads, |_| {})
+    }
+
+    fn trained_with(threads: usize, adjust: impl Fn(&mut GuidedSettings)) -> Guide {
         let text = r#"LookAt 0 0.7 3.6  0 0 0  0 1 0
 Camera "perspective"
 Integrator "guided" "integer maxdepth" 64 "integer photons" 8192 "integer trainingiterations" 3
@@ -300,11 +320,28 @@ AttributeEnd
 "#;
         let desc = nimbus_parser::load_str(text, "glass.pbrt").unwrap();
         let scene = build_scene(&desc, &BuildOptions::default()).unwrap();
-        let IntegratorSettings::Guided(s) = IntegratorSettings::from_entity(&desc.integrator, None).unwrap() else {
+        let IntegratorSettings::Guided(mut s) = IntegratorSettings::from_entity(&desc.integrator, None).unwrap() else {
             unreachable!()
         };
+        adjust(&mut s);
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
         pool.install(|| train(&scene, &s))
+    }
+
+    /// A training budget adds rounds past the count while the next one (twice the last) is
+    /// expected to fit, never removes any, and stops at the most rounds there are; a training
+    /// with no room in its budget traces the count's rounds.
+    #[test]
+    fn a_budget_adds_rounds_that_fit() {
+        // 4 rounds asked for: the first three always go on, the fourth only with room.
+        assert!((1..4).all(|done| another_round(done, 4, None, 100.0, 50.0)));
+        assert!(!another_round(4, 4, None, 0.1, 0.05));
+        assert!(another_round(4, 4, Some(6.0), 0.6, 0.35));
+        // The 7th round took 2.8 s of 5.6: a 5.6 s 8th would end at 11.2 > 6.
+        assert!(!another_round(7, 4, Some(6.0), 5.6, 2.8));
+        assert!(!another_round(MAX_ROUNDS, 4, Some(1e9), 1.0, 0.5));
+        let rounds = |budget| trained_with(2, |s| s.training_budget = budget).stats.rounds;
+        assert_eq!((rounds(None), rounds(Some(0.0))), (3, 3));
     }
 
     /// Whether the ray from `p` (inside the glass sphere) along `d` leaves the sphere by

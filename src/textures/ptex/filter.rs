@@ -791,38 +791,38 @@ impl Eval<'_> {
             return;
         }
         let (nchan, channels) = (self.nchan, self.file.channels);
-        let tangent = self.file.tangent_vectors && nchan >= 2 && k.rot > 0;
-        let mut sums = [0f32; 4];
-        let target = if tangent { &mut sums } else { &mut self.result };
+        // Constant data (a constant face, or any face at 1×1) is added as it is: the
+        // library returns before turning tangent vectors for it.
         let reduced;
         let d = match self.file.data(face as usize, k.res) {
             FaceRef::Constant(i) => {
                 let w = k.weight();
-                for (c, t) in target.iter_mut().enumerate().take(nchan) {
+                for (c, t) in self.result.iter_mut().enumerate().take(nchan) {
                     *t += self.file.constant_value(i, c) * w;
                 }
-                None
+                return;
             }
-            FaceRef::Stored(d) => Some(d),
+            FaceRef::Stored(d) => d,
             FaceRef::Reduced(d) => {
                 reduced = d;
-                Some(&*reduced)
+                &*reduced
             }
         };
-        match d {
-            None => {}
-            Some(d) if d.constant => {
-                let w = k.weight();
-                for (c, t) in target.iter_mut().enumerate().take(nchan) {
-                    *t += d.texels.value(c) * w;
-                }
+        if d.constant {
+            let w = k.weight();
+            for (c, t) in self.result.iter_mut().enumerate().take(nchan) {
+                *t += d.texels.value(c) * w;
             }
-            Some(d) => match &d.texels {
-                Texels::U8(t) => k.apply(target, t, nchan, channels),
-                Texels::U16(t) => k.apply(target, t, nchan, channels),
-                Texels::Half(t) => k.apply(target, t, nchan, channels),
-                Texels::F32(t) => k.apply(target, t, nchan, channels),
-            },
+            return;
+        }
+        let tangent = self.file.tangent_vectors && nchan >= 2 && k.rot > 0;
+        let mut sums = [0f32; 4];
+        let target = if tangent { &mut sums } else { &mut self.result };
+        match &d.texels {
+            Texels::U8(t) => k.apply(target, t, nchan, channels),
+            Texels::U16(t) => k.apply(target, t, nchan, channels),
+            Texels::Half(t) => k.apply(target, t, nchan, channels),
+            Texels::F32(t) => k.apply(target, t, nchan, channels),
         }
         if tangent {
             // Tangent-space vectors turn with the kernel.

@@ -1,6 +1,6 @@
 //! nimbus's own pbrt-v4 parity scenes (`pbrt-scenes/pbrt-v4-parity/`): features the shared
 //! references do not cover (pbrt-v4's coated conductor, mix, diffuse transmission, bump and
-//! normal maps, alpha, loop subdivision, bilinear patches, curves, hair, motion blur), each
+//! normal maps, alpha, loop subdivision, bilinear patches, curves, hair, motion blur, Ptex), each
 //! rendered by the real pbrt-v4 (README there). nimbus's volpath must converge to them.
 
 use std::path::{Path, PathBuf};

@@ -613,6 +613,10 @@ impl PtexFile {
             return FaceRef::Constant(face);
         }
         let (redu, redv) = (f.res.ulog2 - res.ulog2, f.res.vlog2 - res.vlog2);
+        if redu < 0 || redv < 0 {
+            // Finer than the face (the filters never ask): the library has no data either.
+            return FaceRef::Constant(face);
+        }
         if redu == redv
             && let Some(d) = self.levels[face].get(redu as usize)
         {

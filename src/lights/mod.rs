@@ -387,7 +387,8 @@ fn infinite_sample<C>(ctx: &LightContext, scene: &SceneSphere, wi: Vec3, pdf: f3
 
 /// pbrt-v4's `DiffuseAreaLight::AlphaMasked`: no emission where the shape's alpha is 0, none
 /// where a number hashed from the point exceeds a fractional alpha (a fixed pattern over the
-/// surface, apart from the alpha test rays get when they hit it).
+/// surface, apart from the alpha test rays get when they hit it). pbrt-v4 evaluates the alpha
+/// here at a bare `Interaction(p, uv)`, whose Ptex face id is 0, and so does nimbus.
 pub(crate) fn alpha_masked(surfaces: &Surfaces, alpha: u32, p: Vec3, uv: Vec2, n: Vec3) -> bool {
     let a = surfaces.textures.eval_float(surfaces.alphas[alpha as usize], &crate::textures::TexContext::at(p, uv, n));
     if a >= 1.0 {

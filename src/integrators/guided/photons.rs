@@ -321,7 +321,8 @@ pub fn trace<C: Channels>(
         let (material, _) = scene.surface_material(&mut hit, -ray.d, None);
         let s = &hit.surface;
         // Light paths carry no camera footprint (pbrt-v4 has none there either).
-        let tex_ctx = TexContext::at(s.p, s.uv, s.n);
+        let tex_ctx =
+            TexContext { face: scene.surfaces.shapes.face_index(hit.prim.geometry), ..TexContext::at(s.p, s.uv, s.n) };
         let Some(bxdf) = material.bxdf::<C>(&scene.textures, &tex_ctx, lambda) else {
             medium = medium_after(scene, &hit, ray.d, medium);
             ray = s.spawn_ray(ray.d);

@@ -1,6 +1,7 @@
 //! Path guiding in media: the same answer as volpath where it guides (a milky medium in a
-//! glass sphere under a small light, in RGB and spectral transport), lower noise there, the
-//! same image at any thread count, and its guide cache reused and refused as it should be.
+//! glass sphere under a small light, in RGB and spectral transport, with and without
+//! splitting), a white furnace through glass, lower noise there, the same image at any thread
+//! count, and its guide cache reused and refused as it should be.
 
 use nimbus::imageio::Image;
 use nimbus::scene::BuildOptions;
@@ -54,14 +55,17 @@ fn paired_difference(a: &Image, b: &Image, c: usize) -> (f64, f64) {
 }
 
 /// Guided and volpath estimate the same image, in both transports: with the paper's
-/// resampling (g = 0.85 ≥ 0.5) and with one-sample MIS (`selectivethreshold` 2), each
-/// against volpath at another seed, within four standard errors of the pixels' differences.
+/// resampling (g = 0.85 ≥ 0.5) and with one-sample MIS (`selectivethreshold` 2), with
+/// splitting wherever a path's expected contribution grows at all (`splitthreshold` 1, up to
+/// 16 copies) and without splitting, each against volpath at another seed, within four
+/// standard errors of the pixels' differences.
 #[test]
 fn guided_and_volpath_agree() {
     for spectral in [false, true] {
         let opts = BuildOptions { spp: Some(64), seed: Some(3), ..transport(spectral) };
         let volpath = render_scene(&load_scene(&glass_scene("volpath", ""), &opts));
-        for extra in ["", r#""float selectivethreshold" 2"#] {
+        let split_everywhere = r#""float splitthreshold" 1 "integer maxsplit" 16"#;
+        for extra in ["", r#""float selectivethreshold" 2"#, split_everywhere, r#""integer maxsplit" 1"#] {
             let params = format!("{SMALL} {extra}");
             let guided = render_scene(&load_scene(
                 &glass_scene("guided", &params),
@@ -77,6 +81,46 @@ fn guided_and_volpath_agree() {
             }
         }
     }
+}
+
+/// A white furnace through glass: a medium that absorbs nothing, in a glass sphere under a
+/// uniform sky of radiance 1, is invisible, so every pixel's expectation is 1. Guided paths
+/// (resampled directions, split copies, next-event estimation by roulette inside the glass,
+/// where it finds nothing) average to it within four standard errors, at g = 0.85 and 0.
+#[test]
+fn white_furnace_through_glass() {
+    for g in ["0.85", "0"] {
+        let text = format!(
+            r#"LookAt 0 0 3  0 0 0  0 1 0
+Camera "perspective" "float fov" 30
+Film "rgb" "integer xresolution" 16 "integer yresolution" 16
+Sampler "zsobol" "integer pixelsamples" 32
+Integrator "guided" "integer maxdepth" 100000 {SMALL} "float splitthreshold" 1.5
+WorldBegin
+LightSource "infinite" "rgb L" [1 1 1]
+MakeNamedMedium "white" "string type" "homogeneous" "rgb sigma_a" [0 0 0] "rgb sigma_s" [2 2 2] "float g" {g}
+AttributeBegin
+  MediumInterface "white" ""
+  Material "dielectric" "float eta" 1.4
+  Shape "sphere" "float radius" 0.9
+AttributeEnd
+"#
+        );
+        let scene = load_scene(&text, &BuildOptions { seed: Some(6), ..transport(false) });
+        let report = scene.integrator.create(&scene).unwrap().report().join("\n");
+        assert!(report.contains("white guided (100 % refracted)") && report.contains("split into up to 8"), "{report}");
+        crate::common::assert_channels(&render_scene(&scene), [1.0; 3], &format!("furnace, g {g}"));
+    }
+}
+
+/// Copies of a split path share its wavelengths, which a dispersive surface cuts down to the
+/// hero for the whole path: with a dispersive glass, guided does not split.
+#[test]
+fn dispersive_glass_turns_splitting_off() {
+    let text = glass_scene("guided", SMALL).replace(r#""float eta" 1.4"#, r#""spectrum eta" "glass-BK7""#);
+    let scene = load_scene(&text, &BuildOptions { spp: Some(1), ..transport(true) });
+    let report = scene.integrator.create(&scene).unwrap().report().join("\n");
+    assert!(report.contains("guide split off"), "{report}");
 }
 
 /// Where the light comes through the glass, guiding lowers the noise at equal spp: the MSE

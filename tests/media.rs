@@ -188,17 +188,20 @@ fn media_scenes_match_pbrt_v4() {
 /// suite, judged by the same parity check (its guide trained anew for each seed): with its
 /// defaults, which guide only the wax (the one medium lit through a dielectric), and with
 /// every medium guided (`refractedshare` 0: the grids, the VDB cloud, the emissive grid, the
-/// fog under a spotlight), at twice the spp there since a guided estimator's noise is
-/// heavier-tailed.
+/// fog under a spotlight). There the excess is averaged over three independent pairs of
+/// renders: one pair's excess spreads widely on a cloud guided everywhere, with splitting or
+/// without (graph-cloud at 16 spp, six pairs each: 0.90–2.13 and 1.09–2.08, mean 1.24 and
+/// 1.33; grid-cloud at 32 spp, eight pairs: 0.58–1.35, where volpath's own spread 0.77–1.37).
 #[test]
 fn guided_media_scenes_match_pbrt_v4() {
     media_scenes_match_pbrt_v4_with(Some(""), 1);
-    media_scenes_match_pbrt_v4_with(Some(r#""float refractedshare" 0"#), 1);
+    media_scenes_match_pbrt_v4_with(Some(r#""float refractedshare" 0"#), 3);
 }
 
 /// The parity check with the scene's integrator (`None`) or `guided` with these parameters
-/// (added to the scene's), at `spp_factor` times the suite's spp.
-fn media_scenes_match_pbrt_v4_with(guided: Option<&str>, spp_factor: u32) {
+/// (added to the scene's), over `pairs` independent pairs of renders (seeds 1 and 2, 3 and 4,
+/// ...): every pair's mean within tolerance, the pairs' mean excess below its tolerance.
+fn media_scenes_match_pbrt_v4_with(guided: Option<&str>, pairs: i32) {
     let dir = reference_scenes_dir();
     let scenes: [(&str, u32, f64, f64); 8] = [
         ("homogeneous-sphere", 16, 0.01, 1.5),
@@ -226,25 +229,30 @@ fn media_scenes_match_pbrt_v4_with(guided: Option<&str>, spp_factor: u32) {
         };
         let reference = nimbus::imageio::read_exr(&dir.join(format!("../images/{name}.exr"))).unwrap();
         let render_seed = |seed| {
-            let opts = BuildOptions { spp: Some(spp * spp_factor), seed: Some(seed), ..Default::default() };
+            let opts = BuildOptions { spp: Some(spp), seed: Some(seed), ..Default::default() };
             let scene = build_scene(&desc, &opts).unwrap();
             render_with(&scene, scene.integrator.create(&scene).unwrap().as_ref())
         };
-        let (a, b) = (render_seed(1), render_seed(2));
-        let p = nimbus::metrics::parity(&a, &b, &reference).unwrap();
-        // Standard error of the image mean of M, from the pixels' (A − B)/2.
-        let n = a.pixels.len() as f64;
-        let ref_mean = reference.mean();
-        for c in 0..3 {
-            let var: f64 =
-                a.pixels.iter().zip(&b.pixels).map(|(x, y)| (0.5 * (x[c] - y[c]) as f64).powi(2)).sum::<f64>() / n;
-            let se = (var / n).sqrt() / ref_mean[c] as f64;
-            assert!(
-                p.mean_rel[c] < mean_tol + 4.0 * se,
-                "{guided:?} {name}: channel {c} mean_rel {} (tolerance {mean_tol} + 4 × {se})",
-                p.mean_rel[c]
-            );
+        let mut excess = Vec::new();
+        for pair in 0..pairs {
+            let (a, b) = (render_seed(2 * pair + 1), render_seed(2 * pair + 2));
+            let p = nimbus::metrics::parity(&a, &b, &reference).unwrap();
+            // Standard error of the image mean of M, from the pixels' (A − B)/2.
+            let n = a.pixels.len() as f64;
+            let ref_mean = reference.mean();
+            for c in 0..3 {
+                let var: f64 =
+                    a.pixels.iter().zip(&b.pixels).map(|(x, y)| (0.5 * (x[c] - y[c]) as f64).powi(2)).sum::<f64>() / n;
+                let se = (var / n).sqrt() / ref_mean[c] as f64;
+                assert!(
+                    p.mean_rel[c] < mean_tol + 4.0 * se,
+                    "{guided:?} {name}: channel {c} mean_rel {} (tolerance {mean_tol} + 4 × {se})",
+                    p.mean_rel[c]
+                );
+            }
+            excess.push(p.excess);
         }
-        assert!(p.excess < excess_tol, "{guided:?} {name}: {p:?}");
+        let mean_excess = excess.iter().sum::<f64>() / excess.len() as f64;
+        assert!(mean_excess < excess_tol, "{guided:?} {name}: excess {excess:?}");
     }
 }

@@ -242,6 +242,22 @@ impl Material {
         matches!(self, Material::Interface)
     }
 
+    /// Whether the material's η varies with wavelength: a path through it keeps only its
+    /// hero wavelength (pbrt-v4's `TerminateSecondary`). `materials` is the scene's table, for
+    /// the parts of a `mix`.
+    pub fn is_dispersive(&self, materials: &[Material]) -> bool {
+        match self {
+            Material::Dielectric { eta, .. }
+            | Material::ThinDielectric { eta }
+            | Material::CoatedDiffuse { eta, .. } => !eta.is_constant(),
+            Material::CoatedConductor { interface_eta, .. } => !interface_eta.is_constant(),
+            Material::Mix { materials: pair, .. } => {
+                pair.iter().any(|&i| materials[i as usize].is_dispersive(materials))
+            }
+            _ => false,
+        }
+    }
+
     /// The first input that varies with wavelength, by parameter name, or `None` when RGB
     /// transport carries the material exactly (every input gray, η constant). `materials`
     /// is the scene's table, for the parts of a `mix`.

@@ -116,6 +116,20 @@ pub trait PathObserver<C: Channels> {
     fn guide_medium_pdf(&self, _medium: u32, _p: Vec3, _wo: Vec3, _phase: &HenyeyGreenstein, _wi: Vec3) -> Option<f32> {
         None
     }
+    /// The probability of next-event estimation at a real scattering event at `p` in
+    /// `medium` (1: always). Asked only where [`PathObserver::guides`].
+    #[inline]
+    fn nee_medium_probability(&self, _medium: u32, _p: Vec3) -> f32 {
+        1.0
+    }
+    /// Splitting at a real scattering event at `p` in `medium`, before its continuation is
+    /// drawn, for a path whose throughput is `beta` (β over the mean of r_u): how many
+    /// independent continuations the path takes, each with β divided by their number (1:
+    /// the path goes on as it is). Asked only where [`PathObserver::guides`].
+    #[inline]
+    fn split_medium(&mut self, _medium: u32, _p: Vec3, _beta: f32) -> u32 {
+        1
+    }
     /// A scattering vertex was sampled.
     #[inline]
     fn on_vertex(&mut self, _v: &VertexEvent<C>) {}

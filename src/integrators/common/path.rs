@@ -118,6 +118,7 @@ impl<C: Channels> Scatterer<'_, C> {
 }
 
 /// Per-path state shared by the loop and its helpers.
+#[derive(Clone, Copy)]
 struct PathState<C: Channels> {
     beta: C,
     r_u: C,
@@ -131,6 +132,24 @@ struct PathState<C: Channels> {
     /// The path's time (its camera ray's): every ray of the path sees moving shapes there.
     time: f32,
 }
+
+/// A path copy left waiting after splitting at a medium vertex
+/// ([`PathObserver::split_medium`]): the loop's state after that vertex, continuing along
+/// `ray`.
+#[derive(Clone, Copy)]
+struct Branch<C: Channels> {
+    ray: Ray,
+    medium: u32,
+    st: PathState<C>,
+    depth: u32,
+    prev_p: Vec3,
+    eta_scale: f32,
+    extra_done: bool,
+    line_done: bool,
+}
+
+/// Most path copies waiting at once; splitting makes fewer copies when it is full.
+const MAX_PENDING: usize = 16;
 
 /// Radiance arriving along `ray` (from the camera, in medium `medium`) at the wavelengths
 /// `lambda` (which a dispersive surface may cut down to the first), estimated by one path in
@@ -171,322 +190,376 @@ pub fn trace_path<C: Channels, O: PathObserver<C>>(
     let mut camera_diff = scene.footprint.is_some();
     let mut diff = None;
 
-    loop {
-        stats.bounce += 1;
-        // The hero of this segment (one per path unless `hero_per_segment`).
-        let hero = st.hero;
-        let hit = scene.surfaces.intersect(&ray, f32::INFINITY);
-        if config.camera_line && depth == 0 && medium != NONE && !line_done {
-            line_done = true;
-            let c = line_emission(scene, ray, hit, medium, &st, lambda, stats);
-            if !c.is_zero() {
-                l += c;
-                observer.on_emission(&EmissionEvent { depth, contribution: c, pdf_light: 0.0 });
+    let mut pending = [None::<Branch<C>>; MAX_PENDING];
+    let mut n_pending = 0usize;
+    'paths: loop {
+        'bounce: loop {
+            stats.bounce += 1;
+            // The hero of this segment (one per path unless `hero_per_segment`).
+            let hero = st.hero;
+            let hit = scene.surfaces.intersect(&ray, f32::INFINITY);
+            if config.camera_line && depth == 0 && medium != NONE && !line_done {
+                line_done = true;
+                let c = line_emission(scene, ray, hit, medium, &st, lambda, stats);
+                if !c.is_zero() {
+                    l += c;
+                    observer.on_emission(&EmissionEvent { depth, contribution: c, pdf_light: 0.0 });
+                }
             }
-        }
-        // Area lights on the camera line (depth 0) once it has been estimated.
-        let line_counted = line_done && depth == 0;
+            // Area lights on the camera line (depth 0) once it has been estimated.
+            let line_counted = line_done && depth == 0;
 
-        // Delta tracking through the current medium up to the surface.
-        if medium != NONE {
-            let m = &scene.media[medium as usize];
-            let t_max = hit.as_ref().map_or(f32::INFINITY, |h| h.surface.t);
-            let mut rng =
-                Pcg32::new(hash_sample(sampler.get_1d(), Vec2::ZERO), hash_sample(sampler.get_1d(), Vec2::ONE));
-            let u = sampler.get_1d();
-            let (mut scattered, mut terminated) = (false, false);
-            let mut scatter_p = Vec3::ZERO;
-            let t_maj =
-                sample_t_maj::<C, _>(m, &ray, t_max, u, &mut rng, hero, lambda, |p, mp, sigma_maj, t_maj, rng| {
-                    if st.beta.is_zero() {
-                        terminated = true;
-                        return false;
-                    }
-                    // Medium emission, weighted by the chance of having reached it.
-                    if depth < config.max_depth && !mp.le.is_zero() {
-                        let pdf = sigma_maj[hero] * t_maj[hero];
-                        let betap = st.beta * t_maj / pdf;
-                        let r_e = st.r_u * sigma_maj * t_maj / pdf;
-                        if !r_e.is_zero() {
-                            let c = betap * mp.sigma_a * mp.le / r_e.average();
-                            l += c;
-                            observer.on_emission(&EmissionEvent { depth, contribution: c, pdf_light: 0.0 });
-                        }
-                    }
-                    // Choose absorption, real scattering or null scattering with the hero
-                    // channel's probabilities.
-                    let p_absorb = mp.sigma_a[hero] / sigma_maj[hero];
-                    let p_scatter = mp.sigma_s[hero] / sigma_maj[hero];
-                    let um = rng.uniform();
-                    if um < p_absorb {
-                        terminated = true;
-                        false
-                    } else if um < p_absorb + p_scatter {
-                        if depth >= config.max_depth {
+            // Delta tracking through the current medium up to the surface.
+            if medium != NONE {
+                let m = &scene.media[medium as usize];
+                let t_max = hit.as_ref().map_or(f32::INFINITY, |h| h.surface.t);
+                let mut rng =
+                    Pcg32::new(hash_sample(sampler.get_1d(), Vec2::ZERO), hash_sample(sampler.get_1d(), Vec2::ONE));
+                let u = sampler.get_1d();
+                let (mut scattered, mut terminated) = (false, false);
+                let mut scatter_p = Vec3::ZERO;
+                let t_maj =
+                    sample_t_maj::<C, _>(m, &ray, t_max, u, &mut rng, hero, lambda, |p, mp, sigma_maj, t_maj, rng| {
+                        if st.beta.is_zero() {
                             terminated = true;
                             return false;
                         }
-                        depth += 1;
-                        // In a gray medium these ratios are 1: only chromatic media pay for
-                        // spectral MIS.
-                        if m.chromatic {
-                            let pdf = t_maj[hero] * mp.sigma_s[hero];
-                            st.beta *= t_maj * mp.sigma_s / pdf;
-                            st.r_u *= t_maj * mp.sigma_s / pdf;
+                        // Medium emission, weighted by the chance of having reached it.
+                        if depth < config.max_depth && !mp.le.is_zero() {
+                            let pdf = sigma_maj[hero] * t_maj[hero];
+                            let betap = st.beta * t_maj / pdf;
+                            let r_e = st.r_u * sigma_maj * t_maj / pdf;
+                            if !r_e.is_zero() {
+                                let c = betap * mp.sigma_a * mp.le / r_e.average();
+                                l += c;
+                                observer.on_emission(&EmissionEvent { depth, contribution: c, pdf_light: 0.0 });
+                            }
                         }
-                        scattered = true;
-                        scatter_p = p;
-                        false
-                    } else {
-                        let sigma_n = (sigma_maj - mp.sigma_a - mp.sigma_s).max(C::ZERO);
-                        let pdf = t_maj[hero] * sigma_n[hero];
-                        if pdf == 0.0 {
-                            st.beta = C::ZERO;
-                        } else if m.chromatic {
-                            st.beta *= t_maj * sigma_n / pdf;
-                            st.r_u *= t_maj * sigma_n / pdf;
-                            st.r_l *= t_maj * sigma_maj / pdf;
+                        // Choose absorption, real scattering or null scattering with the hero
+                        // channel's probabilities.
+                        let p_absorb = mp.sigma_a[hero] / sigma_maj[hero];
+                        let p_scatter = mp.sigma_s[hero] / sigma_maj[hero];
+                        let um = rng.uniform();
+                        if um < p_absorb {
+                            terminated = true;
+                            false
+                        } else if um < p_absorb + p_scatter {
+                            if depth >= config.max_depth {
+                                terminated = true;
+                                return false;
+                            }
+                            depth += 1;
+                            // In a gray medium these ratios are 1: only chromatic media pay for
+                            // spectral MIS.
+                            if m.chromatic {
+                                let pdf = t_maj[hero] * mp.sigma_s[hero];
+                                st.beta *= t_maj * mp.sigma_s / pdf;
+                                st.r_u *= t_maj * mp.sigma_s / pdf;
+                            }
+                            scattered = true;
+                            scatter_p = p;
+                            false
                         } else {
-                            st.r_l *= sigma_maj[hero] / sigma_n[hero];
+                            let sigma_n = (sigma_maj - mp.sigma_a - mp.sigma_s).max(C::ZERO);
+                            let pdf = t_maj[hero] * sigma_n[hero];
+                            if pdf == 0.0 {
+                                st.beta = C::ZERO;
+                            } else if m.chromatic {
+                                st.beta *= t_maj * sigma_n / pdf;
+                                st.r_u *= t_maj * sigma_n / pdf;
+                                st.r_l *= t_maj * sigma_maj / pdf;
+                            } else {
+                                st.r_l *= sigma_maj[hero] / sigma_n[hero];
+                            }
+                            !st.beta.is_zero() && !st.r_u.is_zero()
                         }
-                        !st.beta.is_zero() && !st.r_u.is_zero()
-                    }
-                });
-            if terminated || st.beta.is_zero() || st.r_u.is_zero() {
-                return l;
-            }
-            if scattered {
-                (camera_diff, diff) = (false, None);
-                if per_segment {
-                    end_segment(&mut st, sampler);
+                    });
+                if terminated || st.beta.is_zero() || st.r_u.is_zero() {
+                    break 'bounce;
                 }
-                // Real scattering: next-event estimation, then sample the phase function.
-                let phase = HenyeyGreenstein::new(m.g);
-                let wo = -ray.d;
-                if config.next_event {
-                    let u_pick = sampler.get_1d();
-                    let u_light = sampler.get_2d();
-                    let sc = Scatterer::Medium { phase, wo };
-                    if let Some(c) = sample_direct(
-                        scene,
-                        scatter_p,
-                        None,
-                        medium,
-                        &sc,
-                        (u_pick, u_light),
-                        &st,
-                        lambda,
-                        depth - 1,
-                        observer,
-                        stats,
-                        true,
-                    ) {
-                        l += c;
+                if scattered {
+                    (camera_diff, diff) = (false, None);
+                    if per_segment {
+                        end_segment(&mut st, sampler);
                     }
-                    if config.extra_direct > 0 && !extra_done {
-                        extra_done = true;
-                        let c = extra_direct(scene, scatter_p, None, medium, &sc, &st, lambda, config, sampler, stats);
-                        observer.on_extra_direct(depth - 1, c);
+                    // Real scattering: next-event estimation, then sample the phase function.
+                    let phase = HenyeyGreenstein::new(m.g);
+                    let wo = -ray.d;
+                    // Next-event estimation as Russian roulette where the observer expects it to
+                    // find nothing (its probability divides what it finds).
+                    let nee_prob =
+                        if observer.guides() { observer.nee_medium_probability(medium, scatter_p) } else { 1.0 };
+                    if config.next_event && (nee_prob >= 1.0 || sampler.get_1d() < nee_prob) {
+                        let u_pick = sampler.get_1d();
+                        let u_light = sampler.get_2d();
+                        let sc = Scatterer::Medium { phase, wo };
+                        if let Some(c) = sample_direct(
+                            scene,
+                            scatter_p,
+                            None,
+                            medium,
+                            &sc,
+                            (u_pick, u_light),
+                            &st,
+                            lambda,
+                            depth - 1,
+                            observer,
+                            stats,
+                            true,
+                        ) {
+                            l += if nee_prob < 1.0 { c / nee_prob } else { c };
+                        }
+                        if config.extra_direct > 0 && !extra_done {
+                            extra_done = true;
+                            let c =
+                                extra_direct(scene, scatter_p, None, medium, &sc, &st, lambda, config, sampler, stats);
+                            observer.on_extra_direct(depth - 1, c);
+                        }
                     }
-                }
-                // The continuation: (direction, phase value, β's factor, MIS density), from
-                // the guide when the observer guides here, else from the phase function.
-                let guided = if observer.guides() {
-                    let u = sampler.get_1d();
-                    observer.guide_medium(medium, scatter_p, wo, &phase, u).map(|gs| (gs, phase.p(wo, gs.wi)))
-                } else {
-                    None
-                };
-                let (wi, p, factor, pdf) = match guided {
-                    Some((gs, p)) => {
-                        // The phase function's own sampling has factor p/pdf = 1.
-                        st.rr_scale = (st.rr_scale / gs.weight).clamp(1e-20, 1e20);
-                        (gs.wi, p, gs.weight, gs.pdf)
+                    // Splitting where the observer guides and asks for it: the path continues in
+                    // several independent directions, each with its share of β (roulette's test
+                    // below sees β as it was before the split).
+                    let mut copies = 1u32;
+                    if observer.guides() {
+                        let beta = (st.beta / st.r_u.average()).average();
+                        let n = observer.split_medium(medium, scatter_p, beta);
+                        copies = n.clamp(1, (MAX_PENDING - n_pending) as u32 + 1);
+                        if copies > 1 {
+                            st.beta /= copies as f32;
+                            st.rr_scale *= copies as f32;
+                        }
                     }
-                    None => {
-                        let u = sampler.get_2d();
-                        let Some(ps) = phase.sample_p(wo, u) else {
-                            return l;
+                    let at_vertex = st;
+                    let mut next: Option<(Ray, PathState<C>)> = None;
+                    for _ in 0..copies {
+                        let mut st = at_vertex;
+                        // The continuation: (direction, phase value, β's factor, MIS density),
+                        // from the guide when the observer guides here, else from the phase
+                        // function.
+                        let guided = if observer.guides() {
+                            let u = sampler.get_1d();
+                            observer.guide_medium(medium, scatter_p, wo, &phase, u).map(|gs| (gs, phase.p(wo, gs.wi)))
+                        } else {
+                            None
                         };
-                        (ps.wi, ps.p, ps.p / ps.pdf, ps.pdf)
+                        let (wi, p, factor, pdf) = match guided {
+                            Some((gs, p)) => {
+                                // The phase function's own sampling has factor p/pdf = 1.
+                                st.rr_scale = (st.rr_scale / gs.weight).clamp(1e-20, 1e20);
+                                (gs.wi, p, gs.weight, gs.pdf)
+                            }
+                            None => {
+                                let u = sampler.get_2d();
+                                let Some(ps) = phase.sample_p(wo, u) else {
+                                    continue;
+                                };
+                                (ps.wi, ps.p, ps.p / ps.pdf, ps.pdf)
+                            }
+                        };
+                        if pdf == 0.0 || factor == 0.0 || !factor.is_finite() {
+                            continue;
+                        }
+                        observer.on_vertex(&VertexEvent {
+                            depth: depth - 1,
+                            p: scatter_p,
+                            n: Vec3::ZERO,
+                            wo,
+                            wi,
+                            pdf,
+                            f: C::splat(p),
+                            beta: st.beta,
+                            specular: false,
+                            in_medium: true,
+                            g: m.g,
+                            lambertian: false,
+                        });
+                        st.beta *= factor;
+                        st.r_l = st.r_u / pdf;
+                        let out = Ray::timed(scatter_p, wi, st.time);
+                        if rr(&mut st, eta_scale, depth, sampler) {
+                            continue;
+                        }
+                        if next.is_none() {
+                            next = Some((out, st));
+                        } else {
+                            pending[n_pending] = Some(Branch {
+                                ray: out,
+                                medium,
+                                st,
+                                depth,
+                                prev_p: scatter_p,
+                                eta_scale,
+                                extra_done,
+                                line_done,
+                            });
+                            n_pending += 1;
+                        }
                     }
-                };
-                if pdf == 0.0 || factor == 0.0 || !factor.is_finite() {
-                    return l;
-                }
-                observer.on_vertex(&VertexEvent {
-                    depth: depth - 1,
-                    p: scatter_p,
-                    n: Vec3::ZERO,
-                    wo,
-                    wi,
-                    pdf,
-                    f: C::splat(p),
-                    beta: st.beta,
-                    specular: false,
-                    in_medium: true,
-                    g: m.g,
-                    lambertian: false,
-                });
-                st.beta *= factor;
-                st.r_l = st.r_u / pdf;
-                prev_p = scatter_p;
-                prev_n = Vec3::ZERO;
-                specular_bounce = false;
-                any_non_specular = true;
-                ray = Ray::timed(scatter_p, wi, st.time);
-                if rr(&mut st, eta_scale, depth, sampler) {
-                    return l;
-                }
-                continue;
-            }
-            if m.chromatic {
-                let h = t_maj[hero];
-                st.beta *= t_maj / h;
-                st.r_u *= t_maj / h;
-                st.r_l *= t_maj / h;
-            }
-        }
-
-        let Some(mut hit) = hit else {
-            // Escaped: environment emission.
-            for &i in &scene.infinite_lights {
-                let light = &scene.lights[i as usize];
-                let le = light.le::<C>(ray.o, ray.d, lambda);
-                if le.is_zero() {
+                    let Some((out, st_next)) = next else { break 'bounce };
+                    (ray, st) = (out, st_next);
+                    prev_p = scatter_p;
+                    prev_n = Vec3::ZERO;
+                    specular_bounce = false;
+                    any_non_specular = true;
                     continue;
                 }
-                let (c, pdf_light) = if depth == 0 || specular_bounce || !config.next_event {
-                    (st.beta * le / st.r_u.average(), 0.0)
-                } else {
-                    let pdf = scene.light_sampler.pmf(prev_p, prev_n, i as usize)
-                        * light.pdf_li(&LightContext { p: prev_p }, ray.d, None, &scene.surfaces.shapes);
-                    (st.beta * le / (st.r_u + st.r_l * pdf).average(), pdf)
-                };
-                l += c;
-                observer.on_emission(&EmissionEvent { depth, contribution: c, pdf_light });
+                if m.chromatic {
+                    let h = t_maj[hero];
+                    st.beta *= t_maj / h;
+                    st.r_u *= t_maj / h;
+                    st.r_l *= t_maj / h;
+                }
             }
-            break;
-        };
-        let s = &hit.surface;
-        let wo = -ray.d;
 
-        // Emission from an area light that was hit.
-        if hit.prim.area_light != NONE && !line_counted {
-            let light = &scene.lights[hit.prim.area_light as usize];
-            let le = light.emitted::<C>(s, wo, lambda, &scene.surfaces);
-            if !le.is_zero() {
-                let (c, pdf_light) = if depth == 0 || specular_bounce || !config.next_event {
-                    (st.beta * le / st.r_u.average(), 0.0)
-                } else {
-                    let pdf = scene.light_sampler.pmf(prev_p, prev_n, hit.prim.area_light as usize)
-                        * light.pdf_li(&LightContext { p: prev_p }, ray.d, Some(s), &scene.surfaces.shapes);
-                    (st.beta * le / (st.r_u + st.r_l * pdf).average(), pdf)
-                };
-                l += c;
-                observer.on_emission(&EmissionEvent { depth, contribution: c, pdf_light });
-            }
-        }
+            let Some(mut hit) = hit else {
+                // Escaped: environment emission.
+                for &i in &scene.infinite_lights {
+                    let light = &scene.lights[i as usize];
+                    let le = light.le::<C>(ray.o, ray.d, lambda);
+                    if le.is_zero() {
+                        continue;
+                    }
+                    let (c, pdf_light) = if depth == 0 || specular_bounce || !config.next_event {
+                        (st.beta * le / st.r_u.average(), 0.0)
+                    } else {
+                        let pdf = scene.light_sampler.pmf(prev_p, prev_n, i as usize)
+                            * light.pdf_li(&LightContext { p: prev_p }, ray.d, None, &scene.surfaces.shapes);
+                        (st.beta * le / (st.r_u + st.r_l * pdf).average(), pdf)
+                    };
+                    l += c;
+                    observer.on_emission(&EmissionEvent { depth, contribution: c, pdf_light });
+                }
+                break;
+            };
+            let s = &hit.surface;
+            let wo = -ray.d;
 
-        if camera_diff {
-            camera_diff = false;
-            diff = scene.footprint.as_ref().and_then(|f| f.camera_differentials(&scene.camera, &camera_ray));
-        }
-        let (material, tex_ctx) = scene.surface_material(&mut hit, wo, diff.as_ref());
-        let s = &hit.surface;
-        let Some(mut bxdf) = material.bxdf::<C>(&scene.textures, &tex_ctx, lambda) else {
-            // An interface: cross it without counting a bounce.
-            medium = medium_after(scene, &hit, ray.d, medium);
-            ray = hit.spawn_ray(ray.d);
-            continue;
-        };
-        if depth == config.max_depth {
-            break;
-        }
-        depth += 1;
-        if per_segment {
-            end_segment(&mut st, sampler);
-        }
-        if config.regularize && any_non_specular {
-            bxdf.regularize();
-        }
-        let frame = shading_frame(&hit);
-        let wo_local = frame.to_local(wo);
+            // Emission from an area light that was hit.
+            if hit.prim.area_light != NONE && !line_counted {
+                let light = &scene.lights[hit.prim.area_light as usize];
+                let le = light.emitted::<C>(s, wo, lambda, &scene.surfaces);
+                if !le.is_zero() {
+                    let (c, pdf_light) = if depth == 0 || specular_bounce || !config.next_event {
+                        (st.beta * le / st.r_u.average(), 0.0)
+                    } else {
+                        let pdf = scene.light_sampler.pmf(prev_p, prev_n, hit.prim.area_light as usize)
+                            * light.pdf_li(&LightContext { p: prev_p }, ray.d, Some(s), &scene.surfaces.shapes);
+                        (st.beta * le / (st.r_u + st.r_l * pdf).average(), pdf)
+                    };
+                    l += c;
+                    observer.on_emission(&EmissionEvent { depth, contribution: c, pdf_light });
+                }
+            }
 
-        // Next-event estimation.
-        if config.next_event && bxdf.flags().is_non_specular() {
-            let u_pick = sampler.get_1d();
-            let u_light = sampler.get_2d();
-            let sc = Scatterer::Surface { bxdf: &bxdf, frame: &frame, wo_local };
-            if let Some(c) = sample_direct(
-                scene,
-                s.p,
-                Some(&hit),
-                medium,
-                &sc,
-                (u_pick, u_light),
-                &st,
-                lambda,
-                depth - 1,
-                observer,
-                stats,
-                true,
-            ) {
-                l += c;
+            if camera_diff {
+                camera_diff = false;
+                diff = scene.footprint.as_ref().and_then(|f| f.camera_differentials(&scene.camera, &camera_ray));
             }
-            if config.extra_direct > 0 && !extra_done {
-                extra_done = true;
-                let c = extra_direct(scene, s.p, Some(&hit), medium, &sc, &st, lambda, config, sampler, stats);
-                observer.on_extra_direct(depth - 1, c);
+            let (material, tex_ctx) = scene.surface_material(&mut hit, wo, diff.as_ref());
+            let s = &hit.surface;
+            let Some(mut bxdf) = material.bxdf::<C>(&scene.textures, &tex_ctx, lambda) else {
+                // An interface: cross it without counting a bounce.
+                medium = medium_after(scene, &hit, ray.d, medium);
+                ray = hit.spawn_ray(ray.d);
+                continue;
+            };
+            if depth == config.max_depth {
+                break;
             }
-        }
+            depth += 1;
+            if per_segment {
+                end_segment(&mut st, sampler);
+            }
+            if config.regularize && any_non_specular {
+                bxdf.regularize();
+            }
+            let frame = shading_frame(&hit);
+            let wo_local = frame.to_local(wo);
 
-        // Continue the path by sampling the BSDF.
-        let uc = sampler.get_1d();
-        let u = sampler.get_2d();
-        let Some(bs) = bxdf.sample_f(wo_local, uc, u, TransportMode::Radiance, ReflTransFlags::ALL) else {
-            break;
-        };
-        let wi = frame.to_world(bs.wi);
-        let f_cos = bs.f * bs.wi.z.abs();
-        observer.on_vertex(&VertexEvent {
-            depth: depth - 1,
-            p: s.p,
-            n: s.ns,
-            wo,
-            wi,
-            pdf: bs.pdf,
-            f: f_cos,
-            beta: st.beta,
-            specular: bs.is_specular(),
-            in_medium: false,
-            g: 0.0,
-            lambertian: matches!(bxdf, Bxdf::Diffuse(_)),
-        });
-        st.beta *= f_cos / bs.pdf;
-        st.r_l = if bs.pdf_is_proportional {
-            st.r_u / bxdf.pdf(wo_local, bs.wi, TransportMode::Radiance, ReflTransFlags::ALL)
-        } else {
-            st.r_u / bs.pdf
-        };
-        diff = match diff {
-            Some(d) if bs.is_specular() => {
-                scene.specular_differentials(&hit, &tex_ctx, &d, wo, wi, bs.is_transmission(), bs.eta)
+            // Next-event estimation.
+            if config.next_event && bxdf.flags().is_non_specular() {
+                let u_pick = sampler.get_1d();
+                let u_light = sampler.get_2d();
+                let sc = Scatterer::Surface { bxdf: &bxdf, frame: &frame, wo_local };
+                if let Some(c) = sample_direct(
+                    scene,
+                    s.p,
+                    Some(&hit),
+                    medium,
+                    &sc,
+                    (u_pick, u_light),
+                    &st,
+                    lambda,
+                    depth - 1,
+                    observer,
+                    stats,
+                    true,
+                ) {
+                    l += c;
+                }
+                if config.extra_direct > 0 && !extra_done {
+                    extra_done = true;
+                    let c = extra_direct(scene, s.p, Some(&hit), medium, &sc, &st, lambda, config, sampler, stats);
+                    observer.on_extra_direct(depth - 1, c);
+                }
             }
-            _ => None,
-        };
-        specular_bounce = bs.is_specular();
-        any_non_specular |= !bs.is_specular();
-        if bs.is_transmission() {
-            eta_scale *= bs.eta * bs.eta;
+
+            // Continue the path by sampling the BSDF.
+            let uc = sampler.get_1d();
+            let u = sampler.get_2d();
+            let Some(bs) = bxdf.sample_f(wo_local, uc, u, TransportMode::Radiance, ReflTransFlags::ALL) else {
+                break;
+            };
+            let wi = frame.to_world(bs.wi);
+            let f_cos = bs.f * bs.wi.z.abs();
+            observer.on_vertex(&VertexEvent {
+                depth: depth - 1,
+                p: s.p,
+                n: s.ns,
+                wo,
+                wi,
+                pdf: bs.pdf,
+                f: f_cos,
+                beta: st.beta,
+                specular: bs.is_specular(),
+                in_medium: false,
+                g: 0.0,
+                lambertian: matches!(bxdf, Bxdf::Diffuse(_)),
+            });
+            st.beta *= f_cos / bs.pdf;
+            st.r_l = if bs.pdf_is_proportional {
+                st.r_u / bxdf.pdf(wo_local, bs.wi, TransportMode::Radiance, ReflTransFlags::ALL)
+            } else {
+                st.r_u / bs.pdf
+            };
+            diff = match diff {
+                Some(d) if bs.is_specular() => {
+                    scene.specular_differentials(&hit, &tex_ctx, &d, wo, wi, bs.is_transmission(), bs.eta)
+                }
+                _ => None,
+            };
+            specular_bounce = bs.is_specular();
+            any_non_specular |= !bs.is_specular();
+            if bs.is_transmission() {
+                eta_scale *= bs.eta * bs.eta;
+            }
+            prev_p = s.p;
+            prev_n = s.ns;
+            medium = medium_after(scene, &hit, wi, medium);
+            ray = hit.spawn_ray(wi);
+            if rr(&mut st, eta_scale, depth, sampler) {
+                break;
+            }
         }
-        prev_p = s.p;
-        prev_n = s.ns;
-        medium = medium_after(scene, &hit, wi, medium);
-        ray = hit.spawn_ray(wi);
-        if rr(&mut st, eta_scale, depth, sampler) {
-            break;
+        // This copy of the path ended: take up the next waiting one.
+        if n_pending == 0 {
+            break 'paths;
         }
+        n_pending -= 1;
+        let b = pending[n_pending].take().expect("pending path");
+        (ray, medium, st, depth, prev_p, eta_scale, extra_done, line_done) =
+            (b.ray, b.medium, b.st, b.depth, b.prev_p, b.eta_scale, b.extra_done, b.line_done);
+        (prev_n, specular_bounce, any_non_specular, camera_diff, diff) = (Vec3::ZERO, false, true, false, None);
     }
     l
 }
@@ -647,20 +720,21 @@ fn sample_direct<C: Channels, O: PathObserver<C>>(
     if f.is_zero() {
         return None;
     }
-    // Where the path is guided, the scattering technique MIS weighs against is the guide's.
+    // A shadow ray leaving a surface starts in the medium on the side it leaves towards.
+    let (n, shadow_medium) = match hit {
+        Some(h) => ((h.surface.n, h.surface.p_error), medium_after(scene, h, ls.wi, medium)),
+        None => ((Vec3::ZERO, 0.0), medium),
+    };
+    let ShadowEstimate { t_ray, r_u, r_l } =
+        transmittance(scene, p, n, shadow_medium, &ls, (st.hero, st.time), lambda, stats)?;
+    // Where the path is guided, the scattering technique MIS weighs against is the guide's
+    // (looked up only for unoccluded samples: inside a dielectric most are blocked).
     let pdf_scatter = match scatterer {
         Scatterer::Medium { phase, wo } if hit.is_none() && observer.guides() => {
             observer.guide_medium_pdf(medium, p, *wo, phase, ls.wi).unwrap_or(pdf_scatter)
         }
         _ => pdf_scatter,
     };
-    // A shadow ray leaving a surface starts in the medium on the side it leaves towards.
-    let (n, medium) = match hit {
-        Some(h) => ((h.surface.n, h.surface.p_error), medium_after(scene, h, ls.wi, medium)),
-        None => ((Vec3::ZERO, 0.0), medium),
-    };
-    let ShadowEstimate { t_ray, r_u, r_l } =
-        transmittance(scene, p, n, medium, &ls, (st.hero, st.time), lambda, stats)?;
     let pdf_light = pmf * ls.pdf;
     let r_l = r_l * st.r_u * pdf_light;
     let r_u = r_u * st.r_u * pdf_scatter;

@@ -190,7 +190,7 @@ pub fn load(path: &Path, scene: &Scene, settings: &GuidedSettings) -> Result<Gui
         return Err(bad("it has bytes after its trees".into()));
     }
     let active = trees.iter().map(Option::is_some).collect();
-    Ok(Guide { trees, refracted, active, stats })
+    Ok(Guide { trees, refracted, active, stats, fluence: Vec::new() })
 }
 
 /// Serialisation of the trees (here, so the tree modules stay about trees).

@@ -133,6 +133,28 @@ impl SdTree {
         }
     }
 
+    /// The volume of each directional tree's leaf (by directional tree index).
+    pub fn leaf_volumes(&self) -> Vec<f32> {
+        let mut out = vec![0.0; self.dtrees.len()];
+        let mut stack = vec![(0usize, self.bounds)];
+        while let Some((i, b)) = stack.pop() {
+            let n = self.nodes[i];
+            if n.child == 0 {
+                let d = b.max - b.min;
+                out[n.dtree as usize] = d.x * d.y * d.z;
+                continue;
+            }
+            let a = n.axis as usize;
+            let mid = 0.5 * (b.min[a] + b.max[a]);
+            let (mut lo, mut hi) = (b, b);
+            lo.max[a] = mid;
+            hi.min[a] = mid;
+            stack.push((n.child as usize, lo));
+            stack.push((n.child as usize + 1, hi));
+        }
+        out
+    }
+
     /// Rebuilds every directional tree for the next round of learning
     /// ([`DTree::refined`]).
     pub fn refine(&mut self, threshold: f32) {

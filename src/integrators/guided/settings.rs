@@ -40,6 +40,12 @@ pub struct GuidedSettings {
     pub refracted_share: f32,
     /// Memory budget of the trees in MiB (`integer maxmemory`): spatial splitting stops there.
     pub max_memory_mib: u32,
+    /// A guided path splits at a medium vertex once its expected contribution (β times the
+    /// learned fluence there) exceeds this multiple of its value at the path's first guided
+    /// vertex (`float splitthreshold`, 2; not in the paper: README).
+    pub split_threshold: f32,
+    /// Most continuations one split makes (`integer maxsplit`, 8; 1 turns splitting off).
+    pub max_split: u32,
     /// `--guide-cache`: trained trees are loaded from this file when it matches the scene,
     /// else trained and saved to it.
     pub cache: Option<std::path::PathBuf>,
@@ -59,6 +65,8 @@ impl Default for GuidedSettings {
             strategy: Strategy { candidates: 6, lambda: 0.9, mix_prob: 0.5, selective_threshold: 0.5, defensive: 0.3 },
             refracted_share: 0.5,
             max_memory_mib: 64,
+            split_threshold: 2.0,
+            max_split: 8,
             cache: None,
         }
     }
@@ -104,6 +112,8 @@ impl GuidedSettings {
             },
             refracted_share: real("refractedshare", d.refracted_share, 0.0, 1.0)?,
             max_memory_mib: count("maxmemory", d.max_memory_mib, 1, 1 << 20)?,
+            split_threshold: real("splitthreshold", d.split_threshold, 1.0, 1e6)?,
+            max_split: count("maxsplit", d.max_split, 1, 16)?,
             cache: None,
         })
     }
@@ -130,6 +140,8 @@ mod tests {
         assert_eq!((s.training_iterations, s.photons, s.strategy.candidates, s.max_memory_mib), (6, 1000, 12, 8));
         assert_eq!((s.strategy.lambda, s.strategy.mix_prob, s.strategy.selective_threshold), (0.5, 0.3, 0.0));
         assert_eq!(s.dtree_threshold, 0.02);
+        let s = read(r#""float splitthreshold" 3 "integer maxsplit" 1"#).unwrap();
+        assert_eq!((s.split_threshold, s.max_split), (3.0, 1));
     }
 
     #[test]
@@ -140,6 +152,8 @@ mod tests {
             (r#""float mixprob" -0.1"#, "mixprob"),
             (r#""integer trainingiterations" 0"#, "trainingiterations"),
             (r#""float photons" 10"#, "photons"),
+            (r#""float splitthreshold" 0.5"#, "splitthreshold"),
+            (r#""integer maxsplit" 17"#, "maxsplit"),
         ] {
             let e = read(params).unwrap_err().to_string();
             assert!(e.contains(name) && e.contains("test.pbrt:1"), "{e}");

@@ -47,6 +47,9 @@ pub struct Guide {
     pub active: Vec<bool>,
     /// What training did, for `--stats`.
     pub stats: TrainingStats,
+    /// Per scene medium, per directional tree: the learned energy over the leaf's volume,
+    /// proportional to the mean fluence there in a medium of constant σs ([`Guide::activate`]).
+    pub fluence: Vec<Vec<f32>>,
 }
 
 /// What training did.
@@ -74,10 +77,34 @@ impl Guide {
         (d.total() > 0.0).then_some(d)
     }
 
+    /// The learned fluence (up to a constant factor) at `p` in `medium`, where it is guided
+    /// and has learned something.
+    pub fn fluence(&self, medium: u32, p: Vec3) -> Option<f32> {
+        if !*self.active.get(medium as usize)? {
+            return None;
+        }
+        let tree = self.trees[medium as usize].as_ref()?;
+        let f = self.fluence[medium as usize][tree.leaf(p)];
+        (f > 0.0).then_some(f)
+    }
+
     /// Guides the media whose learned light came through a refractive boundary for at least
     /// `min_share` of its energy (all media with a tree for 0).
     pub fn activate(&mut self, min_share: f32) {
         self.active = self.trees.iter().zip(&self.refracted).map(|(t, &r)| t.is_some() && r >= min_share).collect();
+        self.fluence = self
+            .trees
+            .iter()
+            .map(|t| match t {
+                Some(t) => t
+                    .dtrees()
+                    .iter()
+                    .zip(t.leaf_volumes())
+                    .map(|(d, v)| if v > 0.0 { d.total() / v } else { 0.0 })
+                    .collect(),
+                None => Vec::new(),
+            })
+            .collect();
     }
 
     /// Bytes of all trees.
@@ -180,7 +207,13 @@ pub fn train(scene: &Scene, settings: &GuidedSettings) -> Guide {
     let emitter = if scene.media.is_empty() { None } else { Emitter::new(scene) };
     let Some(mut emitter) = emitter else {
         let n = scene.media.len();
-        return Guide { trees: vec![None; n], refracted: vec![0.0; n], active: vec![false; n], stats };
+        return Guide {
+            trees: vec![None; n],
+            refracted: vec![0.0; n],
+            active: vec![false; n],
+            stats,
+            fluence: Vec::new(),
+        };
     };
     let seed = 0x6775_6964_6564 ^ scene.sampler.seed as u64;
 
@@ -273,7 +306,7 @@ pub fn train(scene: &Scene, settings: &GuidedSettings) -> Guide {
     stats.seconds = t0.elapsed().as_secs_f64();
     let refracted = energy.iter().map(share).collect();
     let active = trees.iter().map(Option::is_some).collect();
-    Guide { trees, refracted, active, stats }
+    Guide { trees, refracted, active, stats, fluence: Vec::new() }
 }
 
 /// Whether training goes on after `done` rounds: while the count asks for more, or, with a

@@ -132,7 +132,6 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
         crop_window: args.cropwindow.as_ref().map(|v| [v[0], v[1], v[2], v[3]]),
         pixel_bounds: args.pixelbounds.as_ref().map(|v| [v[0], v[1], v[2], v[3]]),
         spectral: args.spectral,
-        time_budget: args.time,
     };
     let scene = match build_scene(&desc, &opts) {
         Ok(s) => s,

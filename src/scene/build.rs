@@ -75,14 +75,7 @@ pub struct BuildOptions {
     pub pixel_bounds: Option<[i32; 4]>,
     /// `--spectral auto|on|off`: overrides the scene's `Option "spectral"`.
     pub spectral: Option<SpectralMode>,
-    /// `--time`: the render's budget in seconds, setup included (methods that precompute may
-    /// size their precomputation to it).
-    pub time_budget: Option<f64>,
 }
-
-/// The share of a `--time` budget `guided` may train for when the scene does not give its
-/// number of rounds (the limit is 15 %; the paper's Table 2 spends a third to a half).
-const TRAINING_SHARE: f64 = 0.1;
 
 /// Time and memory spent building, for `--stats`.
 #[derive(Clone, Debug, Default)]
@@ -1397,10 +1390,6 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions) -> Result<Scene
     }
     if let IntegratorSettings::Guided(s) = &mut integrator {
         s.cache = opts.guide_cache.clone();
-        // Without a round count from the scene, training may use a tenth of the budget.
-        if !s.rounds_given {
-            s.training_budget = opts.time_budget.map(|t| TRAINING_SHARE * t);
-        }
     }
     if let Some(depth) = opts.max_depth {
         integrator.set_max_depth(depth).map_err(|m| err(&desc.integrator.loc, m))?;

@@ -232,10 +232,6 @@ pub fn run_integrator(s: &RunSetup<'_>) -> Result<Run> {
         scene_file: Some(s.scene_file.to_path_buf()),
         spp,
         seed: Some(s.seed),
-        time_budget: match s.mode {
-            Mode::EqualTime => s.time,
-            Mode::EqualSpp => None,
-        },
         ..Default::default()
     };
     let scene = build_scene(s.desc, &opts).map_err(scene_error)?;

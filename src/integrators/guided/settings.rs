@@ -16,12 +16,6 @@ pub struct GuidedSettings {
     pub regularize: bool,
     /// Rounds of photon tracing (`integer trainingiterations`; the paper uses 3–6).
     pub training_iterations: u32,
-    /// Whether the scene gave `trainingiterations` (else a time budget may add rounds).
-    pub rounds_given: bool,
-    /// Seconds training may take under a time budget when the scene gave no round count:
-    /// rounds beyond `training_iterations` follow while the next one (twice the photons of
-    /// the last) is expected to end within it.
-    pub training_budget: Option<f64>,
     /// Photons of the first round, doubling each round (`integer photons`).
     pub photons: u32,
     /// c of the spatial split threshold c·√(2^k) photons per leaf in round k
@@ -57,8 +51,6 @@ impl Default for GuidedSettings {
             max_depth: 5,
             regularize: false,
             training_iterations: 4,
-            rounds_given: false,
-            training_budget: None,
             photons: 1 << 16,
             stree_threshold: 12000,
             dtree_threshold: 0.01,
@@ -98,8 +90,6 @@ impl GuidedSettings {
             max_depth: count("maxdepth", d.max_depth, 0, 100_000)?,
             regularize: p.get_one_bool("regularize", d.regularize)?,
             training_iterations: count("trainingiterations", d.training_iterations, 1, 16)?,
-            rounds_given: p.peek("trainingiterations").is_some(),
-            training_budget: None,
             photons: count("photons", d.photons, 1, 1 << 26)?,
             stree_threshold: count("streethreshold", d.stree_threshold, 1, i32::MAX)?,
             dtree_threshold: real("dtreethreshold", d.dtree_threshold, 1e-6, 1.0)?,

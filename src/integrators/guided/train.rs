@@ -27,8 +27,6 @@ use crate::spectra::SampledSpectrum;
 /// Photons per parallel batch (deposits of one batch are held in memory at once).
 const BATCH: u64 = 1 << 14;
 
-/// Most rounds a time budget can add up to (the 16th traces 2¹⁵ times the first's photons).
-const MAX_ROUNDS: u32 = 16;
 /// Photons per task within a batch.
 const CHUNK: u64 = 256;
 /// Photons traced first, only to find where each medium's photons scatter (the trees'
@@ -251,8 +249,7 @@ pub fn train(scene: &Scene, settings: &GuidedSettings) -> Guide {
     // Energy deposited per medium: (all, through a refractive boundary).
     let mut energy = vec![(0.0f64, 0.0f64); scene.media.len()];
     let share = |&(all, r): &(f64, f64)| if all > 0.0 { (r / all) as f32 } else { 0.0 };
-    for k in 0..MAX_ROUNDS {
-        let round_start = Instant::now();
+    for k in 0..settings.training_iterations {
         let n = settings.photons as u64 * (1u64 << k);
         let mut done = 0u64;
         while done < n {
@@ -293,8 +290,7 @@ pub fn train(scene: &Scene, settings: &GuidedSettings) -> Guide {
         if settings.refracted_share > 0.0 && energy.iter().all(|e| share(e) < settings.refracted_share) {
             break;
         }
-        let (elapsed, last) = (t0.elapsed().as_secs_f64(), round_start.elapsed().as_secs_f64());
-        if !another_round(k + 1, settings.training_iterations, settings.training_budget, elapsed, last) {
+        if k + 1 == settings.training_iterations {
             break;
         }
         let threshold = (settings.stree_threshold as f64 * 2f64.powf(k as f64 / 2.0)) as u64;
@@ -307,13 +303,6 @@ pub fn train(scene: &Scene, settings: &GuidedSettings) -> Guide {
     let refracted = energy.iter().map(share).collect();
     let active = trees.iter().map(Option::is_some).collect();
     Guide { trees, refracted, active, stats, fluence: Vec::new() }
-}
-
-/// Whether training goes on after `done` rounds: while the count asks for more, or, with a
-/// budget, while the next round is expected to end within it (photons double, so about twice
-/// the `last` round's time after the `elapsed` so far), up to [`MAX_ROUNDS`].
-fn another_round(done: u32, count: u32, budget: Option<f64>, elapsed: f64, last: f64) -> bool {
-    done < count || (done < MAX_ROUNDS && budget.is_some_and(|b| elapsed + 2.0 * last <= b))
 }
 
 #[cfg(test)]
@@ -359,22 +348,6 @@ AttributeEnd
         adjust(&mut s);
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
         pool.install(|| train(&scene, &s))
-    }
-
-    /// A training budget adds rounds past the count while the next one (twice the last) is
-    /// expected to fit, never removes any, and stops at the most rounds there are; a training
-    /// with no room in its budget traces the count's rounds.
-    #[test]
-    fn a_budget_adds_rounds_that_fit() {
-        // 4 rounds asked for: the first three always go on, the fourth only with room.
-        assert!((1..4).all(|done| another_round(done, 4, None, 100.0, 50.0)));
-        assert!(!another_round(4, 4, None, 0.1, 0.05));
-        assert!(another_round(4, 4, Some(6.0), 0.6, 0.35));
-        // The 7th round took 2.8 s of 5.6: a 5.6 s 8th would end at 11.2 > 6.
-        assert!(!another_round(7, 4, Some(6.0), 5.6, 2.8));
-        assert!(!another_round(MAX_ROUNDS, 4, Some(1e9), 1.0, 0.5));
-        let rounds = |budget| trained_with(2, |s| s.training_budget = budget).stats.rounds;
-        assert_eq!((rounds(None), rounds(Some(0.0))), (3, 3));
     }
 
     /// Whether the ray from `p` (inside the glass sphere) along `d` leaves the sphere by

@@ -317,10 +317,6 @@ mod tests {
     const LIGHT: Vec3 = Vec3::new(1.4, 1.8, 0.9);
 
     fn trained(threads: usize) -> Guide {
-        trained_with(threads, |_| {})
-    }
-
-    fn trained_with(threads: usize, adjust: impl Fn(&mut GuidedSettings)) -> Guide {
         let text = r#"LookAt 0 0.7 3.6  0 0 0  0 1 0
 Camera "perspective"
 Integrator "guided" "integer maxdepth" 64 "integer photons" 8192 "integer trainingiterations" 3
@@ -342,10 +338,9 @@ AttributeEnd
 "#;
         let desc = nimbus_parser::load_str(text, "glass.pbrt").unwrap();
         let scene = build_scene(&desc, &BuildOptions::default()).unwrap();
-        let IntegratorSettings::Guided(mut s) = IntegratorSettings::from_entity(&desc.integrator, None).unwrap() else {
+        let IntegratorSettings::Guided(s) = IntegratorSettings::from_entity(&desc.integrator, None).unwrap() else {
             unreachable!()
         };
-        adjust(&mut s);
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
         pool.install(|| train(&scene, &s))
     }

@@ -1,5 +1,5 @@
-//! Every pbrt-v4 reference scene of the project (`../shared/pbrt-v4-references/scenes`, beside
-//! the repository) loads, prints and parses back, and reads the same from a `.pbrt.gz`.
+//! Every pbrt-v4 reference scene of the project (`pbrt-scenes/pbrt-v4-references/scenes`)
+//! loads, prints and parses back, and reads the same from a `.pbrt.gz`.
 
 use std::path::{Path, PathBuf};
 
@@ -8,15 +8,14 @@ use nimbus_parser::{SceneDescription, directives_of_str, load_file, load_str, to
 use crate::common::TempDir;
 
 fn scenes_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/pbrt-v4-references/scenes")
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../pbrt-scenes/pbrt-v4-references/scenes")
 }
 
 /// Every `.pbrt` file of the reference scenes, sorted.
 fn scene_files() -> Vec<PathBuf> {
     let dir = scenes_dir();
-    let entries = std::fs::read_dir(&dir).unwrap_or_else(|e| {
-        panic!("the reference scenes should be at {} (shared/ beside the repository): {e}", dir.display())
-    });
+    let entries = std::fs::read_dir(&dir)
+        .unwrap_or_else(|e| panic!("the reference scenes should be at {} (in the repository): {e}", dir.display()));
     let mut files: Vec<PathBuf> =
         entries.map(|e| e.unwrap().path()).filter(|p| p.extension().is_some_and(|e| e == "pbrt")).collect();
     files.sort();

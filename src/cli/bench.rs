@@ -1,5 +1,5 @@
 //! `nimbus bench`: speed on the parity scenes against pbrt-v4's own figures for them
-//! (`../shared/pbrt-v4-references/speed.json`: wall seconds at `--nthreads 2 --spp 64` and the
+//! (`pbrt-scenes/pbrt-v4-references/speed.json`: wall seconds at `--nthreads 2 --spp 64` and the
 //! MSE against the reference images at that spp), at equal spp and at equal error, for each
 //! transport; plus a CPU baseline measured in the same run so figures from different machines
 //! can be compared.
@@ -169,7 +169,7 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode> {
     let refs = args
         .references
         .clone()
-        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/pbrt-v4-references"));
+        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("pbrt-scenes/pbrt-v4-references"));
     let (pbrt_spp, pbrt_threads, pbrt) = read_speed(&refs.join("speed.json"))?;
     if args.spp != pbrt_spp {
         eprintln!(

@@ -5,15 +5,15 @@ use std::process::{Command, Output};
 
 use nimbus::imageio::Image;
 
-/// The pbrt-v4 parity scenes shipped beside the repository.
+/// The pbrt-v4 parity scenes (pbrt-v4's renders of them are in pbrt-scenes/pbrt-v4-references/images).
 pub fn reference_scenes_dir() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/pbrt-v4-references/scenes")
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("pbrt-scenes/pbrt-v4-references/scenes")
 }
 
 /// All `.pbrt` files of the parity suite, sorted.
 pub fn reference_scenes() -> Vec<PathBuf> {
     let mut v: Vec<PathBuf> = std::fs::read_dir(reference_scenes_dir())
-        .expect("../shared/pbrt-v4-references/scenes exists beside the repository")
+        .expect("pbrt-scenes/pbrt-v4-references/scenes is in the repository")
         .map(|e| e.unwrap().path())
         .filter(|p| p.extension().is_some_and(|e| e == "pbrt"))
         .collect();

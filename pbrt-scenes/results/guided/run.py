@@ -10,7 +10,7 @@ machine (timings are 2 threads):
    paper's Candle case (wax-small-light: forward-scattering milk in a glass sphere, small light),
    an isotropic medium in the same glass (g = 0: MIS mode), and a cloud (cloud-sun-sky: not
    guided by default, and guided everywhere with `refractedshare 0`), and the dense cloud of
-   ../shared/pbrt-v4-references (grid-cloud) guided everywhere: folders <case>/.
+   pbrt-scenes/pbrt-v4-references (grid-cloud) guided everywhere: folders <case>/.
    The candle again at the issue's 60-s budget (LONG_TIME), against a volpath reference of two
    LONG_REF_SPP halves rendered here (cached in the temporary folder), with the reference's own
    noise taken out as well: folder candle-60s/.
@@ -154,7 +154,7 @@ def main():
                        (r'"rgb sigma_s" \[ 3.0 3.2 3.5 \]', '"rgb sigma_s" [ 0.6 0.64 0.7 ]')])
         cloud = os.path.join(SCENES, "cloud-sun-sky.pbrt")
         cloud_all = variant(cloud, os.path.join(work, "cloud-all.pbrt"), [guided('"float refractedshare" 0')])
-        pbrt_refs = os.path.join(ROOT, "..", "shared", "pbrt-v4-references")
+        pbrt_refs = os.path.join(SCENES, "pbrt-v4-references")
         dense = variant(os.path.join(pbrt_refs, "scenes", "grid-cloud.pbrt"), os.path.join(work, "grid-cloud-all.pbrt"),
                         [guided('"float refractedshare" 0')])
         cases = [

@@ -1,5 +1,5 @@
 //! `simplevolpath`: the simplified path-tracing architecture (Shirley, Wang, Zimmerman et al.,
-//! "A Simplified Path Tracing Architecture"; `/work/shared/papers/`): no shadow rays, no
+//! "A Simplified Path Tracing Architecture", technical report): no shadow rays, no
 //! direct/indirect split; at every scattering event one direction drawn from a mixture
 //! density over the BSDF or phase function, the luminaires and the environment, weighted by
 //! Equation 2 with the whole mixture density; participating media as probabilistic surfaces

@@ -14,7 +14,7 @@ fn fixture(name: &str) -> PathBuf {
 }
 
 fn reference_scene(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/pbrt-v4-references/scenes").join(name)
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("pbrt-scenes/pbrt-v4-references/scenes").join(name)
 }
 
 fn nano(name: &str, grid: &str) -> Result<SparseGrid, GridError> {

@@ -1,7 +1,7 @@
 //! Volume path graphs: a cluster of one is volpath, in either representation; the image does
 //! not depend on the thread count; the method's energy against volpath, with its bias measured.
 
-use crate::common::{channel_stats, load_scene, render_scene, render_with, transport};
+use crate::common::{Estimate, assert_agree, channel_stats, load_scene, render_scene, render_with, transport};
 use nimbus::imageio::Image;
 use nimbus::integrators::common::PathConfig;
 use nimbus::integrators::volpath::VolPath;
@@ -68,6 +68,23 @@ fn cluster_size_one_is_volpath() {
     }
 }
 
+/// K = 1 against the volpath users get (light seen through the medium found by delta
+/// tracking, not along the camera line): two unbiased estimators of the same image, so every
+/// channel's mean agrees within four standard errors (two independent seeds each, 16 spp).
+#[test]
+fn cluster_size_one_agrees_with_users_volpath() {
+    for spectral in [false, true] {
+        let render = |integrator: &str, params: &str, seed| {
+            let opts = BuildOptions { spp: Some(16), seed: Some(seed), ..transport(spectral) };
+            render_scene(&load_scene(&scene_text(integrator, params, "2 2 2"), &opts))
+        };
+        let k1 = r#""integer clustersize" 1"#;
+        let graph = Estimate::from_seeds(&[render("pathgraph", k1, 1), render("pathgraph", k1, 2)]);
+        let volpath = Estimate::from_seeds(&[render("volpath", "", 3), render("volpath", "", 4)]);
+        assert_agree(&format!("K = 1 against volpath, spectral {spectral}"), &graph, &volpath, 0.0, "none: unbiased");
+    }
+}
+
 /// Centres, clusters and the solve are fixed by the seed: one thread and two give the same
 /// image, bit for bit.
 #[test]
@@ -98,36 +115,42 @@ fn reused_stores_leave_no_trace() {
     assert_eq!(first.pixels, again.pixels);
 }
 
-/// Against volpath at 64 spp: the image means agree within four standard errors of the
-/// difference plus the method's bias allowance (the issue's 1 %), and the graph's per-pixel
-/// noise is lower. Returns the relative mean difference (the bias measured).
+/// The MSE ratio at equal spp the README states for this test's cube (measured 4.4×).
+const NOISE_RATIO: f64 = 3.0;
+
+/// pathgraph's stated bias bound on media scenes (README: within 1 % on the media scenes).
+const GRAPH_BIAS: f64 = 0.01;
+
+/// Against a volpath reference (two seeds at 512 spp) on this scene: pathgraph's image mean
+/// (two seeds at 32 spp) agrees in every channel within four standard errors plus
+/// GRAPH_BIAS, and its per-pixel MSE at 32 spp is lower than volpath's at 32 spp (two seeds
+/// each) by the factor the README states for this scene.
 #[test]
 fn energy_and_noise_against_volpath() {
-    let opts = BuildOptions { spp: Some(64), seed: Some(1), ..Default::default() };
-    let graph = load_scene(&scene_text("pathgraph", "", "2 2 2"), &opts);
-    let volpath = load_scene(&scene_text("volpath", "", "2 2 2"), &opts);
-    let reference = load_scene(
-        &scene_text("volpath", "", "2 2 2"),
-        &BuildOptions { spp: Some(1024), seed: Some(9), ..Default::default() },
-    );
-    let r = render_scene(&reference);
-    let g = render_with(&graph, graph.integrator.create(&graph).unwrap().as_ref());
-    let v = render_scene(&volpath);
-    let (gs, rs) = (channel_stats(&g), channel_stats(&r));
-    for c in 0..3 {
-        let se = (gs[c].1 * gs[c].1 + rs[c].1 * rs[c].1).sqrt();
-        assert!(
-            (gs[c].0 - rs[c].0).abs() <= 4.0 * se + 0.01 * rs[c].0,
-            "channel {c}: graph {:?} reference {:?}",
-            gs[c],
-            rs[c]
-        );
-    }
-    let mse = |a: &Image| {
-        a.pixels.iter().zip(&r.pixels).map(|(p, q)| f64::from((*p - *q).length_squared())).sum::<f64>()
-            / a.pixels.len() as f64
+    let render = |integrator: &str, spp, seed| {
+        let opts = BuildOptions { spp: Some(spp), seed: Some(seed), ..Default::default() };
+        render_scene(&load_scene(&scene_text(integrator, "", "2 2 2"), &opts))
     };
-    assert!(mse(&g) < mse(&v), "graph MSE {} volpath MSE {}", mse(&g), mse(&v));
+    let reference = [render("volpath", 512, 9), render("volpath", 512, 10)];
+    let graph = [render("pathgraph", 32, 1), render("pathgraph", 32, 2)];
+    let volpath = [render("volpath", 32, 3), render("volpath", 32, 4)];
+    let bias = assert_agree(
+        "pathgraph against volpath at 1024 spp",
+        &Estimate::from_seeds(&graph),
+        &Estimate::from_seeds(&reference),
+        GRAPH_BIAS,
+        "pathgraph's bias on media scenes, README",
+    );
+    let r: Vec<_> = reference[0].pixels.iter().zip(&reference[1].pixels).map(|(a, b)| 0.5 * (*a + *b)).collect();
+    let mse = |imgs: &[Image]| {
+        imgs.iter()
+            .map(|a| a.pixels.iter().zip(&r).map(|(p, q)| f64::from((*p - *q).length_squared())).sum::<f64>())
+            .sum::<f64>()
+            / (imgs.len() * r.len()) as f64
+    };
+    let ratio = mse(&volpath) / mse(&graph);
+    eprintln!("pathgraph on the cube: mean {:+.2} %, MSE {ratio:.2}x lower than volpath's at 32 spp", 100.0 * bias);
+    assert!(ratio > NOISE_RATIO, "volpath MSE / pathgraph MSE at 32 spp: {ratio:.2} (README: at least {NOISE_RATIO})");
 }
 
 /// A white furnace: a non-absorbing sphere of medium under a uniform sky of radiance 1, where
@@ -199,53 +222,39 @@ Shape "sphere" "float radius" 1
 #[test]
 fn extra_direct_samples_keep_the_mean() {
     for spectral in [false, true] {
-        let opts = BuildOptions { spp: Some(32), seed: Some(6), ..transport(spectral) };
-        let graph =
-            load_scene(&scene_text("pathgraph", r#""integer clustersize" 1 "integer extradirect" 4"#, "2 2 2"), &opts);
-        // Another seed, so the two estimators' noise is independent.
-        let volpath = load_scene(&scene_text("volpath", "", "2 2 2"), &BuildOptions { seed: Some(7), ..opts.clone() });
-        let (g, v) = (render_scene(&graph), render_scene(&volpath));
-        for c in 0..3 {
-            let (mean, se) = paired_difference(&g, &v, c);
-            let level = channel_stats(&v)[c].0;
-            assert!(mean.abs() <= 4.0 * se + 1e-3 * level, "spectral {spectral} channel {c}: difference {mean} ± {se}");
-        }
+        let render = |integrator: &str, params: &str, seed| {
+            let opts = BuildOptions { spp: Some(16), seed: Some(seed), ..transport(spectral) };
+            render_scene(&load_scene(&scene_text(integrator, params, "2 2 2"), &opts))
+        };
+        let params = r#""integer clustersize" 1 "integer extradirect" 4"#;
+        let graph = Estimate::from_seeds(&[render("pathgraph", params, 6), render("pathgraph", params, 7)]);
+        let volpath = Estimate::from_seeds(&[render("volpath", "", 8), render("volpath", "", 9)]);
+        let what = format!("extradirect 4 against volpath, spectral {spectral}");
+        assert_agree(&what, &graph, &volpath, 0.0, "none: unbiased");
     }
-}
-
-/// Mean per-pixel difference a − b in channel `c` and its standard error: the images' shared
-/// structure cancels, so the tolerance is the noise of the two estimators alone.
-fn paired_difference(a: &Image, b: &Image, c: usize) -> (f64, f64) {
-    let d: Vec<f64> = a.pixels.iter().zip(&b.pixels).map(|(p, q)| f64::from(p[c] - q[c])).collect();
-    let n = d.len() as f64;
-    let mean = d.iter().sum::<f64>() / n;
-    let var = d.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0);
-    (mean, (var / n).sqrt())
 }
 
 /// In a chromatic medium the graph's paths draw a hero wavelength per segment (so that each
 /// edge factor is unbiased when aggregation splices paths): with K = 1 (path tracing with the
-/// per-segment MIS) the image mean matches volpath's within noise, and with the default K
-/// within the method's bias measured on the gray version of this scene (+1.1 to +1.5 % in
-/// this paired comparison), in RGB and spectral transport. Splicing whole-path hero
-/// estimates measured +5 % (red) here and +10.8 % on the rgbgrid-smoke parity scene.
+/// per-segment MIS) the image mean matches volpath's within noise, and with K = 64 within the
+/// method's bias measured on the gray version of this scene (+1.1 to +1.5 %; bound 2 %), in
+/// RGB and spectral transport. Splicing whole-path hero estimates measured +5 % (red) here
+/// and +10.8 % on the rgbgrid-smoke parity scene.
 #[test]
 fn chromatic_media_keep_the_mean() {
     for spectral in [false, true] {
-        let opts = BuildOptions { spp: Some(32), seed: Some(8), ..transport(spectral) };
-        let volpath = load_scene(&scene_text("volpath", "", "1 2 4"), &BuildOptions { seed: Some(9), ..opts.clone() });
-        let v = render_scene(&volpath);
-        for (k, bias) in [(1, 0.0), (64, 0.02)] {
-            let graph = load_scene(&scene_text("pathgraph", &format!(r#""integer clustersize" {k}"#), "1 2 4"), &opts);
-            let g = render_scene(&graph);
-            for c in 0..3 {
-                let (mean, se) = paired_difference(&g, &v, c);
-                let level = channel_stats(&v)[c].0;
-                assert!(
-                    mean.abs() <= 4.0 * se + bias * level,
-                    "spectral {spectral} K {k} channel {c}: difference {mean} ± {se} (level {level})"
-                );
-            }
+        let render = |integrator: &str, params: &str, seed| {
+            let opts = BuildOptions { spp: Some(16), seed: Some(seed), ..transport(spectral) };
+            render_scene(&load_scene(&scene_text(integrator, params, "1 2 4"), &opts))
+        };
+        let volpath = Estimate::from_seeds(&[render("volpath", "", 8), render("volpath", "", 9)]);
+        for (k, bias, source) in [
+            (1, 0.0, "none: K = 1 is unbiased"),
+            (64, 0.02, "aggregation at K = 64 on this cube, measured +1.1 to +1.5 %"),
+        ] {
+            let params = format!(r#""integer clustersize" {k}"#);
+            let graph = Estimate::from_seeds(&[render("pathgraph", &params, 10), render("pathgraph", &params, 11)]);
+            assert_agree(&format!("chromatic, K {k}, spectral {spectral}"), &graph, &volpath, bias, source);
         }
     }
 }
@@ -284,3 +293,46 @@ AttributeEnd
     assert!(reference < 0.9, "maxdepth 4 cuts the furnace's light: {reference}");
     assert!((graph / reference - 1.0).abs() < 0.01, "graph {graph} against volpath {reference}");
 }
+
+/// The README's per-sample claim on its headline scenes (the results' first table: the cloud,
+/// the wax in glass, the fog with an emitter, 128×96 against their 2048/4096-spp volpath
+/// references): at 1 spp pathgraph's relMSE is lower than volpath's by at least the factor
+/// the README states for each (measured over seeds 1–2 here, 18×, 14× and 4.4× in the
+/// results at seed 1).
+#[test]
+fn per_sample_noise_on_the_headline_scenes() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("pbrt-scenes");
+    for (name, at_least) in
+        [("cloud-sun-sky", PER_SAMPLE[0]), ("wax-small-light", PER_SAMPLE[1]), ("fog-emitter", PER_SAMPLE[2])]
+    {
+        let desc = nimbus::parser::load_file(&dir.join(format!("{name}.pbrt"))).unwrap();
+        let reference = nimbus::imageio::read_exr(&dir.join(format!("references/{name}.exr"))).unwrap();
+        let rel_mse = |integrator: &str| {
+            [1, 2]
+                .map(|seed| {
+                    let opts = BuildOptions {
+                        integrator: Some(integrator.into()),
+                        spp: Some(1),
+                        seed: Some(seed),
+                        ..Default::default()
+                    };
+                    let img = render_scene(&nimbus::scene::build_scene(&desc, &opts).unwrap());
+                    nimbus::metrics::error_metrics(&img, &reference).unwrap().rel_mse
+                })
+                .iter()
+                .sum::<f64>()
+                / 2.0
+        };
+        let (v, g) = (rel_mse("volpath"), rel_mse("pathgraph"));
+        eprintln!("{name}: relMSE at 1 spp volpath {v:.4}, pathgraph {g:.4}: {:.1}x", v / g);
+        assert!(
+            v / g >= at_least,
+            "{name}: relMSE at 1 spp {v:.4} -> {g:.4}, {:.1}x (README: at least {at_least}x)",
+            v / g
+        );
+    }
+}
+
+/// The per-sample factors the README states as lower bounds: cloud-sun-sky, wax-small-light,
+/// fog-emitter.
+const PER_SAMPLE: [f64; 3] = [10.0, 8.0, 3.0];

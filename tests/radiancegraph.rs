@@ -1,7 +1,7 @@
 //! The radiance-graph method: against volpath on a scene inside its constraints, and its
 //! toolchain (`nimbus graph build`, `--graph-data`) with its refusals.
 
-use crate::common::{channel_stats, nimbus, render_scene, render_with, scratch_dir};
+use crate::common::{Estimate, assert_agree, channel_stats, nimbus, render_scene, render_with, scratch_dir};
 use nimbus::integrators::radiancegraph::{self, config::GraphConfig, volume::Volume};
 use nimbus::scene::{BuildOptions, build_scene};
 
@@ -35,31 +35,98 @@ const SMALL_CONFIG: &str = r#"{
     "lightingCalculator": {"lightIterations": 4, "pointsOnRadiusLight": 1, "bounces": [9, 1]}
 }"#;
 
-/// Builds `text`'s graph with SMALL_CONFIG, renders it and volpath at 64 spp and checks the
-/// image means agree within four standard errors of the difference plus 3 % for the method's
-/// bias (the issue's accuracy target; thesis Sec. 4.7: node averaging biases by the angle
-/// between light and camera). Returns the graph's relative difference.
+/// The radiance graph's bias bound on the scenes of these tests: node averaging (thesis
+/// Sec. 4.7) moves the mean by the angle between light and camera; measured +0.75 % on the
+/// σs = 2 cube (README).
+const GRAPH_BIAS: f64 = 0.015;
+
+/// Builds `text`'s graph with SMALL_CONFIG twice (build seeds 7 and 8, so the graph's own
+/// noise is counted), renders each at 64 spp (seeds 1 and 2) and volpath at 64 spp (seeds 3
+/// and 4), and checks every channel's image mean agrees within four standard errors plus
+/// GRAPH_BIAS. Returns the graph's relative difference.
 fn assert_graph_matches_volpath(text: &str) -> f64 {
     let desc = nimbus::parser::load_str(text, "cube.pbrt").unwrap();
-    let scene = build_scene(&desc, &BuildOptions { spp: Some(64), seed: Some(1), ..Default::default() }).unwrap();
+    let scene =
+        |seed| build_scene(&desc, &BuildOptions { spp: Some(64), seed: Some(seed), ..Default::default() }).unwrap();
     let config = GraphConfig::from_json(SMALL_CONFIG).unwrap();
-    let (graphs, stats) = radiancegraph::build(&scene, &config, None, 7).unwrap();
-    assert_eq!(graphs.graphs.iter().map(|g| g.bounces).collect::<Vec<_>>(), [9, 1]);
-    assert!(stats.vertices > 1000 && stats.edges > stats.vertices, "{stats:?}");
-    let volume = Volume::new(&scene).unwrap();
-    let full = radiancegraph::render_integrator(&volume, graphs.into_largest());
-    let graph = channel_stats(&render_with(&scene, &full));
-    let reference = channel_stats(&render_scene(&scene));
-    let (g, r) = (graph[1], reference[1]);
-    let se = (g.1 * g.1 + r.1 * r.1).sqrt();
-    assert!((g.0 - r.0).abs() <= 4.0 * se + 0.03 * r.0, "graph {g:?} volpath {r:?}");
-    g.0 / r.0 - 1.0
+    let graph_renders: Vec<_> = [(7, 1), (8, 2)]
+        .into_iter()
+        .map(|(build_seed, seed)| {
+            let scene = scene(seed);
+            let (graphs, stats) = radiancegraph::build(&scene, &config, None, build_seed).unwrap();
+            assert_eq!(graphs.graphs.iter().map(|g| g.bounces).collect::<Vec<_>>(), [9, 1]);
+            assert!(stats.vertices > 1000 && stats.edges > stats.vertices, "{stats:?}");
+            let volume = Volume::new(&scene).unwrap();
+            render_with(&scene, &radiancegraph::render_integrator(&volume, graphs.into_largest()))
+        })
+        .collect();
+    let volpath: Vec<_> = [3, 4].into_iter().map(|seed| render_scene(&scene(seed))).collect();
+    assert_agree(
+        "radiance graph against volpath",
+        &Estimate::from_seeds(&graph_renders),
+        &Estimate::from_seeds(&volpath),
+        GRAPH_BIAS,
+        "the radiance graph's node averaging, thesis Sec. 4.7",
+    )
 }
 
 /// A σs = 2 cube under a distant light (measured: +0.75 %).
 #[test]
 fn homogeneous_cube_matches_volpath() {
-    assert_graph_matches_volpath(&cube_text(2.0, "volpath", ""));
+    let bias = assert_graph_matches_volpath(&cube_text(2.0, "volpath", ""));
+    eprintln!("radiance graph on the σs = 2 cube: {:+.2} %", 100.0 * bias);
+}
+
+/// The graph's MAE at 16 spp on the shipped cloud as a share of volpath's, at most (README).
+const MAE_SHARE: f64 = 0.6;
+
+/// The radiance graph's headline cloud (pbrt-scenes/graph-constraints-cloud.pbrt with the
+/// config shipped beside it, the results' `cloud`): two graphs (one per seed) rendered at 16
+/// spp against the scene's 2048-spp volpath reference, every channel's mean within four
+/// standard errors plus the bias the results README states (+1.8 %; bound 2.5 %).
+#[test]
+fn the_shipped_cloud_matches_its_reference() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("pbrt-scenes");
+    let path = dir.join("graph-constraints-cloud.pbrt");
+    let desc = nimbus::parser::load_file(&path).unwrap();
+    let render = |integrator: &str, seed| {
+        let opts = BuildOptions {
+            integrator: Some(integrator.into()),
+            spp: Some(16),
+            seed: Some(seed),
+            scene_file: Some(path.clone()),
+            ..Default::default()
+        };
+        render_scene(&build_scene(&desc, &opts).unwrap())
+    };
+    let renders = [render("radiancegraph", 1), render("radiancegraph", 2)];
+    let reference = nimbus::imageio::read_exr(&dir.join("references/graph-constraints-cloud.exr")).unwrap();
+    // Error at equal spp: the graph's MAE below volpath's (results README: at 128 spp 4.4 %
+    // of the mean against 7.8 %).
+    let mae = |imgs: &[nimbus::imageio::Image]| {
+        imgs.iter().map(|i| nimbus::metrics::error_metrics(i, &reference).unwrap().mae).sum::<f64>() / imgs.len() as f64
+    };
+    let volpath = [render("volpath", 3), render("volpath", 4)];
+    let level = reference.mean().element_sum() as f64 / 3.0;
+    let (g, v) = (mae(&renders) / level, mae(&volpath) / level);
+    eprintln!(
+        "graph-constraints-cloud at 16 spp: MAE graph {:.1} %, volpath {:.1} % of the mean",
+        100.0 * g,
+        100.0 * v
+    );
+    assert!(
+        g < MAE_SHARE * v,
+        "MAE at 16 spp: graph {g:.4}, volpath {v:.4} of the mean (README: below {MAE_SHARE} of volpath's)"
+    );
+    let graph = Estimate::from_seeds(&renders);
+    let bias = assert_agree(
+        "radiance graph on graph-constraints-cloud",
+        &graph,
+        &Estimate::reference(&reference, 2048.0, &graph, 2, 16.0),
+        0.025,
+        "radiancegraph results README: +1.8 % on this cloud, bound 2.5 %",
+    );
+    eprintln!("radiance graph on graph-constraints-cloud: {:+.2} %", 100.0 * bias);
 }
 
 /// Fewer bounces carry less light: the 1-bounce graph is darker than the 9-bounce one, but
@@ -189,9 +256,8 @@ fn graph_is_the_same_at_any_thread_count() {
 
 /// The collision estimator (`"string estimator" "collision"`) integrates the same Eq. 4.24 as
 /// delta tracking: on the heterogeneous graph-constraints cloud (where tentative collisions
-/// are often null, so the estimators differ) the image means agree within four standard
-/// errors (from two seeds' per-pixel differences), and the collision estimator's noise is
-/// lower.
+/// are often null, so the estimators differ) every channel's image mean agrees within four
+/// standard errors (two seeds each), and the collision estimator's noise is lower.
 #[test]
 fn collision_estimator_agrees_with_less_noise() {
     use nimbus::integrators::radiancegraph::render::Estimator;
@@ -205,18 +271,19 @@ fn collision_estimator_agrees_with_less_noise() {
     let config = GraphConfig::from_json(SMALL_CONFIG).unwrap();
     let (graphs, _) = radiancegraph::build(&scene, &config, None, 7).unwrap();
     let volume = Volume::new(&scene).unwrap();
-    // Per estimator: image mean, its standard error and the per-pixel noise variance.
+    // Per estimator: its estimate of the image mean (every channel) and the per-pixel noise
+    // variance of the green channel.
     let measure = |e| {
         let integrator = radiancegraph::render_integrator(&volume, graphs.cache(0)).with_estimator(e);
         let (a, b) = (render_with(&scene_for(1), &integrator), render_with(&scene_for(2), &integrator));
         let n = a.pixels.len() as f64;
         let noise = a.pixels.iter().zip(&b.pixels).map(|(x, y)| f64::from(x[1] - y[1]).powi(2) / 2.0).sum::<f64>() / n;
-        let mean = a.pixels.iter().zip(&b.pixels).map(|(x, y)| f64::from(x[1] + y[1]) / 2.0).sum::<f64>() / n;
-        (mean, (noise / (2.0 * n)).sqrt(), noise)
+        (Estimate::from_seeds(&[a, b]), noise)
     };
     let (col, dt) = (measure(Estimator::Collision), measure(Estimator::DeltaTracking));
-    assert!((col.0 - dt.0).abs() <= 4.0 * (col.1 * col.1 + dt.1 * dt.1).sqrt(), "collision {col:?} delta {dt:?}");
-    assert!(col.2 < 0.8 * dt.2, "collision noise {} not below delta tracking's {}", col.2, dt.2);
+    // The same graph read two ways: no bias between them.
+    assert_agree("collision against delta tracking", &col.0, &dt.0, 0.0, "none: the same integral of one graph");
+    assert!(col.1 < 0.8 * dt.1, "collision noise {} not below delta tracking's {}", col.1, dt.1);
 }
 
 #[test]

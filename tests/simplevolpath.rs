@@ -7,8 +7,8 @@ use nimbus::integrators::volpath::{VolPath, VolPathSettings};
 use nimbus::scene::{BuildOptions, Scene, build_scene};
 
 use crate::common::{
-    assert_channels, channel_stats, grid_values, load_scene, media_header, medium_cube, reference_scenes, render_scene,
-    render_with, reversed_sphere_images, scratch_dir,
+    Estimate, assert_agree, assert_channels, channel_stats, grid_values, load_scene, media_header, medium_cube,
+    reference_scenes, render_scene, render_with, reversed_sphere_images, scratch_dir,
 };
 
 fn scene(text: &str) -> Scene {
@@ -190,27 +190,9 @@ LightSource "distant" "point3 from" [1 3 2] "rgb L" [2 2 2]"#;
     }
 }
 
-/// Agreement of two estimators from two renders each (different seeds, same spp): the
-/// relative difference of the image means with its standard error, and the RMS of 8×8 block
-/// z-scores of the difference (≈ 1 when they agree).
-struct Agreement {
-    mean_rel: [f64; 3],
-    mean_se: [f64; 3],
-    z_rms: f64,
-}
-
-fn agreement(a: [&Image; 2], b: [&Image; 2]) -> Agreement {
-    let n = a[0].pixels.len() as f64;
-    let (mut mean_rel, mut mean_se) = ([0.0; 3], [0.0; 3]);
-    for c in 0..3 {
-        let half = |i: &Image, j: &Image, k: usize| 0.5 * (i.pixels[k][c] + j.pixels[k][c]) as f64;
-        let noise = |i: &Image, j: &Image, k: usize| (0.5 * (i.pixels[k][c] - j.pixels[k][c]) as f64).powi(2);
-        let ma = (0..a[0].pixels.len()).map(|k| half(a[0], a[1], k)).sum::<f64>() / n;
-        let mb = (0..b[0].pixels.len()).map(|k| half(b[0], b[1], k)).sum::<f64>() / n;
-        let var = (0..a[0].pixels.len()).map(|k| noise(a[0], a[1], k) + noise(b[0], b[1], k)).sum::<f64>() / n;
-        mean_rel[c] = (ma - mb).abs() / mb.max(1e-6);
-        mean_se[c] = (var / n).sqrt() / mb.max(1e-6);
-    }
+/// The RMS of the 8×8 block z-scores of the difference between two estimators, from two
+/// renders each (different seeds, same spp): ≈ 1 when they agree block by block.
+fn block_z_rms(a: [&Image; 2], b: [&Image; 2]) -> f64 {
     let (w, h) = (a[0].width, a[0].height);
     let (mut z2, mut blocks) = (0.0, 0.0);
     for by in 0..h / 8 {
@@ -231,23 +213,21 @@ fn agreement(a: [&Image; 2], b: [&Image; 2]) -> Agreement {
             }
         }
     }
-    Agreement { mean_rel, mean_se, z_rms: if blocks > 0.0 { (z2 / blocks).sqrt() } else { 0.0 } }
+    if blocks > 0.0 { (z2 / blocks).sqrt() } else { 0.0 }
 }
 
-/// Every scene shipped in pbrt-scenes/ and every pbrt-v4 parity scene, at a quarter of the
-/// resolution and small spp, two seeds each: simplevolpath's and volpath's image means agree
-/// within 1 % plus 4 standard errors, and the block z-scores of their difference are noise.
-/// (README.md in src/integrators/simplevolpath has the full-resolution table.)
+/// Every pbrt-v4 reference scene, and the one scene of pbrt-scenes/ the suite leaves to this
+/// test (`wax-small-light`, light only through glass: heavy-tailed without shadow rays until a
+/// few hundred samples), at a quarter of the resolution, two seeds each: simplevolpath's and
+/// volpath's image means agree within 4 standard errors (it is unbiased: no bias allowance),
+/// and the block z-scores of their difference are noise. The other pbrt-scenes scenes are
+/// judged against their references by `suite.rs`. (README.md in src/integrators/simplevolpath
+/// has the full-resolution table.)
 #[test]
 fn converges_to_volpath_on_every_shipped_scene() {
-    let shipped = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("pbrt-scenes");
-    let mut scenes: Vec<std::path::PathBuf> = std::fs::read_dir(&shipped)
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|e| e == "pbrt"))
-        .collect();
-    scenes.sort();
-    scenes.extend(reference_scenes());
+    let wax = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("pbrt-scenes/wax-small-light.pbrt");
+    let mut scenes = reference_scenes();
+    scenes.push(wax);
     assert!(scenes.len() >= 10, "{scenes:?}");
     for path in scenes {
         let desc = nimbus::parser::load_file(&path).unwrap();
@@ -267,17 +247,12 @@ fn converges_to_volpath_on_every_shipped_scene() {
         };
         let (s1, s2) = (build("simplevolpath", 1), build("simplevolpath", 2));
         let (v1, v2) = (build("volpath", 3), build("volpath", 4));
-        let a = agreement([&s1, &s2], [&v1, &v2]);
-        for c in 0..3 {
-            assert!(
-                a.mean_rel[c] < 0.01 + 4.0 * a.mean_se[c],
-                "{name}: channel {c} means differ by {:.4} (standard error {:.4})",
-                a.mean_rel[c],
-                a.mean_se[c]
-            );
-        }
+        let (simple, volpath) =
+            (Estimate::from_seeds(&[s1.clone(), s2.clone()]), Estimate::from_seeds(&[v1.clone(), v2.clone()]));
+        assert_agree(&format!("{name}: simplevolpath against volpath"), &simple, &volpath, 0.0, "none: both unbiased");
         // 16 to 60 blocks with noise estimated from 64 pixels each: about 1 ± 0.3 by chance.
-        assert!(a.z_rms < 1.75, "{name}: block z-scores rms {:.2}", a.z_rms);
+        let z_rms = block_z_rms([&s1, &s2], [&v1, &v2]);
+        assert!(z_rms < 1.75, "{name}: block z-scores rms {z_rms:.2}");
     }
 }
 

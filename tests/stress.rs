@@ -18,6 +18,16 @@ fn condition(what: &str, light: &str) -> String {
     )
 }
 
+/// The bias bound each method's README states for this matrix's homogeneous sphere, and
+/// where it is stated.
+fn stated_bias(integrator: &str) -> (f64, &'static str) {
+    match integrator {
+        "pathgraph" => (0.01, "pathgraph README: within 1 % on media scenes"),
+        "radiancegraph" => (0.025, "radiancegraph README: node averaging, within 2.5 % on the scenes of its tests"),
+        _ => (0.0, "unbiased"),
+    }
+}
+
 fn csv_rows(text: &str) -> Vec<std::collections::HashMap<String, String>> {
     let mut lines = text.lines();
     let header: Vec<String> = lines.next().unwrap().split(',').map(String::from).collect();
@@ -67,13 +77,46 @@ fn stress_judges_every_cell_and_reports_failures() {
                 assert_eq!(verdict, "refused");
                 assert!(r["reason"].contains("distant and uniform infinite lights only"), "{}", r["reason"]);
             }
-            _ => assert!(["better", "same", "worse"].contains(&verdict), "{cond}/{name}: {verdict} {}", r["reason"]),
+            _ => {
+                // The verdict follows from the ratio and its standard error as documented:
+                // beyond twice the standard error of its logarithm and beyond 1.25x.
+                let ratio: f64 = r["relmse_ratio"].parse().unwrap();
+                let se: f64 = r["relmse_se"].parse::<f64>().unwrap() / r["relmse"].parse::<f64>().unwrap();
+                let base = rows.iter().find(|b| &b["condition"] == cond && b["integrator"] == "volpath").unwrap();
+                let base_se: f64 = base["relmse_se"].parse::<f64>().unwrap() / base["relmse"].parse::<f64>().unwrap();
+                let band = (2.0 * (se * se + base_se * base_se).sqrt()).max(1.25f64.ln());
+                let expected = if ratio.ln() < -band {
+                    "better"
+                } else if ratio.ln() > band {
+                    "worse"
+                } else {
+                    "same"
+                };
+                assert_eq!(verdict, expected, "{cond}/{name}: relMSE ratio {ratio} (band ±{band} in log)");
+            }
         }
         if verdict != "refused" {
             let relmse: f64 = r["relmse"].parse().unwrap();
             assert!(relmse.is_finite() && relmse > 0.0, "{cond}/{name}");
             assert_eq!(r["nonfinite_samples"], "0");
             assert!(r["peak_rss_bytes"].parse::<u64>().unwrap() > 0);
+            // Quality: every method's image mean within 4 standard errors of the reference's
+            // plus the bias its README states, and the `biased` column saying so.
+            let (bias, z): (f64, f64) = (r["bias"].parse().unwrap(), r["bias_z"].parse().unwrap());
+            let se = if z != 0.0 { (bias / z).abs() } else { 0.0 };
+            let (bound, source) = stated_bias(name);
+            eprintln!("{cond}/{name}: mean {:+.2} % ± {:.2} %", 100.0 * bias, 100.0 * se);
+            assert!(
+                bias.abs() <= 4.0 * se + bound,
+                "{cond}/{name}: mean {:+.2} % off the reference, more than 4 standard errors ({:.2} %) plus \
+                 the stated bias bound {:.1} % ({source})",
+                100.0 * bias,
+                100.0 * se,
+                100.0 * bound
+            );
+            if bound == 0.0 {
+                assert_eq!(r["biased"], "false", "{cond}/{name}: an unbiased method judged biased");
+            }
         }
     }
     for file in ["stress.md", "heatmap.svg", "heatmap.png", "cells/a-sun/guided.exr", "cells/b-point/radiancegraph.log"]

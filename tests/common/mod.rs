@@ -5,7 +5,7 @@ use std::process::{Command, Output};
 
 use nimbus::imageio::Image;
 
-/// The pbrt-v4 parity scenes (pbrt-v4's renders of them are in pbrt-scenes/pbrt-v4-references/images).
+/// The pbrt-v4 parity scenes shipped beside the repository.
 pub fn reference_scenes_dir() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("pbrt-scenes/pbrt-v4-references/scenes")
 }
@@ -105,7 +105,9 @@ pub fn render_scene(scene: &nimbus::scene::Scene) -> Image {
     render_with(scene, scene.integrator.create(scene).unwrap().as_ref())
 }
 
-/// Per-channel image mean and its standard error from the pixel spread.
+/// Per-channel image mean and its standard error from the pixel spread. The spread is noise
+/// only where every pixel has the same expected value (a white furnace, a uniform slab): use
+/// it for analytic uniform images, and [`Estimate`] to compare images with structure.
 pub fn channel_stats(img: &Image) -> [(f64, f64); 3] {
     let n = img.pixels.len() as f64;
     let mut out = [(0.0, 0.0); 3];
@@ -117,15 +119,104 @@ pub fn channel_stats(img: &Image) -> [(f64, f64); 3] {
     out
 }
 
-/// Every channel's image mean within 4 standard errors (plus 0.2 %) of `expected`.
+/// Every channel's image mean within 4 standard errors of `expected`, plus 0.2 % for the
+/// answer's own rounding (film RGB of a spectrum integrated at 1-nm steps, f32 accumulation).
+/// For analytic images whose every pixel expects the same value (see [`channel_stats`]).
 pub fn assert_channels(img: &Image, expected: [f64; 3], what: &str) {
     for (c, (mean, se)) in channel_stats(img).iter().enumerate() {
         assert!(
             (mean - expected[c]).abs() < 4.0 * se + 2e-3 * expected[c].max(1e-3),
-            "{what}: channel {c} mean {mean} ± {se}, expected {}",
+            "{what}: channel {c} mean {mean} ± {se}, expected {} (4 standard errors + 0.2 % rounding of the answer)",
             expected[c]
         );
     }
+}
+
+/// An estimate of an image's mean per channel with its standard error, from renders of one
+/// estimator with independent seeds: how each 8×8 block's mean differs between the seeds is
+/// the estimator's noise alone (the image's structure is the same in every render and
+/// cancels), and blocks rather than pixels count the noise that neighbouring pixels share
+/// (a graph method's clusters span pixels).
+#[derive(Clone, Copy, Debug)]
+pub struct Estimate {
+    /// Image mean per channel over the renders.
+    pub mean: [f64; 3],
+    /// Its standard error per channel.
+    pub se: [f64; 3],
+}
+
+impl Estimate {
+    /// From `images`, renders of the same estimator with independent seeds (at least two).
+    pub fn from_seeds(images: &[Image]) -> Estimate {
+        let k = images.len();
+        assert!(k >= 2, "a noise estimate needs renders with two seeds or more");
+        let (w, h) = (images[0].width, images[0].height);
+        assert!(images.iter().all(|i| (i.width, i.height) == (w, h)), "renders of different sizes");
+        let n = (w * h) as f64;
+        let mut out = Estimate { mean: [0.0; 3], se: [0.0; 3] };
+        for c in 0..3 {
+            let mut var = 0.0;
+            for by in (0..h).step_by(8) {
+                for bx in (0..w).step_by(8) {
+                    let (x1, y1) = ((bx + 8).min(w), (by + 8).min(h));
+                    // Each render's block sum, as a share of the image mean.
+                    let sums: Vec<f64> = images
+                        .iter()
+                        .map(|img| {
+                            (by..y1)
+                                .flat_map(|y| (bx..x1).map(move |x| (x, y)))
+                                .map(|(x, y)| img.get(x, y)[c] as f64)
+                                .sum::<f64>()
+                                / n
+                        })
+                        .collect();
+                    let m = sums.iter().sum::<f64>() / k as f64;
+                    out.mean[c] += m;
+                    var += sums.iter().map(|s| (s - m).powi(2)).sum::<f64>() / (k - 1) as f64 / k as f64;
+                }
+            }
+            out.se[c] = var.sqrt();
+        }
+        out
+    }
+
+    /// A reference image rendered by an estimator with `noise` per sample as `test`'s, at
+    /// `spp` where `test` took `test_spp` per render: its standard error is `test`'s scaled to
+    /// the reference's sample count.
+    pub fn reference(img: &Image, spp: f64, test: &Estimate, renders: usize, test_spp: f64) -> Estimate {
+        let mean = img.mean();
+        let scale = (renders as f64 * test_spp / spp).sqrt();
+        Estimate { mean: [0, 1, 2].map(|c| mean[c] as f64), se: test.se.map(|s| s * scale) }
+    }
+}
+
+/// The film's f32 accumulation of thousands of samples rounds a pixel by up to this share of
+/// its value: a noiseless region (sky seen directly) of a render and of a reference rendered
+/// at another sample count differ by that much.
+pub const F32_ROUNDING: f64 = 1e-5;
+
+/// `test` against `reference`, every channel: the means within 4 standard errors of their
+/// difference plus `bias` (relative to the reference's mean), the method's stated bias bound,
+/// which `bias_source` names, and F32_ROUNDING. Returns the worst channel's relative
+/// difference.
+pub fn assert_agree(what: &str, test: &Estimate, reference: &Estimate, bias: f64, bias_source: &str) -> f64 {
+    let mut worst = 0.0f64;
+    for c in 0..3 {
+        let (t, r) = (test.mean[c], reference.mean[c]);
+        let se = (test.se[c].powi(2) + reference.se[c].powi(2)).sqrt();
+        let tol = 4.0 * se + (bias + F32_ROUNDING) * r.abs();
+        assert!(
+            (t - r).abs() <= tol,
+            "{what}: channel {c} mean {t:.6} against {r:.6} ({:+.2} %): more than 4 standard errors ({se:.2e}) \
+             plus the stated bias bound {:.2} % ({bias_source})",
+            100.0 * (t / r - 1.0),
+            100.0 * bias
+        );
+        if r != 0.0 {
+            worst = if (t / r - 1.0).abs() > worst.abs() { t / r - 1.0 } else { worst };
+        }
+    }
+    worst
 }
 
 /// The film RGB (pbrt-v4's default `cie1931` sensor, sRGB output) of radiance spectrum `f`:

@@ -3,6 +3,7 @@
 mod bench;
 mod camera;
 mod check;
+mod checksums;
 mod cluster;
 mod common;
 mod compare;

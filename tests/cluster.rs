@@ -154,7 +154,7 @@ fn a_graph_orbit_precomputes_once_and_renders_each_frame() {
     let submit = std::fs::read_to_string(out.join("submit.sh")).unwrap();
     assert!(submit.contains("--dependency=afterok:"), "{submit}");
     let tasks = std::fs::read_to_string(out.join("tasks.txt")).unwrap();
-    assert!(tasks.lines().all(|l| l.contains("--graph-data") && l.contains("--lookat")), "{tasks}");
+    assert!(tasks.lines().all(|l| l.contains("--precomputed") && l.contains("--lookat")), "{tasks}");
     // The precomputation, as its job would run it, then the frames.
     let line = pre.lines().last().unwrap();
     assert!(std::process::Command::new("bash").args(["-c", line]).status().unwrap().success());
@@ -214,7 +214,7 @@ fn guided_tasks_load_the_trees_their_precompute_job_trained() {
     ]);
     let pre = std::fs::read_to_string(out.join("precompute.sbatch")).unwrap();
     let line = pre.lines().last().unwrap();
-    assert!(line.contains("--guide-cache") && line.matches("--spp").count() == 1, "{line}");
+    assert!(line.contains("--precomputed") && line.matches("--spp").count() == 1, "{line}");
     assert!(std::process::Command::new("bash").args(["-c", line]).status().unwrap().success());
     let cache = out.join("guide.cache");
     let trained = std::fs::metadata(&cache).expect("the precompute job saved the trees").modified().unwrap();

@@ -269,10 +269,8 @@ LightSource "infinite" "rgb L" [1 1 1]"#;
     let s =
         build_scene(&desc, &BuildOptions { integrator: Some("simplevolpath".into()), ..Default::default() }).unwrap();
     assert_eq!(s.integrator.name(), "simplevolpath");
-    match &s.integrator {
-        nimbus::integrators::IntegratorSettings::SimpleVolPath(p) => assert_eq!(p.max_depth, 7),
-        other => panic!("{other:?}"),
-    }
+    let p = s.integrator.settings::<SimpleVolPathSettings>().expect("simplevolpath's settings");
+    assert_eq!(p.max_depth, 7);
     assert!(nimbus::integrators::INTEGRATOR_NAMES.contains(&"simplevolpath"));
     assert_eq!(s.integrator.create(&s).unwrap().name(), "simplevolpath");
     let bad = text.replace(r#""volpath" "integer maxdepth" 7"#, r#""simplevolpath" "float envfraction" -1"#);

@@ -17,6 +17,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, ExitCode};
 
 use anyhow::{Context, Result, bail};
+use nimbus::integrators::registry::Precompute;
 use serde_json::{Value, json};
 
 /// Arguments of `nimbus cluster`.
@@ -254,36 +255,26 @@ fn plan(args: &ClusterArgs, scene: &Path, out: &Path) -> Result<Manifest> {
         "--quiet".into(),
     ];
     let seed = built.sampler.seed;
-    let precompute = match integrator {
-        "radiancegraph" => {
-            let config = scene.with_extension("json");
-            let graph_config = if config.exists() {
-                nimbus::integrators::radiancegraph::config::GraphConfig::from_file(&config)
-                    .map_err(|e| anyhow::anyhow!("{e}"))?
-            } else {
-                Default::default()
-            };
-            let depth = graph_config.lighting_calculator.bounces.iter().max().copied().unwrap_or(0) + 1;
-            let stem = config.file_stem().map_or("graph".into(), |s| s.to_string_lossy().into_owned());
-            let file = format!("graph/{stem}_d{depth}.txt");
-            base.extend(["--graph-data".into(), out.join(&file).display().to_string()]);
-            let mut command = vec![exe.display().to_string(), "graph".into(), "build".into()];
-            command.extend([scene_abs.display().to_string(), "--quiet".into(), "--out".into()]);
-            command.push(out.join("graph").display().to_string());
+    // The method says what it prepares before its renders; every render task then reads it.
+    let precompute = match built.integrator.precompute(&scene_abs).map_err(anyhow::Error::msg)? {
+        None => None,
+        Some(Precompute::Command { args, file }) => {
+            base.extend(["--precomputed".into(), out.join(&file).display().to_string()]);
+            let mut command = vec![exe.display().to_string()];
+            command.extend(args);
+            command.push(out.join(&file).parent().unwrap_or(&out).display().to_string());
             Some(Task { output: file, command })
         }
-        "guided" => {
-            let file = "guide.cache".to_string();
-            base.extend(["--guide-cache".into(), out.join(&file).display().to_string()]);
-            // Training happens when the cache is missing; one pixel at one sample renders it.
+        Some(Precompute::FirstRender { file }) => {
+            base.extend(["--precomputed".into(), out.join(&file).display().to_string()]);
+            // One pixel at one sample renders it.
             let mut command = base.clone();
             command.extend(["--seed".into(), seed.to_string(), "--spp".into(), "1".into()]);
             command.extend(["--pixelbounds".into(), fb[0].to_string(), (fb[0] + 1).to_string()]);
             command.extend([fb[2].to_string(), (fb[2] + 1).to_string(), "--outfile".into()]);
-            command.push(out.join("logs/guide-training.exr").display().to_string());
+            command.push(out.join("logs/precompute.exr").display().to_string());
             Some(Task { output: file, command })
         }
-        _ => None,
     };
     if let Some(spp) = args.spp {
         base.extend(["--spp".into(), spp.to_string()]);

@@ -44,14 +44,13 @@ pub struct RenderArgs {
     /// Render with this integrator instead of the scene's (drop-in comparison).
     #[arg(long)]
     integrator: Option<String>,
-    /// Graph file for `radiancegraph` (from `nimbus graph build`); without it the graph is
-    /// built first, with the scene's `.json` config if there is one.
-    #[arg(long, value_name = "FILE")]
-    graph_data: Option<PathBuf>,
-    /// Trained trees for `guided`: loaded when the file matches the scene (its media and
-    /// lights), else trained and saved there for later renders and other cameras.
-    #[arg(long, value_name = "FILE")]
-    guide_cache: Option<PathBuf>,
+    /// What the method prepared before rendering, refused when it was prepared for another
+    /// scene: `radiancegraph`'s graph file (from `nimbus graph build`, the thesis's
+    /// `--graph-data`; without it the graph is built first, with the scene's `.json` config
+    /// if there is one), `guided`'s trained trees (`--guide-cache`: loaded when the file
+    /// matches the scene, else trained and saved there for later renders and other cameras).
+    #[arg(long, value_name = "FILE", visible_aliases = ["graph-data", "guide-cache"])]
+    precomputed: Option<PathBuf>,
     /// Longest light path, overriding the integrator's `maxdepth` (the radiance-graph
     /// thesis's pbrt-v4 has this flag; its VolPath references are rendered with it).
     #[arg(long, value_name = "N")]
@@ -123,8 +122,7 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
     let opts = BuildOptions {
         integrator: args.integrator.clone(),
         scene_file: (args.scene.as_os_str() != "-").then(|| args.scene.clone()),
-        graph_data: args.graph_data.clone(),
-        guide_cache: args.guide_cache.clone(),
+        precomputed: args.precomputed.clone(),
         max_depth: args.maxdepth,
         spp: args.spp,
         seed: args.seed,

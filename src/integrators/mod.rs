@@ -1,12 +1,16 @@
-//! Integrators: one folder per method, each with its settings. The registry maps the names
-//! scenes and `--integrator` use to settings readers and implementations.
+//! Integrators: one folder per method, each with its settings and its entry in the
+//! [`registry`], which maps the names scenes and `--integrator` use to them; the traits every
+//! method implements to render.
 
 pub mod common;
 pub mod guided;
 pub mod pathgraph;
 pub mod radiancegraph;
+pub mod registry;
 pub mod simplevolpath;
 pub mod volpath;
+
+pub use registry::{INTEGRATOR_NAMES, MethodSettings, REFERENCE, canonical_name, pbrt_v4_substitute};
 
 use nimbus_parser::{Entity, Error};
 
@@ -17,91 +21,50 @@ use crate::scene::Scene;
 use crate::spectra::{SampledSpectrum, SampledWavelengths};
 use common::RayStats;
 
-/// Settings of the integrator a scene asks for.
-#[derive(Clone, Debug, PartialEq)]
-pub enum IntegratorSettings {
-    /// `volpath`
-    VolPath(volpath::VolPathSettings),
-    /// `simplevolpath`
-    SimpleVolPath(simplevolpath::SimpleVolPathSettings),
-    /// `radiancegraph` (`graph` in the thesis's scenes)
-    RadianceGraph(radiancegraph::RadianceGraphSettings),
-    /// `pathgraph`
-    PathGraph(pathgraph::PathGraphSettings),
-    /// `guided`
-    Guided(guided::GuidedSettings),
-}
+/// Settings of the integrator a scene asks for: the method's own (see [`registry`]), read by
+/// the method's entry in [`registry::METHODS`].
+#[derive(Debug)]
+pub struct IntegratorSettings(Box<dyn MethodSettings>);
 
-/// The integrator a scene's name stands for: the radiance-graph thesis's scenes name their
-/// VolPath reference `volpathcustom` (pbrt-v4's volpath with the thesis's analysis hooks and
-/// the same parameters) and its method `graph`.
-pub fn canonical_name(name: &str) -> &str {
-    match name {
-        "volpathcustom" => "volpath",
-        "graph" => "radiancegraph",
-        other => other,
+impl Clone for IntegratorSettings {
+    fn clone(&self) -> IntegratorSettings {
+        IntegratorSettings(self.0.clone_box())
     }
 }
 
-/// What nimbus says about a pbrt-v4 integrator it does not have: `Ok(note)` when the scene
-/// renders with `volpath` instead (the note says why that is the same image), `Err(reason)`
-/// when it is refused (the reason names the nimbus integrator that computes its image).
-/// `None` for names nimbus has or does not know.
-pub fn pbrt_v4_substitute(name: &str) -> Option<Result<&'static str, &'static str>> {
-    Some(match name {
-        "path" | "simplepath" => {
-            Ok("pbrt-v4's surface path tracer runs as \"volpath\", which computes the same image for surfaces \
-             (and, unlike it, also renders the scene's participating media)")
-        }
-        "randomwalk" => Ok("pbrt-v4's random-walk integrator runs as \"volpath\": the same image (the random walk's \
-             expectation) with next-event estimation and far less noise"),
-        "bdpt" => Err("bidirectional path tracing is not in nimbus; \"volpath\" converges to the same image"),
-        "mlt" => Err("Metropolis light transport is not in nimbus; \"volpath\" converges to the same image"),
-        "sppm" => {
-            Err("stochastic progressive photon mapping is not in nimbus; \"volpath\" converges to the same image")
-        }
-        "lightpath" => Err("light tracing is not in nimbus; \"volpath\" converges to the same image"),
-        "ambientocclusion" => {
-            Err("ambient occlusion is not light transport and nimbus has no integrator that computes it")
-        }
-        "function" => Err("pbrt-v4's function-integration test harness is not a renderer; nimbus has none"),
-        _ => return None,
-    })
+impl std::ops::Deref for IntegratorSettings {
+    type Target = dyn MethodSettings;
+    fn deref(&self) -> &(dyn MethodSettings + 'static) {
+        self.0.as_ref()
+    }
 }
 
-/// Names of the integrators nimbus has.
-pub const INTEGRATOR_NAMES: &[&str] = &["volpath", "simplevolpath", "radiancegraph", "pathgraph", "guided"];
+impl std::ops::DerefMut for IntegratorSettings {
+    fn deref_mut(&mut self) -> &mut (dyn MethodSettings + 'static) {
+        self.0.as_mut()
+    }
+}
 
 impl IntegratorSettings {
     /// Reads the integrator entity; `name_override` replaces the scene's choice (the
     /// parameters that method shares with the scene's, such as `maxdepth`, are kept).
     pub fn from_entity(e: &Entity, name_override: Option<&str>) -> Result<IntegratorSettings, Error> {
-        match canonical_name(name_override.unwrap_or(&e.name)) {
-            "volpath" => Ok(IntegratorSettings::VolPath(volpath::VolPathSettings::from_entity(e)?)),
-            "simplevolpath" => {
-                Ok(IntegratorSettings::SimpleVolPath(simplevolpath::SimpleVolPathSettings::from_entity(e)?))
-            }
-            "radiancegraph" => {
-                Ok(IntegratorSettings::RadianceGraph(radiancegraph::RadianceGraphSettings::from_entity(e)?))
-            }
-            "pathgraph" => Ok(IntegratorSettings::PathGraph(pathgraph::PathGraphSettings::from_entity(e)?)),
-            "guided" => Ok(IntegratorSettings::Guided(guided::GuidedSettings::from_entity(e)?)),
-            other => match pbrt_v4_substitute(other) {
-                Some(Ok(_)) => Ok(IntegratorSettings::VolPath(volpath::VolPathSettings::from_entity(e)?)),
-                Some(Err(reason)) => Err(Error::new(
-                    &e.loc,
-                    format!(
-                        "integrator \"{other}\": {reason} (use `Integrator \"volpath\"` or `--integrator volpath`)"
-                    ),
-                )),
-                None => Err(Error::new(
-                    &e.loc,
-                    format!(
-                        "integrator \"{other}\" is not available in nimbus (it has: {})",
-                        INTEGRATOR_NAMES.join(", ")
-                    ),
-                )),
-            },
+        let name = name_override.unwrap_or(&e.name);
+        if let Some(method) = registry::find(name) {
+            return Ok(IntegratorSettings((method.read)(e)?));
+        }
+        match pbrt_v4_substitute(name) {
+            Some(Ok(_)) => Ok(IntegratorSettings((registry::METHODS[0].read)(e)?)),
+            Some(Err(reason)) => Err(Error::new(
+                &e.loc,
+                format!(
+                    "integrator \"{name}\": {reason} (use `Integrator \"{REFERENCE}\"` or `--integrator {REFERENCE}`)"
+                ),
+            )),
+            None => Err(Error::new(
+                &e.loc,
+                format!("integrator \"{name}\" is not available in nimbus (it has: {})", INTEGRATOR_NAMES.join(", ")),
+            )),
         }
     }
 
@@ -117,47 +80,14 @@ impl IntegratorSettings {
         }
     }
 
-    /// Sets the longest path (`--maxdepth`, the radiance-graph thesis's pbrt-v4 flag, which
-    /// overrides the scene's `maxdepth`). The radiance graph has no such parameter: its light
-    /// paths' depth is the graph config's, and saying so beats ignoring the flag.
-    pub fn set_max_depth(&mut self, depth: u32) -> Result<(), String> {
-        match self {
-            IntegratorSettings::VolPath(s) => s.max_depth = depth,
-            IntegratorSettings::SimpleVolPath(s) => s.max_depth = depth,
-            IntegratorSettings::PathGraph(s) => s.max_depth = depth,
-            IntegratorSettings::Guided(s) => s.max_depth = depth,
-            IntegratorSettings::RadianceGraph(_) => {
-                return Err("--maxdepth: radiancegraph has no maxdepth; its light paths' depth is the graph \
-                            config's graphBuilder.maxDepth"
-                    .into());
-            }
-        }
-        Ok(())
-    }
-
     /// The method's name.
     pub fn name(&self) -> &'static str {
-        match self {
-            IntegratorSettings::VolPath(_) => "volpath",
-            IntegratorSettings::SimpleVolPath(_) => "simplevolpath",
-            IntegratorSettings::RadianceGraph(_) => "radiancegraph",
-            IntegratorSettings::PathGraph(_) => "pathgraph",
-            IntegratorSettings::Guided(_) => "guided",
-        }
+        self.0.method().name
     }
 
-    /// Creates the integrator for `scene` (as pbrt-v4's `Integrator::Create` receives the
-    /// scene's lights: methods may build per-scene tables here, and methods that precompute
-    /// do it here: the radiance graph loads or builds its graph). Fails with a message for
-    /// the user when the precomputation cannot run.
-    pub fn create(&self, scene: &Scene) -> Result<Box<dyn Integrator>, String> {
-        Ok(match self {
-            IntegratorSettings::VolPath(s) => Box::new(volpath::VolPath::new(s)),
-            IntegratorSettings::SimpleVolPath(s) => Box::new(simplevolpath::SimpleVolPath::new(s, scene)),
-            IntegratorSettings::RadianceGraph(s) => Box::new(radiancegraph::create(s, scene)?),
-            IntegratorSettings::PathGraph(s) => Box::new(pathgraph::create(s, scene)?),
-            IntegratorSettings::Guided(s) => Box::new(guided::create(s, scene)?),
-        })
+    /// The method's own settings, if they are of type `T`.
+    pub fn settings<T: 'static>(&self) -> Option<&T> {
+        self.0.as_any().downcast_ref()
     }
 }
 

@@ -33,9 +33,8 @@ use crate::film::filter::Filter;
 use crate::geometry::ply::read_ply;
 use crate::geometry::{Bounds3, MotionTransform};
 use crate::integrators::IntegratorSettings;
-use crate::lights::{
-    EmissionImage, EnvironmentMap, Light, LightKind, LightSampler, LightSamplerKind, PortalMap, SceneSphere,
-};
+use crate::integrators::registry::MethodInputs;
+use crate::lights::{EmissionImage, EnvironmentMap, Light, LightKind, LightSampler, PortalMap, SceneSphere};
 use crate::materials::{ConductorInput, HairAbsorption, Material, RoughnessTex, ShadingPerturbation, resolve};
 use crate::math::Frame;
 use crate::media::dense::DenseGrid;
@@ -53,14 +52,12 @@ use crate::textures::{
 pub struct BuildOptions {
     /// `--integrator`: render with this method instead of the scene's.
     pub integrator: Option<String>,
-    /// The scene file named on the command line (the radiance graph looks for its `.json`
-    /// config beside it).
+    /// The scene file named on the command line (methods look for their own files beside
+    /// it).
     pub scene_file: Option<std::path::PathBuf>,
-    /// `--graph-data`: a graph file for the radiance-graph method.
-    pub graph_data: Option<std::path::PathBuf>,
-    /// `--guide-cache`: trained trees for the guided method (loaded if they match the scene,
-    /// else trained and saved there).
-    pub guide_cache: Option<std::path::PathBuf>,
+    /// `--precomputed` (`--graph-data`, `--guide-cache`): what the method prepared before
+    /// (see [`crate::integrators::registry::MethodInputs`]).
+    pub precomputed: Option<std::path::PathBuf>,
     /// `--maxdepth`: the longest path, overriding the integrator's `maxdepth`.
     pub max_depth: Option<u32>,
     /// `--spp`
@@ -1383,14 +1380,8 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions) -> Result<Scene
     let filter = Filter::new(&FilterSettings::from_entity(&desc.filter)?);
     let mut integrator = IntegratorSettings::from_entity(&desc.integrator, opts.integrator.as_deref())?;
     warnings.extend(IntegratorSettings::substitution_note(&desc.integrator, opts.integrator.as_deref()));
-    if let IntegratorSettings::RadianceGraph(s) = &mut integrator {
-        s.graph_data = opts.graph_data.clone();
-        // graph_maker's default config: the scene's name with `.json`.
-        s.config = opts.scene_file.as_ref().map(|f| f.with_extension("json")).filter(|c| c.exists());
-    }
-    if let IntegratorSettings::Guided(s) = &mut integrator {
-        s.cache = opts.guide_cache.clone();
-    }
+    integrator
+        .set_inputs(&MethodInputs { scene_file: opts.scene_file.as_deref(), precomputed: opts.precomputed.as_deref() });
     if let Some(depth) = opts.max_depth {
         integrator.set_max_depth(depth).map_err(|m| err(&desc.integrator.loc, m))?;
     }
@@ -1474,11 +1465,8 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions) -> Result<Scene
                 "the spectral film records spectra: it needs spectral transport, not --spectral off",
             ));
         }
-        if matches!(integrator, IntegratorSettings::PathGraph(_)) {
-            return Err(err(
-                &desc.film.loc,
-                "pathgraph accumulates RGB and cannot write the spectral film (use \"rgb\" or \"gbuffer\")",
-            ));
+        if let Some(why) = integrator.spectral_film_refusal() {
+            return Err(err(&desc.film.loc, why));
         }
         transport =
             TransportChoice { transport: Transport::Spectral, reason: "the spectral film records spectra".into() };
@@ -1637,10 +1625,7 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions) -> Result<Scene
     }
     let infinite_lights = lights.iter().enumerate().filter(|(_, l)| l.is_infinite()).map(|(i, _)| i as u32).collect();
     // pbrt-v4's default for every integrator is the light BVH.
-    let kind = match &integrator {
-        IntegratorSettings::VolPath(v) => v.light_sampler,
-        _ => LightSamplerKind::Bvh,
-    };
+    let kind = integrator.light_sampler();
     let light_sampler = LightSampler::new(&lights, &surfaces.shapes, &sphere, kind);
     let bumps = shading.iter().any(|s| matches!(s, ShadingPerturbation::Bump(_)));
     let footprint = (tb.textures.uses_footprint() || bumps)

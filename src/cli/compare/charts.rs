@@ -174,6 +174,7 @@ mod tests {
     use super::*;
     use crate::cli::compare::run::{Checkpoint, Reference, ReferenceSource};
     use nimbus::imageio::Image;
+    use nimbus::integrators::REFERENCE;
     use nimbus::metrics::ErrorMetrics;
 
     fn run(name: &str, mode: Mode, scale: f64) -> Run {
@@ -220,7 +221,7 @@ mod tests {
                 spp: None,
                 seed: None,
             },
-            runs: vec![run("volpath", Mode::EqualTime, 1.0), run("othermethod", Mode::EqualTime, 0.3)],
+            runs: vec![run(REFERENCE, Mode::EqualTime, 1.0), run("othermethod", Mode::EqualTime, 0.3)],
             diff_scale: Vec::new(),
         };
         error_vs_time(&cmp, &dir.join("t")).unwrap();

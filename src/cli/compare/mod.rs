@@ -14,7 +14,7 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use anyhow::{Context, Result};
-use nimbus::integrators::INTEGRATOR_NAMES;
+use nimbus::integrators::{INTEGRATOR_NAMES, REFERENCE};
 
 use run::{Mode, Run};
 
@@ -27,7 +27,7 @@ pub struct CompareArgs {
     scene: PathBuf,
     /// Integrators to compare, comma-separated (any of nimbus's; an unknown name is answered
     /// with the list).
-    #[arg(long, value_delimiter = ',', default_value = "volpath")]
+    #[arg(long, value_delimiter = ',', default_value = REFERENCE)]
     integrators: Vec<String>,
     /// Reference image (.exr) of the film's pixel bounds.
     #[arg(long)]

@@ -1,6 +1,7 @@
 //! The comparison as CSV (every checkpoint), JSON (everything) and a Markdown table (final
 //! errors).
 
+use nimbus::integrators::REFERENCE;
 use std::fmt::Write;
 
 use serde_json::{Value, json};
@@ -85,7 +86,7 @@ pub fn json(cmp: &Comparison) -> String {
                 ReferenceSource::Cached => "cached",
                 ReferenceSource::Rendered => "rendered",
             },
-            "integrator": "volpath",
+            "integrator": REFERENCE,
             "spp": reference.spp,
             "seed": reference.seed,
             "width": reference.image.width,

@@ -1,5 +1,6 @@
 //! The reference image and one integrator's timed render with checkpoints.
 
+use nimbus::integrators::REFERENCE;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -120,7 +121,7 @@ impl Reference {
         let path = dir.join(format!("{stem}.volpath-{spp}spp-seed{seed}.exr"));
         let hash = crate::cli::scene_hash::of_file(scene_path)?;
         let opts =
-            BuildOptions { integrator: Some("volpath".into()), spp: Some(spp), seed: Some(seed), ..Default::default() };
+            BuildOptions { integrator: Some(REFERENCE.into()), spp: Some(spp), seed: Some(seed), ..Default::default() };
         let scene = build_scene(desc, &opts).map_err(scene_error)?;
         let (w, h) = film_size(&scene);
         if path.exists() {
@@ -129,7 +130,7 @@ impl Reference {
                 Ok(image) => {
                     let meta = |k: &str| image.metadata.get(k).map(String::as_str);
                     let expected = [
-                        ("nimbus:integrator", "volpath".to_string()),
+                        ("nimbus:integrator", REFERENCE.to_string()),
                         ("nimbus:spp", spp.to_string()),
                         ("nimbus:seed", seed.to_string()),
                         ("nimbus:scene-hash", hash.clone()),
@@ -154,7 +155,7 @@ impl Reference {
         let integrator = scene.integrator.create(&scene).map_err(anyhow::Error::msg)?;
         let result = render(&scene, integrator.as_ref(), &RenderOptions { time_budget: None, quiet });
         let mut image = result.image;
-        image.metadata.insert("nimbus:integrator".into(), "volpath".into());
+        image.metadata.insert("nimbus:integrator".into(), REFERENCE.into());
         image.metadata.insert("nimbus:spp".into(), result.spp.to_string());
         image.metadata.insert("nimbus:seed".into(), seed.to_string());
         image.metadata.insert("nimbus:time".into(), format!("{:.3}", result.seconds));

@@ -2,6 +2,7 @@
 //! by log relMSE ratio to volpath (blue better, red worse, white the same), labelled with the
 //! ratio; refused cells gray, failed cells black, biased cells outlined with their bias.
 
+use nimbus::integrators::REFERENCE;
 use std::path::Path;
 
 use anyhow::Result;
@@ -63,7 +64,7 @@ where
         for (j, name) in m.integrators.iter().enumerate() {
             let x0 = LABEL + COL * j as i32;
             let Some((cell, v)) = m.cell(cond, name) else { continue };
-            let baseline = m.cell(cond, "volpath").map(|(b, _)| b);
+            let baseline = m.cell(cond, REFERENCE).map(|(b, _)| b);
             let ratio = baseline.and_then(|b| verdict::ratio(cell, b)).map(|(r, _)| r);
             let (fill, ink, label) = match v {
                 Verdict::Refused(_) => (RGBColor(215, 215, 215), RGBColor(80, 80, 80), "refused".to_string()),

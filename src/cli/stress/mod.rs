@@ -17,7 +17,7 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use anyhow::{Context, Result};
-use nimbus::integrators::INTEGRATOR_NAMES;
+use nimbus::integrators::{INTEGRATOR_NAMES, REFERENCE};
 
 use cell::{Cell, CellSetup};
 use verdict::Verdict;
@@ -80,7 +80,7 @@ impl Matrix {
 }
 
 fn integrators(args: &StressArgs) -> Result<Vec<String>> {
-    let mut names = vec!["volpath".to_string()];
+    let mut names = vec![REFERENCE.to_string()];
     let asked: Vec<&str> = if args.integrators.is_empty() {
         INTEGRATOR_NAMES.to_vec()
     } else {
@@ -188,7 +188,7 @@ pub fn run(args: &StressArgs) -> Result<ExitCode> {
             };
             row.push(cell::run_cell(&setup)?);
         }
-        let baseline = row.iter().find(|c| c.integrator == "volpath").cloned();
+        let baseline = row.iter().find(|c| c.integrator == REFERENCE).cloned();
         for c in row {
             let v = verdict::judge(&c, baseline.as_ref());
             say(format!("  {}", report::one_line(&c, &v, baseline.as_ref())));

@@ -1,6 +1,7 @@
 //! The matrix as CSV (one line per cell, every measurement) and Markdown (the verdict table,
 //! then every cell's numbers and every refusal's and failure's message).
 
+use nimbus::integrators::REFERENCE;
 use std::fmt::Write;
 
 use super::Matrix;
@@ -54,7 +55,7 @@ pub fn csv(m: &Matrix) -> String {
          peak_rss_bytes,precomputed_bytes,reason\n",
     );
     for (c, v) in &m.cells {
-        let baseline = m.cell(&c.condition, "volpath").map(|(b, _)| b);
+        let baseline = m.cell(&c.condition, REFERENCE).map(|(b, _)| b);
         let ratio = baseline.and_then(|b| verdict::ratio(c, b)).map_or(String::new(), |(r, _)| format!("{r:.4}"));
         let reason = match v {
             Verdict::Refused(why) | Verdict::Failed(why) => why.as_str(),
@@ -101,7 +102,7 @@ pub fn csv(m: &Matrix) -> String {
 
 /// The verdict of one cell as a table entry: the verdict, the ratio, a bias mark.
 fn entry(m: &Matrix, cell: &Cell, v: &Verdict) -> String {
-    let baseline = m.cell(&cell.condition, "volpath").map(|(b, _)| b);
+    let baseline = m.cell(&cell.condition, REFERENCE).map(|(b, _)| b);
     let mut s = match v {
         Verdict::Baseline => "1x".to_string(),
         Verdict::Refused(_) => "refused".to_string(),
@@ -171,7 +172,7 @@ pub fn markdown(m: &Matrix) -> String {
     );
     for (c, _) in &m.cells {
         let Some(x) = &c.measured else { continue };
-        let baseline = m.cell(&c.condition, "volpath").map(|(b, _)| b);
+        let baseline = m.cell(&c.condition, REFERENCE).map(|(b, _)| b);
         let _ = writeln!(
             s,
             "| {} | {} | {:.3e} | {} | {:.2e} | {:.2e} | {:+.2} % ({:+.1}) | {} | {:.2} | {} | {} | {} / {} |",

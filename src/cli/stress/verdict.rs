@@ -1,6 +1,7 @@
 //! A cell's verdict against volpath's cell on the same condition.
 
 use super::cell::{Cell, Outcome};
+use nimbus::integrators::REFERENCE;
 
 /// Where a method stands on one condition.
 #[derive(Clone, Debug, PartialEq)]
@@ -79,7 +80,7 @@ pub fn judge(cell: &Cell, baseline: Option<&Cell>) -> Verdict {
             cell.nonfinite_samples, m.nonfinite_pixels
         ));
     }
-    if cell.integrator == "volpath" {
+    if cell.integrator == REFERENCE {
         return Verdict::Baseline;
     }
     let Some(baseline) = baseline.filter(|b| b.outcome == Outcome::Rendered) else {
@@ -150,7 +151,7 @@ mod tests {
 
     #[test]
     fn verdicts_follow_the_ratio_beyond_noise() {
-        let base = cell("volpath", 1e-3, 1e-5, 0.0, 0.0, 10 << 20);
+        let base = cell(REFERENCE, 1e-3, 1e-5, 0.0, 0.0, 10 << 20);
         assert_eq!(judge(&base, Some(&base)), Verdict::Baseline);
         assert_eq!(judge(&cell("m", 0.5e-3, 1e-5, 0.0, 0.0, 10 << 20), Some(&base)), Verdict::Better);
         assert_eq!(judge(&cell("m", 2e-3, 1e-5, 0.0, 0.0, 10 << 20), Some(&base)), Verdict::Worse);
@@ -162,7 +163,7 @@ mod tests {
 
     #[test]
     fn failures_outrank_errors() {
-        let base = cell("volpath", 1e-3, 1e-5, 0.0, 0.0, 10 << 20);
+        let base = cell(REFERENCE, 1e-3, 1e-5, 0.0, 0.0, 10 << 20);
         let mut c = cell("m", 0.5e-3, 1e-5, 0.0, 0.0, 25 << 20);
         assert!(matches!(judge(&c, Some(&base)), Verdict::Failed(m) if m.contains("2x volpath")));
         // The radiance graph's graph is reported apart, not counted.

@@ -19,8 +19,11 @@ pub use train::Guide;
 
 use glam::{Vec2, Vec3};
 
+use std::path::Path;
+
 use super::RayIntegrator;
 use super::common::{GuidedSample, PathConfig, PathObserver, RayStats, trace_path};
+use super::registry::{Method, MethodInputs, MethodSettings, Precompute};
 use crate::color::Channels;
 use crate::geometry::Ray;
 use crate::media::phase::HenyeyGreenstein;
@@ -28,6 +31,47 @@ use crate::samplers::Sampler;
 use crate::sampling::rng::{Pcg32, hash_sample};
 use crate::scene::Scene;
 use sampling::Strategy;
+
+/// The registry's entry.
+pub const METHOD: Method = Method { name: "guided", aliases: &[], read };
+
+fn read(e: &nimbus_parser::Entity) -> Result<Box<dyn MethodSettings>, nimbus_parser::Error> {
+    Ok(Box::new(GuidedSettings::from_entity(e)?))
+}
+
+impl MethodSettings for GuidedSettings {
+    fn method(&self) -> &'static Method {
+        &METHOD
+    }
+
+    fn clone_box(&self) -> Box<dyn MethodSettings> {
+        Box::new(self.clone())
+    }
+
+    fn as_any(&self) -> &dyn std::any::Any {
+        self
+    }
+
+    fn set_max_depth(&mut self, depth: u32) -> Result<(), String> {
+        self.max_depth = depth;
+        Ok(())
+    }
+
+    /// The precomputed file is the guide cache: loaded when it matches, trained and saved
+    /// when it is missing.
+    fn set_inputs(&mut self, inputs: &MethodInputs<'_>) {
+        self.cache = inputs.precomputed.map(Path::to_path_buf);
+    }
+
+    /// Training happens in the first render whose cache file is missing.
+    fn precompute(&self, _scene_file: &Path) -> Result<Option<Precompute>, String> {
+        Ok(Some(Precompute::FirstRender { file: "guide.cache".into() }))
+    }
+
+    fn create(&self, scene: &Scene) -> Result<Box<dyn super::Integrator>, String> {
+        Ok(Box::new(create(self, scene)?))
+    }
+}
 
 /// The guided path tracer.
 pub struct Guided {
@@ -174,7 +218,7 @@ impl<C: Channels> PathObserver<C> for GuidingObserver<'_> {
 
 impl RayIntegrator for Guided {
     fn name(&self) -> &'static str {
-        "guided"
+        METHOD.name
     }
 
     fn li<C: Channels>(

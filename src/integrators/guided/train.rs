@@ -338,9 +338,8 @@ AttributeEnd
 "#;
         let desc = nimbus_parser::load_str(text, "glass.pbrt").unwrap();
         let scene = build_scene(&desc, &BuildOptions::default()).unwrap();
-        let IntegratorSettings::Guided(s) = IntegratorSettings::from_entity(&desc.integrator, None).unwrap() else {
-            unreachable!()
-        };
+        let settings = IntegratorSettings::from_entity(&desc.integrator, None).unwrap();
+        let s = settings.settings::<GuidedSettings>().expect("guided's settings").clone();
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
         pool.install(|| train(&scene, &s))
     }

@@ -20,6 +20,7 @@ use std::time::Instant;
 use rayon::prelude::*;
 
 use super::common::{NoObserver, PathConfig, RayStats, trace_path};
+use super::registry::{Method, MethodSettings};
 use super::{ImageIntegrator, Integrator, PixelValue};
 use crate::accel::NONE;
 use crate::color::Rgb;
@@ -30,6 +31,40 @@ use crate::scene::Scene;
 use crate::scene::transport::Transport;
 use crate::spectra::{SampledSpectrum, SampledWavelengths};
 use record::{Paths, Recorder, Vertices};
+
+/// The registry's entry.
+pub const METHOD: Method = Method { name: "pathgraph", aliases: &[], read };
+
+fn read(e: &nimbus_parser::Entity) -> Result<Box<dyn MethodSettings>, nimbus_parser::Error> {
+    Ok(Box::new(PathGraphSettings::from_entity(e)?))
+}
+
+impl MethodSettings for PathGraphSettings {
+    fn method(&self) -> &'static Method {
+        &METHOD
+    }
+
+    fn clone_box(&self) -> Box<dyn MethodSettings> {
+        Box::new(self.clone())
+    }
+
+    fn as_any(&self) -> &dyn std::any::Any {
+        self
+    }
+
+    fn set_max_depth(&mut self, depth: u32) -> Result<(), String> {
+        self.max_depth = depth;
+        Ok(())
+    }
+
+    fn spectral_film_refusal(&self) -> Option<&'static str> {
+        Some("pathgraph accumulates RGB and cannot write the spectral film (use \"rgb\" or \"gbuffer\")")
+    }
+
+    fn create(&self, scene: &Scene) -> Result<Box<dyn Integrator>, String> {
+        Ok(Box::new(create(self, scene)?))
+    }
+}
 
 /// The path-graph integrator.
 pub struct PathGraph {
@@ -363,7 +398,7 @@ impl ImageIntegrator for PathGraph {
 
 impl Integrator for PathGraph {
     fn name(&self) -> &'static str {
-        "pathgraph"
+        METHOD.name
     }
 
     /// Per-ray callers get the path-traced estimate the graph starts from.

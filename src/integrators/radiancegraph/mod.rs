@@ -16,6 +16,7 @@ pub mod search_range;
 pub mod transport;
 pub mod volume;
 
+use std::path::Path;
 use std::time::Instant;
 
 use config::GraphConfig;
@@ -23,7 +24,64 @@ use glam::Vec3;
 use render::RadianceCache;
 use volume::Volume;
 
+use super::registry::{Method, MethodInputs, MethodSettings, Precompute};
 use crate::scene::Scene;
+
+/// The registry's entry (`graph` is the thesis's name for it).
+pub const METHOD: Method = Method { name: "radiancegraph", aliases: &["graph"], read };
+
+fn read(e: &nimbus_parser::Entity) -> Result<Box<dyn MethodSettings>, nimbus_parser::Error> {
+    Ok(Box::new(RadianceGraphSettings::from_entity(e)?))
+}
+
+impl MethodSettings for RadianceGraphSettings {
+    fn method(&self) -> &'static Method {
+        &METHOD
+    }
+
+    fn clone_box(&self) -> Box<dyn MethodSettings> {
+        Box::new(self.clone())
+    }
+
+    fn as_any(&self) -> &dyn std::any::Any {
+        self
+    }
+
+    /// The method has no such parameter: its light paths' depth is the graph config's, and
+    /// saying so beats ignoring the flag.
+    fn set_max_depth(&mut self, _depth: u32) -> Result<(), String> {
+        Err("--maxdepth: radiancegraph has no maxdepth; its light paths' depth is the graph config's \
+             graphBuilder.maxDepth"
+            .into())
+    }
+
+    /// The precomputed file is a graph `nimbus graph build` wrote (it must exist); without
+    /// one the graph is built with the scene's config, graph_maker's default: the scene's
+    /// name with `.json`.
+    fn set_inputs(&mut self, inputs: &MethodInputs<'_>) {
+        self.graph_data = inputs.precomputed.map(Path::to_path_buf);
+        self.config = inputs.scene_file.map(|f| f.with_extension("json")).filter(|c| c.exists());
+    }
+
+    /// `nimbus graph build` with the scene's config, writing the graph of its largest bounce
+    /// count as graph_maker names it.
+    fn precompute(&self, scene_file: &Path) -> Result<Option<Precompute>, String> {
+        let config_path = scene_file.with_extension("json");
+        let config = if config_path.exists() {
+            GraphConfig::from_file(&config_path).map_err(|e| e.to_string())?
+        } else {
+            GraphConfig::default()
+        };
+        let depth = config.lighting_calculator.bounces.iter().max().copied().unwrap_or(0) + 1;
+        let stem = config_path.file_stem().map_or("graph".into(), |s| s.to_string_lossy().into_owned());
+        let args = ["graph", "build", &scene_file.display().to_string(), "--quiet", "--out"].map(String::from).to_vec();
+        Ok(Some(Precompute::Command { args, file: format!("graph/{stem}_d{depth}.txt") }))
+    }
+
+    fn create(&self, scene: &Scene) -> Result<Box<dyn super::Integrator>, String> {
+        Ok(Box::new(create(self, scene)?))
+    }
+}
 
 /// What `Integrator "radiancegraph"` (or the thesis's `"graph"`) renders from.
 #[derive(Clone, Debug, Default, PartialEq)]

@@ -202,7 +202,7 @@ impl RadianceGraphIntegrator {
 
 impl RayIntegrator for RadianceGraphIntegrator {
     fn name(&self) -> &'static str {
-        "radiancegraph"
+        super::METHOD.name
     }
 
     fn report(&self) -> Vec<String> {

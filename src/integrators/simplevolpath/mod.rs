@@ -23,12 +23,43 @@ pub use settings::SimpleVolPathSettings;
 
 use super::RayIntegrator;
 use super::common::RayStats;
+use super::registry::{Method, MethodSettings};
 use crate::color::Channels;
 use crate::geometry::Ray;
 use crate::samplers::Sampler;
 use crate::scene::Scene;
 use mixture::Mixture;
 use tracer::DeltaLights;
+
+/// The registry's entry.
+pub const METHOD: Method = Method { name: "simplevolpath", aliases: &[], read };
+
+fn read(e: &nimbus_parser::Entity) -> Result<Box<dyn MethodSettings>, nimbus_parser::Error> {
+    Ok(Box::new(SimpleVolPathSettings::from_entity(e)?))
+}
+
+impl MethodSettings for SimpleVolPathSettings {
+    fn method(&self) -> &'static Method {
+        &METHOD
+    }
+
+    fn clone_box(&self) -> Box<dyn MethodSettings> {
+        Box::new(self.clone())
+    }
+
+    fn as_any(&self) -> &dyn std::any::Any {
+        self
+    }
+
+    fn set_max_depth(&mut self, depth: u32) -> Result<(), String> {
+        self.max_depth = depth;
+        Ok(())
+    }
+
+    fn create(&self, scene: &Scene) -> Result<Box<dyn super::Integrator>, String> {
+        Ok(Box::new(SimpleVolPath::new(self, scene)))
+    }
+}
 
 /// The simplified path tracer, with the densities of one scene.
 pub struct SimpleVolPath {
@@ -47,7 +78,7 @@ impl SimpleVolPath {
 
 impl RayIntegrator for SimpleVolPath {
     fn name(&self) -> &'static str {
-        "simplevolpath"
+        METHOD.name
     }
 
     fn li<C: Channels>(

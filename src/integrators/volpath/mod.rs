@@ -7,10 +7,45 @@ pub use settings::{LightSamplerKind, VolPathSettings};
 
 use super::RayIntegrator;
 use super::common::{NoObserver, PathConfig, RayStats, trace_path};
+use super::registry::{Method, MethodSettings};
 use crate::color::Channels;
 use crate::geometry::Ray;
 use crate::samplers::Sampler;
 use crate::scene::Scene;
+
+/// The registry's entry (`volpathcustom` is the radiance-graph thesis's name for it).
+pub const METHOD: Method = Method { name: "volpath", aliases: &["volpathcustom"], read };
+
+fn read(e: &nimbus_parser::Entity) -> Result<Box<dyn MethodSettings>, nimbus_parser::Error> {
+    Ok(Box::new(VolPathSettings::from_entity(e)?))
+}
+
+impl MethodSettings for VolPathSettings {
+    fn method(&self) -> &'static Method {
+        &METHOD
+    }
+
+    fn clone_box(&self) -> Box<dyn MethodSettings> {
+        Box::new(self.clone())
+    }
+
+    fn as_any(&self) -> &dyn std::any::Any {
+        self
+    }
+
+    fn set_max_depth(&mut self, depth: u32) -> Result<(), String> {
+        self.max_depth = depth;
+        Ok(())
+    }
+
+    fn light_sampler(&self) -> LightSamplerKind {
+        self.light_sampler
+    }
+
+    fn create(&self, _scene: &Scene) -> Result<Box<dyn super::Integrator>, String> {
+        Ok(Box::new(VolPath::new(self)))
+    }
+}
 
 /// The volumetric path tracer.
 pub struct VolPath {
@@ -31,7 +66,7 @@ impl VolPath {
 
 impl RayIntegrator for VolPath {
     fn name(&self) -> &'static str {
-        "volpath"
+        METHOD.name
     }
 
     fn li<C: Channels>(

@@ -131,10 +131,10 @@ fn run_once(path: &Path, opts: &BuildOptions) -> Result<(f64, nimbus::imageio::I
     let t = Instant::now();
     let desc = nimbus::parser::load_file(path).map_err(|e| e.to_string())?;
     let scene = build_scene(&desc, opts).map_err(|e| e.to_string())?;
-    let integrator = scene.integrator.create(&scene)?;
+    let prepared = nimbus::integrators::registry::prepare(&scene)?;
     let r = nimbus::render::render(
         &scene,
-        integrator.as_ref(),
+        prepared.integrator.as_ref(),
         &nimbus::render::RenderOptions { time_budget: None, quiet: true },
     );
     Ok((t.elapsed().as_secs_f64(), r.image, scene.transport.transport.name()))

@@ -152,15 +152,15 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
     }
     let t_built = Instant::now();
     let rss_before_setup = super::memory::rss_bytes();
-    let integrator = match scene.integrator.create(&scene) {
-        Ok(i) => i,
+    // A method's precomputation (guide training, graph building) counts in the budget.
+    let prepared = match nimbus::integrators::registry::prepare(&scene) {
+        Ok(p) => p,
         Err(e) => {
             eprintln!("{}: error: {e}", args.scene.display());
             return Ok(ExitCode::FAILURE);
         }
     };
-    // A method's precomputation (guide training, graph building) counts in the budget.
-    let setup = t_built.elapsed().as_secs_f64();
+    let (integrator, setup) = (&prepared.integrator, prepared.seconds);
     // What a method's precomputed structure cost as the system counts it (its own count
     // misses transient allocations: traced path batches, hash-map growth), when it has one.
     let precomputed = match (integrator.precomputed_bytes(), rss_before_setup, super::memory::peak_rss_bytes()) {
@@ -168,7 +168,7 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
         (own, Some(before), Some(peak)) => (own as u64).max(peak.saturating_sub(before)),
         (own, ..) => own as u64,
     };
-    let time_budget = args.time.map(|t| (t - setup).max(0.0));
+    let time_budget = prepared.remaining(args.time);
     let result = nimbus::render::render(
         &scene,
         integrator.as_ref(),

@@ -126,6 +126,33 @@ pub trait MethodSettings: std::fmt::Debug + Send + Sync + Any {
     fn create(&self, scene: &Scene) -> Result<Box<dyn Integrator>, String>;
 }
 
+/// A method ready to render a scene, and what preparing it took.
+pub struct Prepared {
+    /// The integrator.
+    pub integrator: Box<dyn Integrator>,
+    /// Wall seconds the preparation took (training, building or loading a graph; next to
+    /// nothing for methods that prepare nothing).
+    pub seconds: f64,
+}
+
+impl Prepared {
+    /// What is left of a budget of `total` seconds once preparing is counted in it: every
+    /// command that compares methods at equal time counts preparation this one way (scene
+    /// building, the same for every method, is not counted).
+    pub fn remaining(&self, total: Option<f64>) -> Option<f64> {
+        total.map(|t| (t - self.seconds).max(0.0))
+    }
+}
+
+/// Prepares the scene's method: the pipeline's own timed phase between building the scene
+/// and rendering it (`nimbus render`, `compare`, `bench`; `stress` and `cluster` run
+/// `render`).
+pub fn prepare(scene: &Scene) -> Result<Prepared, String> {
+    let t = std::time::Instant::now();
+    let integrator = scene.integrator.create(scene)?;
+    Ok(Prepared { integrator, seconds: t.elapsed().as_secs_f64() })
+}
+
 /// What nimbus says about a pbrt-v4 integrator it does not have: `Ok(note)` when the scene
 /// renders with the reference instead (the note says why that is the same image),
 /// `Err(reason)` when it is refused (the reason names the nimbus integrator that computes its

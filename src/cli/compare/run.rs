@@ -2,7 +2,6 @@
 
 use nimbus::integrators::REFERENCE;
 use std::path::{Path, PathBuf};
-use std::time::Instant;
 
 use anyhow::{Context, Result};
 use nimbus::imageio::Image;
@@ -220,10 +219,10 @@ pub struct RunSetup<'a> {
 
 /// Builds the scene for the integrator and renders it, measuring the error against the
 /// reference after every pass that ends on a checkpoint's spp and after the last pass. The
-/// clock starts before the scene is built, so building, the integrator's own preprocessing and
-/// rendering are all counted; measuring the error is not.
+/// method's preparation (training, a graph build) and rendering are counted, as `nimbus
+/// render --time` counts them (`registry::Prepared::remaining`); building the scene, the same
+/// for every method, and measuring the error are not.
 pub fn run_integrator(s: &RunSetup<'_>) -> Result<Run> {
-    let t0 = Instant::now();
     let spp = match s.mode {
         Mode::EqualTime => None,
         Mode::EqualSpp => s.spp,
@@ -236,8 +235,8 @@ pub fn run_integrator(s: &RunSetup<'_>) -> Result<Run> {
         ..Default::default()
     };
     let scene = build_scene(s.desc, &opts).map_err(scene_error)?;
-    let integrator = scene.integrator.create(&scene).map_err(anyhow::Error::msg)?;
-    let setup_seconds = t0.elapsed().as_secs_f64();
+    let prepared = nimbus::integrators::registry::prepare(&scene).map_err(anyhow::Error::msg)?;
+    let (integrator, setup_seconds) = (&prepared.integrator, prepared.seconds);
     let (w, h) = film_size(&scene);
     let reference = &s.reference.image;
     anyhow::ensure!(
@@ -260,7 +259,7 @@ pub fn run_integrator(s: &RunSetup<'_>) -> Result<Run> {
     let (budget, max_spp) = match s.mode {
         Mode::EqualTime => {
             let t = s.time.unwrap_or(0.0);
-            (Some((t - setup_seconds).max(0.0)), MAX_CHECKPOINT_SPP)
+            (prepared.remaining(Some(t)), MAX_CHECKPOINT_SPP)
         }
         Mode::EqualSpp => (None, scene.sampler.pixel_samples),
     };

@@ -17,6 +17,7 @@ pub mod materials;
 pub mod math;
 pub mod media;
 pub mod metrics;
+pub mod params;
 pub mod render;
 pub mod samplers;
 pub mod sampling;

@@ -208,7 +208,7 @@ fn rotate_from_to(from: Vec3, to: Vec3) -> Mat3 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::camera::CameraSettings;
+    use crate::camera::settings::CameraSettings;
     use nimbus_parser::transform::look_at;
 
     #[test]
@@ -251,7 +251,7 @@ mod tests {
     #[test]
     fn camera_differentials_are_the_next_pixels_rays() {
         let ortho = CameraSettings {
-            projection: crate::scene::camera::Projection::Orthographic,
+            projection: crate::camera::settings::Projection::Orthographic,
             ..CameraSettings::perspective(0.0)
         };
         let lens = CameraSettings { lens_radius: 0.3, focal_distance: 7.0, ..CameraSettings::perspective(50.0) };
@@ -273,7 +273,7 @@ mod tests {
         // from the film position the direction maps back to.
         for equal_area in [true, false] {
             let sph = CameraSettings {
-                projection: crate::scene::camera::Projection::Spherical { equal_area },
+                projection: crate::camera::settings::Projection::Spherical { equal_area },
                 ..CameraSettings::perspective(0.0)
             };
             let cam = camera(&sph);
@@ -295,7 +295,7 @@ mod tests {
     #[test]
     fn realistic_differentials_are_the_shifted_rays() {
         let settings = CameraSettings {
-            projection: crate::scene::camera::Projection::Realistic(crate::scene::camera::RealisticSettings {
+            projection: crate::camera::settings::Projection::Realistic(crate::camera::settings::RealisticSettings {
                 elements: crate::camera::realistic::tests::DGAUSS.to_vec(),
                 aperture_diameter: 20.0,
                 focus_distance: 3.0,

@@ -4,6 +4,7 @@
 
 mod footprint;
 mod realistic;
+pub mod settings;
 
 use std::sync::Arc;
 
@@ -12,10 +13,10 @@ use glam::{Affine3A, DMat4, Vec2, Vec3};
 pub use footprint::{Differentials, Footprint};
 pub use realistic::RealisticLens;
 
+use crate::camera::settings::{CameraSettings, Projection};
 use crate::geometry::{MotionTransform, Ray};
 use crate::sampling::warp::concentric_disk;
 use crate::sampling::warp::{equal_area_sphere_to_square, equal_area_square_to_sphere};
-use crate::scene::camera::{CameraSettings, Projection};
 
 /// A camera that turns film positions into world-space rays.
 #[derive(Clone, Debug)]

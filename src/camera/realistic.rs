@@ -9,9 +9,9 @@ use std::sync::{Arc, Mutex};
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
+use crate::camera::settings::{Aperture, RealisticSettings};
 use crate::math::{quadratic, refract, sqr};
 use crate::samplers::radical_inverse;
-use crate::scene::camera::{Aperture, RealisticSettings};
 
 /// Film rings over which exit-pupil bounds are found (pbrt-v4's 64).
 const PUPIL_RINGS: usize = 64;

@@ -9,9 +9,9 @@ use std::f64::consts::PI;
 
 use glam::Vec2;
 
+use crate::film::filter_settings::FilterSettings;
 use crate::sampling::distribution::PiecewiseConstant2D;
 use crate::sampling::warp::ONE_MINUS_EPSILON;
-use crate::scene::filter::FilterSettings;
 
 /// A filter offset and its weight.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -12,14 +12,14 @@ use rayon::prelude::*;
 
 use crate::camera::CameraRay;
 use crate::color::{Channels, Rgb};
+use crate::film::settings::FilmKind;
 use crate::geometry::Ray;
 use crate::imageio::Image;
 use crate::integrators::common::RayStats;
 use crate::integrators::{ImageIntegrator, Integrator, PixelValue};
+use crate::samplers::settings::SamplerSettings;
 use crate::samplers::{CameraSample, Sampler, get_camera_sample};
 use crate::scene::Scene;
-use crate::scene::film::FilmKind;
-use crate::scene::sampler::SamplerSettings;
 use crate::scene::transport::Transport;
 use crate::spectra::{CIE_Y_INTEGRAL, N_SPECTRUM_SAMPLES, SampledSpectrum, SampledWavelengths};
 

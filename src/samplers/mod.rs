@@ -16,13 +16,14 @@ mod hash;
 mod independent;
 mod padded_sobol;
 mod pmj02bn;
+pub mod settings;
 mod sobol;
 mod stratified;
 mod zsobol;
 
 use glam::{UVec2, Vec2};
 
-use crate::scene::sampler::{SamplerKind, SamplerSettings};
+use crate::samplers::settings::{SamplerKind, SamplerSettings};
 
 pub use camera_sample::{CameraSample, get_camera_sample};
 pub(crate) use halton::radical_inverse;

@@ -6,8 +6,8 @@ use glam::{UVec2, Vec2};
 
 use super::hash::{permutation_element, pixel_dimension_hash};
 use super::zsobol::{fast_owen_scramble, owen_scramble, sobol_bits};
+use crate::samplers::settings::Randomization;
 use crate::sampling::warp::ONE_MINUS_EPSILON;
-use crate::scene::sampler::Randomization;
 
 /// pbrt-v4's padded Sobol' sampler.
 #[derive(Clone, Debug)]

@@ -4,7 +4,7 @@
 use glam::{UVec2, Vec2};
 
 use super::*;
-use crate::scene::sampler::{Randomization, SamplerKind, SamplerSettings};
+use crate::samplers::settings::{Randomization, SamplerKind, SamplerSettings};
 
 const RESOLUTION: UVec2 = UVec2::new(16, 16);
 
@@ -125,7 +125,7 @@ fn starting_dimension_skips_that_many_values() {
 #[test]
 fn camera_samples_come_in_pbrt_order() {
     use crate::film::filter::Filter;
-    use crate::scene::filter::FilterSettings;
+    use crate::film::filter_settings::FilterSettings;
     let filter = Filter::new(&FilterSettings::Box { radius: [0.5, 0.5] });
     for (name, mut s) in all(16) {
         let pixel = UVec2::new(6, 2);

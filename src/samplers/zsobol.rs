@@ -5,8 +5,8 @@
 use glam::{UVec2, Vec2};
 
 use super::hash::{encode_morton2, mix_bits};
+use crate::samplers::settings::Randomization;
 use crate::sampling::warp::ONE_MINUS_EPSILON;
-use crate::scene::sampler::Randomization;
 
 #[cfg(test)]
 /// Column `j` of the generator matrix of Sobol' dimension 0: the van der Corput sequence

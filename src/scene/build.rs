@@ -12,24 +12,22 @@ use nimbus_parser::{
     AnimatedTransform, ColorSpace, Error, FileLoc, MaterialRef, SceneDescription, ShapeEntity, TextureValue, Warning,
 };
 
-use super::camera::CameraSettings;
-use super::film::{FilmKind, FilmSettings};
-use super::filter::FilterSettings;
 use super::lights::{AreaLightSettings, LightKind as LightSpec, LightSettings};
 use super::materials::{
     ConductorSpec, Eta, HairAbsorptionSpec, MaterialKind, MaterialSettings, Roughness, SubsurfaceCoefficients,
 };
 use super::media::{MediumKind as MediumSpec, MediumSettings};
-use super::sampler::SamplerSettings;
 use super::shapes::{ShapeKind, ShapeSettings};
 use super::spectra::SpectrumResolver;
 use super::textures::{Mapping, TexInput, TextureKind, TextureSettings};
 use super::transport::{SpectralMode, Transport, TransportChoice};
-use super::values::{FloatInput, SpectrumInput, SpectrumSpec};
 use crate::accel::{Accel, Geometry, Instance, NONE, Primitive, ShapeStore, Surfaces};
+use crate::camera::settings::CameraSettings;
 use crate::camera::{Camera, Differentials};
 use crate::color::{Rgb, pack_voxel};
 use crate::film::filter::Filter;
+use crate::film::filter_settings::FilterSettings;
+use crate::film::settings::{FilmKind, FilmSettings};
 use crate::geometry::ply::read_ply;
 use crate::geometry::{Bounds3, MotionTransform};
 use crate::integrators::IntegratorSettings;
@@ -40,8 +38,11 @@ use crate::math::Frame;
 use crate::media::dense::DenseGrid;
 use crate::media::grid::VdbFile;
 use crate::media::{Density, Emission, Field, Medium};
+use crate::params::FloatInput;
+use crate::samplers::settings::SamplerSettings;
 use crate::shapes::{BilinearMesh, Curve, CurveCommon, Cylinder, Disk, Mesh, Sphere, uniform_scale};
 use crate::spectra::RgbRole;
+use crate::spectra::spec::{SpectrumInput, SpectrumSpec};
 use crate::spectra::{BlackbodyRgbTable, PixelSensor, SpectrumValue};
 use crate::textures::{
     MipFilter, MipMap, PtexEncoding, PtexTexture, Tex, TexContext, TexMapping, TexNode, Textures, Wrap,
@@ -1371,8 +1372,8 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions) -> Result<Scene
     } else if opts.quick {
         sampler.pixel_samples = (sampler.pixel_samples / 4).max(1);
     }
-    if sampler.kind == crate::scene::sampler::SamplerKind::Pmj02bn {
-        crate::scene::sampler::check_pmj02bn_samples(sampler.pixel_samples, &desc.sampler.loc)?;
+    if sampler.kind == crate::samplers::settings::SamplerKind::Pmj02bn {
+        crate::samplers::settings::check_pmj02bn_samples(sampler.pixel_samples, &desc.sampler.loc)?;
     }
     if let Some(seed) = opts.seed {
         sampler.seed = seed;

@@ -5,17 +5,17 @@ use std::collections::BTreeMap;
 
 use nimbus_parser::{Entity, Error, ParameterDictionary, SceneDescription, ShapeEntity, Warning};
 
-use super::camera::{CameraSettings, Projection};
-use super::film::FilmSettings;
-use super::filter::FilterSettings;
 use super::lights::{AreaLightSettings, LightSettings};
 use super::materials::MaterialSettings;
 use super::media::MediumSettings;
-use super::sampler::SamplerSettings;
 use super::shapes::{ShapeKind, ShapeSettings};
 use super::textures::TextureSettings;
+use crate::camera::settings::{CameraSettings, Projection};
+use crate::film::filter_settings::FilterSettings;
+use crate::film::settings::FilmSettings;
 use crate::geometry::ply::read_ply;
 use crate::integrators::IntegratorSettings;
+use crate::samplers::settings::SamplerSettings;
 
 /// What `nimbus check` found.
 #[derive(Clone, Debug, PartialEq)]

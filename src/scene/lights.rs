@@ -7,7 +7,8 @@ use std::path::PathBuf;
 use nimbus_parser::loc_shown as shown;
 use nimbus_parser::{Entity, Error, LightEntity};
 
-use super::values::{SpectrumSpec, checked_float, spectrum};
+use crate::params::checked_float;
+use crate::spectra::spec::{SpectrumSpec, spectrum};
 
 /// What a light is.
 #[derive(Clone, Debug, PartialEq)]

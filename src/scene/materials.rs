@@ -3,9 +3,8 @@
 
 use nimbus_parser::{Entity, Error, Warning};
 
-use super::values::{
-    FloatInput, SpectrumInput, SpectrumSpec, checked_float, checked_int, float_input, spectrum, spectrum_input,
-};
+use crate::params::{FloatInput, checked_float, checked_int, float_input};
+use crate::spectra::spec::{SpectrumInput, SpectrumSpec, spectrum, spectrum_input};
 
 /// Microfacet roughness along u and v, possibly textured.
 #[derive(Clone, Debug, PartialEq)]

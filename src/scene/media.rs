@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use nimbus_parser::loc_shown as shown;
 use nimbus_parser::{Error, MediumEntity, ParameterDictionary};
 
-use super::values::{SpectrumSpec, spectrum};
+use crate::spectra::spec::{SpectrumSpec, spectrum};
 
 /// Measured scattering coefficients pbrt-v4 knows by name (`"string preset"`), in mm⁻¹:
 /// (name, σ′s, σa). From Jensen et al. 2001, "A Practical Model for Subsurface Light

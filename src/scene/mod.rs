@@ -2,17 +2,12 @@
 //! parameters with pbrt-v4's names and defaults, validates them, and leaves unknown ones to
 //! be reported; rendering builds on these settings.
 
-pub mod camera;
-pub mod film;
-pub mod filter;
 pub mod lights;
 pub mod materials;
 pub mod media;
-pub mod sampler;
 pub mod shapes;
 pub mod textures;
 pub mod transport;
-pub mod values;
 
 mod build;
 mod check;

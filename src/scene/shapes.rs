@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use nimbus_parser::loc_shown as shown;
 use nimbus_parser::{Error, FileLoc, ShapeEntity};
 
-use super::values::{FloatInput, checked_float, checked_int, float_input};
+use crate::params::{FloatInput, checked_float, checked_int, float_input};
 use crate::shapes::{CurveType, cubic_bspline_to_bezier, elevate_quadratic, quadratic_bspline_to_bezier};
 use glam::Vec3;
 

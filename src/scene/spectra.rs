@@ -8,8 +8,8 @@
 use nimbus_parser::ColorSpace;
 
 use super::materials::Eta;
-use super::values::SpectrumSpec;
 use crate::color::Rgb;
+use crate::spectra::spec::SpectrumSpec;
 use crate::spectra::{
     CIE_Y_INTEGRAL, DenseSpectrum, PixelSensor, ResolvedSpectrum, RgbRole, Sampled, SpectrumError, SpectrumValue,
     conductor_rgb, dielectric_eta, fit_sigmoid, illuminant_rgb, illuminant_table, reflectance_rgb, resolve,

@@ -6,7 +6,8 @@ use std::path::PathBuf;
 use nimbus_parser::loc_shown as shown;
 use nimbus_parser::{Error, TextureEntity, TextureValue};
 
-use super::values::{FloatInput, SpectrumInput, SpectrumSpec, float_input, spectrum_input};
+use crate::params::{FloatInput, float_input};
+use crate::spectra::spec::{SpectrumInput, SpectrumSpec, spectrum_input};
 
 /// How surface points map to texture coordinates.
 #[derive(Clone, Debug, PartialEq)]

@@ -18,7 +18,7 @@ use super::colorspace::{convert_reflectance_rgb, rgb_color_space};
 use super::convert::spectrum_reflectance_rgb;
 use super::spectrum::{ResolvedSpectrum, Spectrum, resolve};
 use crate::color::Rgb;
-use crate::scene::values::SpectrumSpec;
+use crate::spectra::spec::SpectrumSpec;
 
 /// A complex number, just enough for the Fresnel equations.
 #[derive(Clone, Copy, Debug)]

@@ -13,7 +13,7 @@ use super::cie::{CIE_Y_INTEGRAL, integrate_xyz, integrate_y};
 use super::colorspace::{convert_reflectance_rgb, convert_rgb, rgb_color_space};
 use super::spectrum::{ResolvedSpectrum, Spectrum, resolve};
 use crate::color::Rgb;
-use crate::scene::values::SpectrumSpec;
+use crate::spectra::spec::SpectrumSpec;
 
 /// RGB of a reflectance, albedo or other unbounded quantity (σa, σs, …) for a film in
 /// `film`: the spectrum as seen under `film`'s illuminant, normalised so a constant

@@ -20,6 +20,7 @@ mod piecewise;
 mod sampled;
 mod sensor;
 mod sigmoid;
+pub mod spec;
 mod spectrum;
 mod value;
 

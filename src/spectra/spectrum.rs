@@ -8,7 +8,7 @@ use super::cie::integrate_xyz;
 use super::named::named_spectrum;
 use super::{PiecewiseLinearSpectrum, SpectrumError};
 use crate::color::Rgb;
-use crate::scene::values::SpectrumSpec;
+use crate::spectra::spec::SpectrumSpec;
 
 /// A spectral distribution: value as a function of wavelength in nm.
 #[derive(Clone, Debug, PartialEq)]

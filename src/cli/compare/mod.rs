@@ -145,7 +145,7 @@ pub fn run(args: &CompareArgs) -> Result<ExitCode> {
     let seed = match args.seed {
         Some(s) => s,
         None => {
-            nimbus::scene::sampler::SamplerSettings::from_entity(&desc.sampler, desc.options.seed, &mut Vec::new())
+            nimbus::samplers::settings::SamplerSettings::from_entity(&desc.sampler, desc.options.seed, &mut Vec::new())
                 .map_err(|e| anyhow::anyhow!("{e}"))?
                 .seed
         }

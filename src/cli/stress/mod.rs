@@ -158,7 +158,7 @@ pub fn run(args: &StressArgs) -> Result<ExitCode> {
         let stem = super::compare::scene_stem(path);
         let desc = nimbus::parser::load_file(path).map_err(|e| anyhow::anyhow!("{e}"))?;
         let spp =
-            nimbus::scene::sampler::SamplerSettings::from_entity(&desc.sampler, desc.options.seed, &mut Vec::new())
+            nimbus::samplers::settings::SamplerSettings::from_entity(&desc.sampler, desc.options.seed, &mut Vec::new())
                 .map_err(|e| anyhow::anyhow!("{e}"))?
                 .pixel_samples;
         say(format!("{stem}: {}", description(path)));

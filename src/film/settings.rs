@@ -2,7 +2,7 @@
 
 use nimbus_parser::{ColorSpace, Entity, Error};
 
-use super::values::checked_float;
+use crate::params::checked_float;
 
 /// Which film: pbrt-v4's `rgb`, or `gbuffer` (the same image plus the first visible
 /// surface's albedo, position, normals, uv, depth derivatives and the samples' variance).

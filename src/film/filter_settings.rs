@@ -2,7 +2,7 @@
 
 use nimbus_parser::{Entity, Error};
 
-use super::values::checked_float;
+use crate::params::checked_float;
 
 /// A pixel reconstruction filter.
 #[derive(Clone, Debug, PartialEq)]

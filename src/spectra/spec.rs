@@ -1,11 +1,11 @@
-//! Parameter values as entities use them: spectra given inline or by name, and inputs that
-//! may be a constant or a named texture.
+//! Spectrum parameters as entities give them: inline, by name or from a file, or a named
+//! spectrum texture; checked, not yet converted to the film's color space.
 
 use std::path::PathBuf;
 
-use nimbus_parser::{Error, FloatOrTexture, ParameterDictionary, SpectrumOrTexture, SpectrumParam, SpectrumValue};
+use nimbus_parser::{Error, ParameterDictionary, SpectrumOrTexture, SpectrumParam, SpectrumValue};
 
-use crate::spectra::is_named_spectrum;
+use super::is_named_spectrum;
 
 /// A spectrum as the scene gives it, checked but not yet converted to the film's color space.
 #[derive(Clone, Debug, PartialEq)]
@@ -65,15 +65,6 @@ impl SpectrumSpec {
     }
 }
 
-/// A float that may come from a texture.
-#[derive(Clone, Debug, PartialEq)]
-pub enum FloatInput {
-    /// A constant.
-    Value(f32),
-    /// The named float texture.
-    Texture(String),
-}
-
 /// A spectrum that may come from a texture.
 #[derive(Clone, Debug, PartialEq)]
 pub enum SpectrumInput {
@@ -88,14 +79,6 @@ pub fn spectrum(params: &ParameterDictionary, name: &str) -> Result<Option<Spect
     params.get_one_spectrum(name)?.map(|p| SpectrumSpec::from_param(p, name)).transpose()
 }
 
-/// Reads an optional float-or-texture parameter.
-pub fn float_input(params: &ParameterDictionary, name: &str) -> Result<Option<FloatInput>, Error> {
-    Ok(params.get_float_or_texture(name)?.map(|f| match f {
-        FloatOrTexture::Value(v) => FloatInput::Value(v),
-        FloatOrTexture::Texture(t, _) => FloatInput::Texture(t.to_string()),
-    }))
-}
-
 /// Reads an optional spectrum-or-texture parameter.
 pub fn spectrum_input(params: &ParameterDictionary, name: &str) -> Result<Option<SpectrumInput>, Error> {
     params
@@ -105,36 +88,4 @@ pub fn spectrum_input(params: &ParameterDictionary, name: &str) -> Result<Option
             SpectrumOrTexture::Texture(t, _) => Ok(SpectrumInput::Texture(t.to_string())),
         })
         .transpose()
-}
-
-/// A float parameter that must satisfy `ok`, reported with `what` otherwise.
-pub fn checked_float(
-    params: &ParameterDictionary,
-    name: &str,
-    default: f32,
-    ok: impl Fn(f32) -> bool,
-    what: &str,
-) -> Result<f32, Error> {
-    let v = params.get_one_float(name, default)?;
-    if !ok(v) {
-        let loc = params.loc(name).cloned();
-        return Err(Error { loc, message: format!("\"{name}\" = {v}: {what}") });
-    }
-    Ok(v)
-}
-
-/// An integer parameter that must satisfy `ok`.
-pub fn checked_int(
-    params: &ParameterDictionary,
-    name: &str,
-    default: i32,
-    ok: impl Fn(i32) -> bool,
-    what: &str,
-) -> Result<i32, Error> {
-    let v = params.get_one_int(name, default)?;
-    if !ok(v) {
-        let loc = params.loc(name).cloned();
-        return Err(Error { loc, message: format!("\"{name}\" = {v}: {what}") });
-    }
-    Ok(v)
 }

@@ -2,7 +2,7 @@
 
 use nimbus_parser::{Entity, Error, Warning};
 
-use super::values::checked_int;
+use crate::params::checked_int;
 
 /// Which sample generator to use.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use nimbus_parser::loc_shown as shown;
 use nimbus_parser::{CameraEntity, Error, FileLoc, Warning};
 
-use super::values::checked_float;
+use crate::params::checked_float;
 
 /// The kind of projection.
 #[derive(Clone, Debug, PartialEq)]

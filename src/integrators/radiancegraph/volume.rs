@@ -9,7 +9,7 @@ use glam::Vec3;
 use crate::accel::NONE;
 use crate::color::Rgb;
 use crate::geometry::{Bounds3, Ray};
-use crate::integrators::common::media::sample_t_maj;
+use crate::integrators::common::media::{ShadowEstimate, ratio_tracking, sample_t_maj};
 use crate::lights::LightKind;
 use crate::media::Medium;
 use crate::sampling::rng::Pcg32;
@@ -242,26 +242,15 @@ impl<'a> Volume<'a> {
     }
 
     /// Transmittance along `ray` to distance `t_max` inside the medium, one ratio-tracking
-    /// estimate (thesis Eq. 4.22 averages these).
+    /// estimate (thesis Eq. 4.22 averages these): the shadow rays' own ratio tracking, with
+    /// no unidirectional technique to weigh against (r_u = 0), so the estimate is T_ray / r_l
+    /// and r_l is 1 in a gray medium. Its Russian roulette below 0.05 is nimbus's (and
+    /// pbrt-v4's): unbiased, and walks deep into a dense cloud stop early instead of
+    /// multiplying ever smaller ratios to the far side. The thesis tracks to the end.
     pub fn transmittance(&self, ray: &Ray, t_max: f32, rng: &mut Pcg32) -> f32 {
-        let mut tr = 1.0;
-        let u = rng.uniform();
-        sample_t_maj::<Rgb, _>(self.medium, ray, t_max, u, rng, 0, &(), |_, mp, sigma_maj, _, rng| {
-            let sigma_n = (sigma_maj[0] - mp.sigma_a[0] - mp.sigma_s[0]).max(0.0);
-            tr *= sigma_n / sigma_maj[0];
-            // Russian roulette once the estimate is small (as nimbus's shadow rays, and pbrt-v4's):
-            // unbiased, and walks deep into a dense cloud stop early instead of multiplying
-            // ever smaller ratios to the far side. The thesis tracks to the end.
-            if tr < 0.05 {
-                if rng.uniform() < 0.75 {
-                    tr = 0.0;
-                } else {
-                    tr /= 0.25;
-                }
-            }
-            tr > 0.0
-        });
-        tr
+        let mut est = ShadowEstimate::<Rgb> { t_ray: Rgb::ONE, r_u: Rgb::ZERO, r_l: Rgb::ONE };
+        ratio_tracking(self.medium, ray, t_max, rng, 0, &(), &mut est);
+        est.t_ray[0] / est.r_l[0]
     }
 }
 

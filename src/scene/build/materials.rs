@@ -235,3 +235,49 @@ pub(super) fn material(
     };
     Ok(BuiltMaterial { material, shading, subsurface })
 }
+
+/// The scene's materials: anonymous ones by index, then named ones, with their shading
+/// perturbations (bump, normal maps) and the media of subsurface materials.
+pub(super) struct Materials {
+    pub(super) materials: Vec<Material>,
+    pub(super) shading: Vec<ShadingPerturbation>,
+    pub(super) subsurface: Vec<Option<SubsurfaceMedium>>,
+    pub(super) named: HashMap<String, u32>,
+}
+
+/// Builds every material of `desc` and resolves its mixes; a subsurface material inside a
+/// mix is refused.
+pub(super) fn build_materials(
+    desc: &SceneDescription,
+    tb: &TextureBuilder<'_>,
+    warnings: &mut Vec<Warning>,
+) -> Result<Materials, Error> {
+    let mut materials = Vec::with_capacity(desc.materials.len() + desc.named_materials.len());
+    let mut shading = Vec::with_capacity(materials.capacity());
+    let mut subsurface = Vec::with_capacity(materials.capacity());
+    let mut named = HashMap::new();
+    let entities =
+        desc.materials.iter().map(|m| (None, m)).chain(desc.named_materials.iter().map(|m| (Some(&m.name), &m.entity)));
+    let measured = MeasuredCache::default();
+    for (name, e) in entities {
+        if let Some(name) = name {
+            named.insert(name.clone(), materials.len() as u32);
+        }
+        let built = material(e, tb, &measured, warnings)?;
+        materials.push(built.material);
+        shading.push(built.shading);
+        subsurface.push(built.subsurface);
+    }
+    resolve_mixes(desc, &mut materials, &named)?;
+    for m in &materials {
+        if let Material::Mix { materials: pair, .. } = m
+            && let Some(part) = pair.iter().find_map(|&i| subsurface[i as usize].as_ref())
+        {
+            return Err(err(
+                &part.loc,
+                "a subsurface material cannot be part of a mix in nimbus (its medium boundary belongs to the shape)",
+            ));
+        }
+    }
+    Ok(Materials { materials, shading, subsurface, named })
+}

@@ -134,3 +134,45 @@ pub(super) fn build_medium(
         }
     })
 }
+
+/// The scene's media, the named ones' indices, and each material's subsurface medium (or
+/// `NONE`).
+pub(super) struct Media {
+    pub(super) media: Vec<Medium>,
+    pub(super) ids: HashMap<String, u32>,
+    pub(super) subsurface: Vec<u32>,
+}
+
+/// Builds the media the camera, lights or boundary surfaces use (`used`), then one medium per
+/// subsurface material (shapes sharing the material share it).
+pub(super) fn build_media(
+    desc: &SceneDescription,
+    used: &std::collections::HashSet<&str>,
+    spectra: &SpectrumResolver<'_>,
+    transport: Transport,
+    subsurface: &[Option<SubsurfaceMedium>],
+) -> Result<Media, Error> {
+    let mut media = Vec::new();
+    let mut media_ids: HashMap<String, u32> = HashMap::new();
+    for m in &desc.media {
+        let settings = MediumSettings::from_entity(m)?;
+        if used.contains(m.name.as_str()) {
+            media_ids.insert(m.name.clone(), media.len() as u32);
+            media.push(build_medium(m, &settings, spectra, transport)?);
+        }
+    }
+    // A subsurface material's medium, one per material (shapes sharing it share it).
+    let subsurface_media: Vec<u32> = subsurface
+        .iter()
+        .enumerate()
+        .map(|(i, m)| match m {
+            Some(m) => {
+                let name = format!("subsurface material {i}");
+                media.push(Medium::homogeneous(name, m.sigma_a, m.sigma_s, SpectrumValue::ZERO, m.g));
+                media.len() as u32 - 1
+            }
+            None => NONE,
+        })
+        .collect();
+    Ok(Media { media, ids: media_ids, subsurface: subsurface_media })
+}

@@ -222,3 +222,85 @@ pub(super) fn push_pieces(
         prims.push(Primitive { geometry, material, area_light: NONE, interface, alpha });
     }
 }
+
+/// The scene's surfaces placed: the top-level BVH over shapes and instances, the BVHs of
+/// moving shapes and object definitions, and the instances that place them.
+pub(super) struct Placed {
+    pub(super) top: Option<Accel>,
+    pub(super) blas: Vec<Accel>,
+    pub(super) instances: Vec<Instance>,
+    pub(super) primitives: usize,
+}
+
+impl ShapeBuilder<'_> {
+    /// Builds every shape, object definition and instance of `desc`: fixed shapes into the
+    /// top level, each moving shape as a BVH of its own placed by its motion at each ray's
+    /// time (pbrt-v4's AnimatedPrimitive), each object definition once.
+    pub(super) fn place_all(&mut self, desc: &SceneDescription) -> Result<Placed, Error> {
+        let mut prims = Vec::new();
+        let mut bounds = Vec::new();
+        let mut blas = Vec::new();
+        let mut instances = Vec::new();
+        for shape in &desc.shapes {
+            let t = &shape.world_from_object;
+            if !t.is_animated() {
+                self.add(
+                    shape,
+                    &desc.area_lights,
+                    false,
+                    affine(&t.start, &shape.entity.loc)?,
+                    &mut prims,
+                    &mut bounds,
+                )?;
+                continue;
+            }
+            // A moving shape: built in its own space as a BVH of its own, placed by its motion at
+            // each ray's time (pbrt-v4's AnimatedPrimitive).
+            if shape.area_light.is_some() {
+                return Err(err(&shape.entity.loc, "animated area lights are not supported (nor are they by pbrt-v4)"));
+            }
+            let motion = motion_transform(t, &shape.entity.loc)?;
+            let (mut p, mut b) = (Vec::new(), Vec::new());
+            self.add(shape, &desc.area_lights, false, Affine3A::IDENTITY, &mut p, &mut b)?;
+            if let Some(accel) = Accel::build(p, &b) {
+                bounds.push(motion.bounds(&accel.bounds()));
+                blas.push(accel);
+                instances.push(Instance::moving(blas.len() as u32 - 1, motion));
+                prims.push(Primitive::instance(instances.len() as u32 - 1));
+            }
+        }
+        let mut blas_of: HashMap<&str, Option<u32>> = HashMap::new();
+        for def in &desc.instance_definitions {
+            let mut p = Vec::new();
+            let mut b = Vec::new();
+            for shape in &def.shapes {
+                let world = fixed_transform(&shape.world_from_object, &shape.entity.loc, "a shape inside ObjectBegin")?;
+                self.add(shape, &desc.area_lights, true, world, &mut p, &mut b)?;
+            }
+            let accel = Accel::build(p, &b);
+            blas_of.insert(def.name.as_str(), accel.as_ref().map(|_| blas.len() as u32));
+            if let Some(a) = accel {
+                blas.push(a);
+            }
+        }
+        for u in &desc.instances {
+            let Some(Some(accel)) = blas_of.get(u.name.as_str()).copied() else {
+                continue;
+            };
+            let object_bounds = blas[accel as usize].bounds();
+            let t = &u.world_from_instance;
+            if t.is_animated() {
+                let motion = motion_transform(t, &u.loc)?;
+                bounds.push(motion.bounds(&object_bounds));
+                instances.push(Instance::moving(accel, motion));
+            } else {
+                let world = affine(&t.start, &u.loc)?;
+                bounds.push(object_bounds.transformed(&world));
+                instances.push(Instance::fixed(accel, world));
+            }
+            prims.push(Primitive::instance(instances.len() as u32 - 1));
+        }
+        let primitives = prims.len();
+        Ok(Placed { top: Accel::build(prims, &bounds), blas, instances, primitives })
+    }
+}

@@ -4,6 +4,7 @@
 pub mod media;
 pub mod observer;
 pub mod path;
+mod shadow;
 
 pub use observer::{EmissionEvent, GuidedSample, NeeEvent, NoObserver, PathObserver, VertexEvent};
 pub use path::{PathConfig, medium_after, shading_frame, trace_path};

@@ -10,12 +10,13 @@
 use glam::{Vec2, Vec3};
 
 use super::RayStats;
-use super::media::{ShadowEstimate, line_transmittance, ratio_tracking, sample_t_maj};
+use super::media::{ShadowEstimate, line_transmittance, sample_t_maj};
 use super::observer::{EmissionEvent, NeeEvent, NoObserver, PathObserver, VertexEvent};
+use super::shadow::transmittance;
 use crate::accel::{Hit, NONE};
 use crate::color::Channels;
-use crate::geometry::{Ray, offset_origin_by};
-use crate::lights::{LightContext, LightSample};
+use crate::geometry::Ray;
+use crate::lights::LightContext;
 use crate::materials::bxdf::{Bxdf, ReflTransFlags, TransportMode};
 use crate::math::Frame;
 use crate::media::phase::HenyeyGreenstein;
@@ -752,53 +753,4 @@ fn sample_direct<C: Channels, O: PathObserver<C>>(
         contribution,
     });
     Some(contribution)
-}
-
-/// Transmittance from `p` to the light sample, with the rescaled probabilities of the
-/// segments through media, or `None` when something opaque is in the way.
-#[allow(clippy::too_many_arguments)]
-fn transmittance<C: Channels>(
-    scene: &Scene,
-    p: Vec3,
-    (n, p_error): (Vec3, f32),
-    mut medium: u32,
-    ls: &LightSample<C>,
-    (hero, time): (usize, f32),
-    lambda: &C::Lambda,
-    stats: &mut RayStats,
-) -> Option<ShadowEstimate<C>> {
-    let mut est = ShadowEstimate::default();
-    let origin = if n == Vec3::ZERO { p } else { offset_origin_by(p, n, ls.wi, p_error) };
-    let mut ray = Ray::timed(origin, ls.wi, time);
-    // Distance left to the light point; the light's own surface is not an occluder.
-    let mut remaining = if ls.infinite { f32::INFINITY } else { (ls.p - origin).length() * (1.0 - 1e-4) };
-    if medium == NONE && !scene.has_interfaces {
-        stats.shadow += 1;
-        return (!scene.surfaces.occluded(&ray, remaining)).then_some(est);
-    }
-    let mut rng = Pcg32::new(crate::sampling::rng::hash_vec3(ray.o), crate::sampling::rng::hash_vec3(ray.d));
-    loop {
-        stats.shadow += 1;
-        let hit = scene.surfaces.intersect(&ray, remaining);
-        if let Some(h) = &hit
-            && !scene.materials[h.prim.material as usize].is_interface()
-        {
-            return None;
-        }
-        if medium != NONE {
-            let t_max = hit.as_ref().map_or(remaining, |h| h.surface.t);
-            ratio_tracking(&scene.media[medium as usize], &ray, t_max, &mut rng, hero, lambda, &mut est);
-            if est.t_ray.is_zero() {
-                return None;
-            }
-        }
-        let Some(h) = hit else { return Some(est) };
-        medium = medium_after(scene, &h, ray.d, medium);
-        let travelled = h.surface.t;
-        ray = h.spawn_ray(ray.d);
-        remaining -= travelled;
-        if remaining <= 0.0 {
-            return Some(est);
-        }
-    }
 }

@@ -6,7 +6,9 @@ pub mod observer;
 pub mod path;
 mod shadow;
 
-pub use observer::{EmissionEvent, GuidedSample, NeeEvent, NoObserver, PathObserver, VertexEvent};
+pub use observer::{
+    EmissionEvent, GuidedSample, NeeEvent, NoObserver, PathObserver, PathRecorder, PathStrategy, VertexEvent,
+};
 pub use path::{PathConfig, medium_after, shading_frame, trace_path};
 
 /// Rays traced, for `--stats`.

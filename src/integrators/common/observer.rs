@@ -81,14 +81,15 @@ pub struct GuidedSample {
     /// technique (for resampling, p·W/q: Deng et al. 2020, Eq. 5). β is multiplied by it.
     pub weight: f32,
     /// The density that MIS with light sampling uses for `wi` (the same function as
-    /// [`PathObserver::guide_medium_pdf`]).
+    /// [`PathStrategy::guide_medium_pdf`]).
     pub pdf: f32,
 }
 
-/// Receives the path loop's events, in the channels the path carries (RGB or the path's
-/// sampled wavelengths), and may guide its scattering in media.
-pub trait PathObserver<C: Channels> {
-    /// Whether this observer guides scattering in media ([`PathObserver::guide_medium`]).
+/// How a method steers the path loop (strategy hooks): guiding scattering in media, the
+/// probability of next-event estimation there, splitting. Each default leaves the loop as
+/// volpath runs it.
+pub trait PathStrategy {
+    /// Whether this observer guides scattering in media ([`PathStrategy::guide_medium`]).
     /// The loop draws the guide's random number only then, so observers that do not guide
     /// leave the sampler's dimensions, hence volpath's images, unchanged.
     #[inline]
@@ -110,14 +111,14 @@ pub trait PathObserver<C: Channels> {
     ) -> Option<GuidedSample> {
         None
     }
-    /// The MIS density of direction `wi` under [`PathObserver::guide_medium`] at the same
+    /// The MIS density of direction `wi` under [`PathStrategy::guide_medium`] at the same
     /// vertex, or `None` where it would not guide (the phase density applies).
     #[inline]
     fn guide_medium_pdf(&self, _medium: u32, _p: Vec3, _wo: Vec3, _phase: &HenyeyGreenstein, _wi: Vec3) -> Option<f32> {
         None
     }
     /// The probability of next-event estimation at a real scattering event at `p` in
-    /// `medium` (1: always). Asked only where [`PathObserver::guides`].
+    /// `medium` (1: always). Asked only where [`PathStrategy::guides`].
     #[inline]
     fn nee_medium_probability(&self, _medium: u32, _p: Vec3) -> f32 {
         1.0
@@ -125,11 +126,16 @@ pub trait PathObserver<C: Channels> {
     /// Splitting at a real scattering event at `p` in `medium`, before its continuation is
     /// drawn, for a path whose throughput is `beta` (β over the mean of r_u): how many
     /// independent continuations the path takes, each with β divided by their number (1:
-    /// the path goes on as it is). Asked only where [`PathObserver::guides`].
+    /// the path goes on as it is). Asked only where [`PathStrategy::guides`].
     #[inline]
     fn split_medium(&mut self, _medium: u32, _p: Vec3, _beta: f32) -> u32 {
         1
     }
+}
+
+/// What a method learns from the path loop as it happens (observing hooks: they change
+/// nothing), in the channels the path carries (RGB or the path's sampled wavelengths).
+pub trait PathRecorder<C: Channels> {
     /// A scattering vertex was sampled.
     #[inline]
     fn on_vertex(&mut self, _v: &VertexEvent<C>) {}
@@ -145,8 +151,16 @@ pub trait PathObserver<C: Channels> {
     fn on_extra_direct(&mut self, _depth: u32, _contribution: C) {}
 }
 
+/// A method's view of the path loop: what it records and how it steers. Implement
+/// [`PathRecorder`] and [`PathStrategy`] (either may be empty); this follows.
+pub trait PathObserver<C: Channels>: PathRecorder<C> + PathStrategy {}
+
+impl<C: Channels, T: PathRecorder<C> + PathStrategy> PathObserver<C> for T {}
+
 /// The observer that records nothing.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct NoObserver;
 
-impl<C: Channels> PathObserver<C> for NoObserver {}
+impl PathStrategy for NoObserver {}
+
+impl<C: Channels> PathRecorder<C> for NoObserver {}

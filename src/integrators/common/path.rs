@@ -135,7 +135,7 @@ struct PathState<C: Channels> {
 }
 
 /// A path copy left waiting after splitting at a medium vertex
-/// ([`PathObserver::split_medium`]): the loop's state after that vertex, continuing along
+/// ([`super::PathStrategy::split_medium`]): the loop's state after that vertex, continuing along
 /// `ray`.
 #[derive(Clone, Copy)]
 struct Branch<C: Channels> {

@@ -22,7 +22,7 @@ use glam::{Vec2, Vec3};
 use std::path::Path;
 
 use super::RayIntegrator;
-use super::common::{GuidedSample, PathConfig, PathObserver, RayStats, trace_path};
+use super::common::{GuidedSample, PathConfig, PathRecorder, PathStrategy, RayStats, trace_path};
 use super::registry::{Method, MethodInputs, MethodSettings, Precompute};
 use crate::color::Channels;
 use crate::geometry::Ray;
@@ -151,7 +151,9 @@ struct GuidingObserver<'a> {
     reference: Option<f32>,
 }
 
-impl<C: Channels> PathObserver<C> for GuidingObserver<'_> {
+impl<C: Channels> PathRecorder<C> for GuidingObserver<'_> {}
+
+impl PathStrategy for GuidingObserver<'_> {
     /// Only where a medium is guided: otherwise the path is volpath's, sample for sample.
     #[inline]
     fn guides(&self) -> bool {

@@ -22,7 +22,7 @@ use rayon::prelude::*;
 
 use crate::accel::NONE;
 use crate::color::{Channels, Rgb};
-use crate::integrators::common::{EmissionEvent, NeeEvent, PathObserver, VertexEvent};
+use crate::integrators::common::{EmissionEvent, NeeEvent, PathRecorder, PathStrategy, VertexEvent};
 
 /// Graph vertices, struct of arrays.
 #[derive(Debug, Default)]
@@ -290,7 +290,9 @@ impl<C: Channels> Default for Recorder<C> {
     }
 }
 
-impl<C: Channels> PathObserver<C> for Recorder<C> {
+impl<C: Channels> PathStrategy for Recorder<C> {}
+
+impl<C: Channels> PathRecorder<C> for Recorder<C> {
     #[inline]
     fn on_vertex(&mut self, v: &VertexEvent<C>) {
         self.vertices.push(*v);

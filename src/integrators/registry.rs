@@ -86,17 +86,30 @@ pub enum Precompute {
     },
 }
 
-/// A method's settings, read from the scene's `Integrator` entity: what the rest of nimbus
-/// may ask a method before and while it prepares to render.
-pub trait MethodSettings: std::fmt::Debug + Send + Sync + Any {
-    /// The method's entry in [`METHODS`].
-    fn method(&self) -> &'static Method;
-
+/// Copying and downcasting boxed settings, for every settings type that is `Clone`.
+pub trait SettingsBox {
     /// A copy.
     fn clone_box(&self) -> Box<dyn MethodSettings>;
 
     /// For downcasting to the method's own settings type.
     fn as_any(&self) -> &dyn Any;
+}
+
+impl<T: MethodSettings + Clone> SettingsBox for T {
+    fn clone_box(&self) -> Box<dyn MethodSettings> {
+        Box::new(self.clone())
+    }
+
+    fn as_any(&self) -> &dyn Any {
+        self
+    }
+}
+
+/// A method's settings, read from the scene's `Integrator` entity: what the rest of nimbus
+/// may ask a method before and while it prepares to render.
+pub trait MethodSettings: SettingsBox + std::fmt::Debug + Send + Sync + Any {
+    /// The method's entry in [`METHODS`].
+    fn method(&self) -> &'static Method;
 
     /// Sets the longest path (`--maxdepth`); methods without one say so.
     fn set_max_depth(&mut self, depth: u32) -> Result<(), String>;

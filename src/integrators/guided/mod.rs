@@ -44,14 +44,6 @@ impl MethodSettings for GuidedSettings {
         &METHOD
     }
 
-    fn clone_box(&self) -> Box<dyn MethodSettings> {
-        Box::new(self.clone())
-    }
-
-    fn as_any(&self) -> &dyn std::any::Any {
-        self
-    }
-
     fn set_max_depth(&mut self, depth: u32) -> Result<(), String> {
         self.max_depth = depth;
         Ok(())

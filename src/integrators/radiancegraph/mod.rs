@@ -39,14 +39,6 @@ impl MethodSettings for RadianceGraphSettings {
         &METHOD
     }
 
-    fn clone_box(&self) -> Box<dyn MethodSettings> {
-        Box::new(self.clone())
-    }
-
-    fn as_any(&self) -> &dyn std::any::Any {
-        self
-    }
-
     /// The method has no such parameter: its light paths' depth is the graph config's, and
     /// saying so beats ignoring the flag.
     fn set_max_depth(&mut self, _depth: u32) -> Result<(), String> {

@@ -2,7 +2,8 @@
 //!
 //! Data flows one way: the `nimbus-parser` crate reads a scene file into a
 //! [`nimbus_parser::SceneDescription`]; [`scene`] reads each entity's settings (pbrt-v4's
-//! parameter names and defaults); integrators render from there.
+//! parameter names and defaults) and builds the scene; [`setup`] pairs it with the method
+//! ([`integrators`]) that renders it; [`render`] runs the method over the film.
 #![deny(missing_docs)]
 
 pub mod accel;
@@ -22,6 +23,7 @@ pub mod render;
 pub mod samplers;
 pub mod sampling;
 pub mod scene;
+pub mod setup;
 pub mod shapes;
 pub mod spectra;
 pub mod textures;

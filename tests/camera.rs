@@ -117,11 +117,11 @@ fn lens_errors_name_the_file_and_line() {
         let path = dir.join("s.pbrt");
         std::fs::write(&path, &text).unwrap();
         let desc = nimbus::parser::load_file(&path).unwrap();
-        let err = nimbus::scene::build_scene(&desc, &BuildOptions::default()).err().map(|e| e.to_string());
+        let err = nimbus::setup::build(&desc, &BuildOptions::default()).err().map(|e| e.to_string());
         let err = err.unwrap_or_else(|| panic!("no error for {expected}"));
         assert!(err.contains(expected) && err.contains("s.pbrt:2:"), "{err}");
         // `check` refuses what rendering refuses, with the same message.
-        let check = nimbus::scene::check_scene(&desc).err().map(|e| e.to_string());
+        let check = nimbus::setup::check_scene(&desc).err().map(|e| e.to_string());
         assert_eq!(check.as_deref(), Some(err.as_str()));
     }
 }

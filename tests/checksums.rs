@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 
 use nimbus::integrators::INTEGRATOR_NAMES;
 use nimbus::render::{RenderOptions, render};
-use nimbus::scene::{BuildOptions, build_scene};
+use nimbus::scene::BuildOptions;
 
 use crate::common::scratch_dir;
 
@@ -66,7 +66,7 @@ fn line(root: &Path, scene: &Path, integrator: &str, graph_dir: &Path) -> String
         scene_file: Some(graph_dir.join(format!("{stem}.pbrt"))),
         ..Default::default()
     };
-    let outcome = build_scene(&desc, &opts).map_err(|e| e.to_string()).and_then(|scene| {
+    let outcome = nimbus::setup::build(&desc, &opts).map_err(|e| e.to_string()).and_then(|scene| {
         let method = scene.integrator.create(&scene)?;
         Ok(render(&scene, method.as_ref(), &RenderOptions { time_budget: None, quiet: true }).image)
     });

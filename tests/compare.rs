@@ -3,7 +3,7 @@
 
 use nimbus::imageio::{Image, read_exr, read_image, write_image};
 use nimbus::render::{RenderOptions, render, render_with_passes};
-use nimbus::scene::{BuildOptions, build_scene};
+use nimbus::scene::BuildOptions;
 
 use crate::common::{nimbus, scratch_dir};
 
@@ -190,7 +190,7 @@ fn difference_image_is_green_where_brighter_and_red_where_darker() {
 #[test]
 fn pass_checkpoints_cost_no_extra_rendering() {
     let desc = nimbus::parser::load_str(TINY, "tiny.pbrt").unwrap();
-    let scene = build_scene(&desc, &BuildOptions { spp: Some(8), ..Default::default() }).unwrap();
+    let scene = nimbus::setup::build(&desc, &BuildOptions { spp: Some(8), ..Default::default() }).unwrap();
     let integrator = scene.integrator.create(&scene).unwrap();
     let options = RenderOptions { time_budget: None, quiet: true };
     let plain = render(&scene, integrator.as_ref(), &options);

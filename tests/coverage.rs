@@ -3,7 +3,8 @@
 //! with a warning that names it — never silently something else. `nimbus check` and scene
 //! building agree on each, and the README's table lists each in the column it falls in.
 
-use nimbus::scene::{BuildOptions, build_scene, check_scene};
+use nimbus::scene::BuildOptions;
+use nimbus::setup::check_scene;
 
 /// What nimbus does with an entity type.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -219,7 +220,7 @@ fn every_pbrt_v4_entity_type_is_rendered_refused_or_replaced_by_name() {
                 continue;
             }
         };
-        let built = build_scene(&desc, &opts);
+        let built = nimbus::setup::build(&desc, &opts);
         let checked = check_scene(&desc);
         let named = |m: &str| m.contains(&format!("\"{name}\""));
         let outcome = match (&built, &checked) {
@@ -334,8 +335,8 @@ ObjectInstance "thing"
     let path = dir.as_ref().join("all.pbrt");
     std::fs::write(&path, text).unwrap();
     let desc = nimbus::parser::load_file(&path).unwrap_or_else(|e| panic!("{e}"));
-    let scene =
-        build_scene(&desc, &BuildOptions { spp: Some(1), ..Default::default() }).unwrap_or_else(|e| panic!("{e}"));
+    let scene = nimbus::setup::build(&desc, &BuildOptions { spp: Some(1), ..Default::default() })
+        .unwrap_or_else(|e| panic!("{e}"));
     check_scene(&desc).unwrap_or_else(|e| panic!("{e}"));
     assert!(scene.surfaces.top.is_some() && !scene.media.is_empty());
 }

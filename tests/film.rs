@@ -133,7 +133,7 @@ fn gbuffer_film_is_written_with_its_channels() {
     // pbrt-v4 writes only EXR from this film.
     let png = scene(0.0, 0.0, "camera").replace("g.exr", "g.png");
     let desc = nimbus::parser::load_str(&png, "png.pbrt").unwrap();
-    let e = nimbus::scene::build_scene(&desc, &BuildOptions::default()).err().expect("png refused");
+    let e = nimbus::setup::build(&desc, &BuildOptions::default()).err().expect("png refused");
     assert!(e.to_string().contains("EXR"), "{e}");
 }
 
@@ -183,9 +183,9 @@ Shape "trianglemesh" "integer indices" [ 0 1 2 0 2 3 ] "point3 P" [ 0 -5 3  10 -
     }
     // EXR only, and only with spectral transport.
     let desc = nimbus::parser::load_str(&text("s.png"), "s.pbrt").unwrap();
-    assert!(nimbus::scene::build_scene(&desc, &BuildOptions::default()).is_err());
+    assert!(nimbus::setup::build(&desc, &BuildOptions::default()).is_err());
     let desc = nimbus::parser::load_str(&text("s.exr"), "s.pbrt").unwrap();
     let off = BuildOptions { spectral: Some(nimbus::scene::transport::SpectralMode::Off), ..Default::default() };
-    let e = nimbus::scene::build_scene(&desc, &off).err().expect("spectral off refused");
+    let e = nimbus::setup::build(&desc, &off).err().expect("spectral off refused");
     assert!(e.to_string().contains("spectral transport"), "{e}");
 }

@@ -293,7 +293,7 @@ fn the_candle_at_equal_spp() {
                     pixel_bounds: Some(bounds.map(|b| b as i32)),
                     ..Default::default()
                 };
-                let img = render_scene(&nimbus::scene::build_scene(&desc, &opts).unwrap());
+                let img = render_scene(&nimbus::setup::build(&desc, &opts).unwrap());
                 assert_eq!((img.width, img.height), (32, 32));
                 let mut sum = 0.0;
                 for y in 0..32 {

@@ -64,7 +64,7 @@ fn goniometric_lights_need_a_square_image() {
     let path = dir.join("s.pbrt");
     std::fs::write(&path, text("LightSource \"goniometric\" \"rgb I\" [1 1 1]")).unwrap();
     let desc = nimbus::parser::load_file(&path).unwrap();
-    let scene = nimbus::scene::build_scene(&desc, &BuildOptions::default()).unwrap();
+    let scene = nimbus::setup::build(&desc, &BuildOptions::default()).unwrap();
     assert!(scene.lights.is_empty());
     assert!(scene.warnings.iter().any(|w| w.message.contains("goniometric")), "{:?}", scene.warnings);
     let mut img = nimbus::imageio::Image::new(4, 2);
@@ -72,7 +72,7 @@ fn goniometric_lights_need_a_square_image() {
     nimbus::imageio::write_image(&dir.join("wide.exr"), &img).unwrap();
     std::fs::write(&path, text("LightSource \"goniometric\" \"string filename\" \"wide.exr\"")).unwrap();
     let desc = nimbus::parser::load_file(&path).unwrap();
-    let e = nimbus::scene::build_scene(&desc, &BuildOptions::default()).err().expect("a 4x2 map is refused");
+    let e = nimbus::setup::build(&desc, &BuildOptions::default()).err().expect("a 4x2 map is refused");
     assert!(e.message.contains("wide.exr") && e.message.contains("not square"), "{}", e.message);
 }
 
@@ -96,7 +96,7 @@ fn illuminance_scales_infinite_lights_as_pbrt_v4_does() {
         std::fs::write(&path, text).unwrap();
         let desc = nimbus::parser::load_file(&path).unwrap();
         let opts = crate::common::transport(false);
-        let image = render_scene(&nimbus::scene::build_scene(&desc, &opts).unwrap());
+        let image = render_scene(&nimbus::setup::build(&desc, &opts).unwrap());
         image.pixels.iter().map(|p| p.x as f64).sum::<f64>() / image.pixels.len() as f64
     };
     let pi = std::f64::consts::PI;
@@ -144,7 +144,7 @@ fn image_area_lights_emit_their_texels() {
         std::fs::write(&path, text).unwrap();
         let desc = nimbus::parser::load_file(&path).unwrap();
         let opts = crate::common::transport(spectral);
-        nimbus::scene::build_scene(&desc, &opts).map(|scene| render_scene(&scene))
+        nimbus::setup::build(&desc, &opts).map(|scene| render_scene(&scene))
     };
     // With `power`, pbrt-v4 normalises an RGB `L` by its illuminant alone but an image by its
     // texels' mean luminance too, so the image then shines 1/Y(0.8, 0.5, 0.2) times brighter.
@@ -177,7 +177,7 @@ fn projection_lights_need_an_image() {
     let text = "LookAt 0 3 6  0 0 0  0 1 0\nCamera \"perspective\"\nFilm \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8\n\
                 WorldBegin\nShape \"sphere\"\nLightSource \"projection\" \"float fov\" 30\n";
     let desc = nimbus::parser::load_str(text, "p.pbrt").unwrap();
-    let e = nimbus::scene::build_scene(&desc, &BuildOptions::default()).err().expect("refused");
+    let e = nimbus::setup::build(&desc, &BuildOptions::default()).err().expect("refused");
     assert!(e.message.contains("projection light") && e.message.contains("filename"), "{}", e.message);
     assert!(e.to_string().contains("p.pbrt:6"), "{e}");
 }
@@ -236,9 +236,9 @@ fn portals_must_be_rectangles() {
         [("-1 0 2  -1 1 2  1 1 2", "4 corners"), ("-1 0 2  -1 1 2  1 1.5 2  1 0 2", "not a rectangle")]
     {
         let desc = nimbus::parser::load_str(&text(portal), "s.pbrt").unwrap();
-        let e = nimbus::scene::build_scene(&desc, &BuildOptions::default()).err().expect("refused");
+        let e = nimbus::setup::build(&desc, &BuildOptions::default()).err().expect("refused");
         assert!(e.to_string().contains(expected) && e.to_string().contains("s.pbrt:5:"), "{e}");
-        let c = nimbus::scene::check_scene(&desc).expect_err("check refuses it too");
+        let c = nimbus::setup::check_scene(&desc).expect_err("check refuses it too");
         assert_eq!(c.to_string(), e.to_string());
     }
 }

@@ -67,7 +67,7 @@ NamedMaterial "loop""#,
     ];
     for (material, message) in cases {
         let desc = nimbus::parser::load_str(&lit_plane(material, "0 3 4", 1), "mix.pbrt").unwrap();
-        let e = nimbus::scene::build_scene(&desc, &transport(false)).err().expect("refused");
+        let e = nimbus::setup::build(&desc, &transport(false)).err().expect("refused");
         let text = e.to_string();
         assert!(text.contains(message) && text.contains("mix.pbrt:"), "{material}: {text}");
     }
@@ -121,7 +121,7 @@ Shape "trianglemesh" "integer indices" [0 1 2 0 2 3] "point3 P" [-10 -10 0  10 -
     // "reflectance" and "conductor.eta" together are refused, as pbrt-v4 refuses them.
     let both = text.replace("\"rgb conductor.k\"", "\"rgb reflectance\" [0.5 0.5 0.5] \"rgb conductor.k\"");
     let desc = nimbus::parser::load_str(&both, "cc.pbrt").unwrap();
-    let e = nimbus::scene::build_scene(&desc, &transport(false)).err().expect("refused");
+    let e = nimbus::setup::build(&desc, &transport(false)).err().expect("refused");
     assert!(e.to_string().contains("cannot both be given"), "{e}");
 }
 
@@ -190,7 +190,7 @@ fn normal_map_sets_the_shading_normal() {
 Material "diffuse" "string normalmap" "nowhere.exr"
 Shape "sphere""#;
     let desc = nimbus::parser::load_str(text, "nm.pbrt").unwrap();
-    let e = nimbus::scene::build_scene(&desc, &transport(false)).err().expect("refused");
+    let e = nimbus::setup::build(&desc, &transport(false)).err().expect("refused");
     assert!(e.to_string().contains("nm.pbrt:2") && e.to_string().contains("nowhere.exr"), "{e}");
 }
 
@@ -333,7 +333,7 @@ Material "subsurface" "texture reflectance" "t""#,
     ] {
         let text = scene(&format!("{material}\nShape \"sphere\""));
         let desc = nimbus::parser::load_str(&text, "sss.pbrt").unwrap();
-        let e = nimbus::scene::build_scene(&desc, &transport(false)).err().expect("refused");
+        let e = nimbus::setup::build(&desc, &transport(false)).err().expect("refused");
         assert!(e.to_string().contains("sss.pbrt:") && e.to_string().contains(message), "{material}: {e}");
     }
 }
@@ -440,7 +440,7 @@ Material "diffuse" "rgb reflectance" [0 0 0]
         (r#"Shape "curve" "string basis" "nurbs" "point3 P" [0 0 0 1 0 0 2 0 0 3 0 0]"#, "unknown basis"),
     ] {
         let desc = nimbus::parser::load_str(&scene(shape), "curve.pbrt").unwrap();
-        let e = nimbus::scene::build_scene(&desc, &transport(false)).err().expect("refused");
+        let e = nimbus::setup::build(&desc, &transport(false)).err().expect("refused");
         assert!(e.to_string().contains("curve.pbrt:9") && e.to_string().contains(message), "{shape}: {e}");
     }
 }
@@ -530,7 +530,7 @@ Shape "trianglemesh" "integer indices" [0 1 2 0 2 3] "point3 P" [-10 -10 0  10 -
     assert!(px.iter().all(|p| p.min_element() >= 0.0 && p.max_element() <= 1.0));
     assert!(px.iter().any(|p| p.z > p.x + 0.01), "marble's veins are bluish");
     let desc = nimbus::parser::load_str("WorldBegin\nTexture \"t\" \"spectrum\" \"fbm\"\n", "fbm.pbrt").unwrap();
-    let e = nimbus::scene::build_scene(&desc, &transport(false)).err().expect("refused");
+    let e = nimbus::setup::build(&desc, &transport(false)).err().expect("refused");
     assert!(e.to_string().contains("fbm.pbrt:2") && e.to_string().contains("float texture"), "{e}");
 }
 
@@ -561,7 +561,7 @@ fn measured_brdf_reflects_its_tabulated_value() {
     std::fs::write(&bad, b"tensor_file\0\x01\x00").unwrap();
     let text = lit_plane(&format!("Material \"measured\" \"string filename\" \"{}\"", bad.display()), "0 0 1", 1);
     let desc = nimbus::parser::load_str(&text, "m.pbrt").unwrap();
-    let e = nimbus::scene::build_scene(&desc, &Default::default()).err().expect("refused");
+    let e = nimbus::setup::build(&desc, &Default::default()).err().expect("refused");
     assert!(e.to_string().contains("m.pbrt:") && e.to_string().contains("bad.bsdf"), "{e}");
 }
 
@@ -578,7 +578,7 @@ fn ewa_max_anisotropy_must_be_positive() {
             path.display()
         );
         let desc = nimbus::parser::load_str(&text, "ewa.pbrt").unwrap();
-        match nimbus::scene::build_scene(&desc, &transport(false)) {
+        match nimbus::setup::build(&desc, &transport(false)) {
             Ok(_) => assert!(ok, "maxanisotropy {v} accepted"),
             Err(e) => {
                 let e = e.to_string();

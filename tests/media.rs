@@ -1,7 +1,8 @@
 //! Participating media checked against analytic answers, against each other, and against
 //! pbrt-v4's renders of the media parity scenes.
 
-use nimbus::scene::{BuildOptions, Scene, build_scene};
+use nimbus::scene::BuildOptions;
+use nimbus::setup::Setup;
 
 use nimbus::color::rgb_spectrum;
 use nimbus::lights::LightKind;
@@ -13,7 +14,7 @@ use crate::common::{
     render_with, transport,
 };
 
-fn scene(text: &str) -> Scene {
+fn scene(text: &str) -> Setup {
     load_scene(text, &BuildOptions::default())
 }
 
@@ -170,7 +171,7 @@ fn nanovdb_and_openvdb_files_render_alike() {
     assert_ne!(text, vdb, "the scene names its NanoVDB file");
     let build = |t: &str| {
         let desc = nimbus::parser::load_str(t, dir.join("vdb-cloud.pbrt").to_str().unwrap()).unwrap();
-        build_scene(&desc, &BuildOptions { spp: Some(2), quick: true, ..Default::default() }).unwrap()
+        nimbus::setup::build(&desc, &BuildOptions { spp: Some(2), quick: true, ..Default::default() }).unwrap()
     };
     assert_eq!(render_scene(&build(&text)).pixels, render_scene(&build(&vdb)).pixels);
 }
@@ -238,7 +239,7 @@ fn media_scenes_match_pbrt_v4_with(guided: Option<&str>, pairs: i32, only: &[&st
         let reference = nimbus::imageio::read_exr(&dir.join(format!("../images/{name}.exr"))).unwrap();
         let render_seed = |seed| {
             let opts = BuildOptions { spp: Some(spp), seed: Some(seed), ..Default::default() };
-            let scene = build_scene(&desc, &opts).unwrap();
+            let scene = nimbus::setup::build(&desc, &opts).unwrap();
             render_with(&scene, scene.integrator.create(&scene).unwrap().as_ref())
         };
         let mut excess = Vec::new();

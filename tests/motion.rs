@@ -109,7 +109,7 @@ fn a_rotating_shape_stays_inside_its_motion_bounds() {
 fn motion_pbrt_v4_does_not_support_is_refused_or_warned() {
     let area = slab_scene("", MOVING, 1.0).replace("  Material", "  AreaLightSource \"diffuse\"\n  Material");
     let desc = nimbus::parser::load_str(&area, "moving-light.pbrt").unwrap();
-    let e = nimbus::scene::build_scene(&desc, &BuildOptions::default()).err().expect("animated area light refused");
+    let e = nimbus::setup::build(&desc, &BuildOptions::default()).err().expect("animated area light refused");
     assert!(e.to_string().contains("animated area lights") && e.to_string().contains("moving-light.pbrt"), "{e}");
     // A moving point light is used at its start, with pbrt-v4's warning.
     let light = slab_scene("", "", 1.0).replace(

@@ -316,7 +316,7 @@ fn per_sample_noise_on_the_headline_scenes() {
                         seed: Some(seed),
                         ..Default::default()
                     };
-                    let img = render_scene(&nimbus::scene::build_scene(&desc, &opts).unwrap());
+                    let img = render_scene(&nimbus::setup::build(&desc, &opts).unwrap());
                     nimbus::metrics::error_metrics(&img, &reference).unwrap().rel_mse
                 })
                 .iter()

@@ -6,7 +6,7 @@
 use std::path::{Path, PathBuf};
 
 use nimbus::imageio::Image;
-use nimbus::scene::{BuildOptions, build_scene};
+use nimbus::scene::BuildOptions;
 
 use crate::common::render_scene;
 
@@ -20,7 +20,8 @@ fn renders(scene: &Path, spp: u32, seeds: std::ops::Range<i32>) -> Vec<Image> {
     seeds
         .map(|seed| {
             render_scene(
-                &build_scene(&desc, &BuildOptions { spp: Some(spp), seed: Some(seed), ..Default::default() }).unwrap(),
+                &nimbus::setup::build(&desc, &BuildOptions { spp: Some(spp), seed: Some(seed), ..Default::default() })
+                    .unwrap(),
             )
         })
         .collect()

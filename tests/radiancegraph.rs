@@ -3,7 +3,7 @@
 
 use crate::common::{Estimate, assert_agree, channel_stats, nimbus, render_scene, render_with, scratch_dir};
 use nimbus::integrators::radiancegraph::{self, config::GraphConfig, volume::Volume};
-use nimbus::scene::{BuildOptions, build_scene};
+use nimbus::scene::BuildOptions;
 
 /// A homogeneous cube (side 2, σs = `sigma_s`) lit from above by a distant light, seen from
 /// the side; `extra` goes into the world block.
@@ -46,8 +46,9 @@ const GRAPH_BIAS: f64 = 0.015;
 /// GRAPH_BIAS. Returns the graph's relative difference.
 fn assert_graph_matches_volpath(text: &str) -> f64 {
     let desc = nimbus::parser::load_str(text, "cube.pbrt").unwrap();
-    let scene =
-        |seed| build_scene(&desc, &BuildOptions { spp: Some(64), seed: Some(seed), ..Default::default() }).unwrap();
+    let scene = |seed| {
+        nimbus::setup::build(&desc, &BuildOptions { spp: Some(64), seed: Some(seed), ..Default::default() }).unwrap()
+    };
     let config = GraphConfig::from_json(SMALL_CONFIG).unwrap();
     let graph_renders: Vec<_> = [(7, 1), (8, 2)]
         .into_iter()
@@ -97,7 +98,7 @@ fn the_shipped_cloud_matches_its_reference() {
             scene_file: Some(path.clone()),
             ..Default::default()
         };
-        render_scene(&build_scene(&desc, &opts).unwrap())
+        render_scene(&nimbus::setup::build(&desc, &opts).unwrap())
     };
     let renders = [render("radiancegraph", 1), render("radiancegraph", 2)];
     let reference = nimbus::imageio::read_exr(&dir.join("references/graph-constraints-cloud.exr")).unwrap();
@@ -134,7 +135,8 @@ fn the_shipped_cloud_matches_its_reference() {
 #[test]
 fn fewer_bounces_give_less_light() {
     let desc = nimbus::parser::load_str(&cube_text(2.0, "volpath", ""), "cube.pbrt").unwrap();
-    let scene = build_scene(&desc, &BuildOptions { spp: Some(4), seed: Some(1), ..Default::default() }).unwrap();
+    let scene =
+        nimbus::setup::build(&desc, &BuildOptions { spp: Some(4), seed: Some(1), ..Default::default() }).unwrap();
     let config = GraphConfig::from_json(SMALL_CONFIG).unwrap();
     let (graphs, _) = radiancegraph::build(&scene, &config, None, 7).unwrap();
     let volume = Volume::new(&scene).unwrap();
@@ -264,8 +266,11 @@ fn collision_estimator_agrees_with_less_noise() {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("pbrt-scenes/graph-constraints-cloud.pbrt");
     let desc = nimbus::parser::load_file(&path).unwrap();
     let scene_for = |seed| {
-        build_scene(&desc, &BuildOptions { spp: Some(16), seed: Some(seed), quick: true, ..Default::default() })
-            .unwrap()
+        nimbus::setup::build(
+            &desc,
+            &BuildOptions { spp: Some(16), seed: Some(seed), quick: true, ..Default::default() },
+        )
+        .unwrap()
     };
     let scene = scene_for(1);
     let config = GraphConfig::from_json(SMALL_CONFIG).unwrap();
@@ -293,7 +298,7 @@ fn unknown_estimator_is_an_error() {
         r#"Integrator "radiancegraph" "string estimator" "trackleng""#,
     );
     let desc = nimbus::parser::load_str(&text, "cube.pbrt").unwrap();
-    let err = build_scene(&desc, &BuildOptions::default()).err().expect("refused");
+    let err = nimbus::setup::build(&desc, &BuildOptions::default()).err().expect("refused");
     assert!(err.to_string().contains("unknown estimator \"trackleng\" (deltatracking or collision)"), "{err}");
 }
 
@@ -302,7 +307,7 @@ fn unknown_estimator_is_an_error() {
 #[test]
 fn a_graph_too_large_for_memory_is_refused_by_name() {
     let desc = nimbus::parser::load_str(&cube_text(2.0, "volpath", ""), "cube.pbrt").unwrap();
-    let scene = build_scene(&desc, &BuildOptions::default()).unwrap();
+    let scene = nimbus::setup::build(&desc, &BuildOptions::default()).unwrap();
     let volume = Volume::new(&scene).unwrap();
     let config = GraphConfig::from_json(SMALL_CONFIG).unwrap();
     let radius = volume.radius * 2.0 / 1000.0 * 20.0;

@@ -4,7 +4,8 @@
 use nimbus::imageio::Image;
 use nimbus::integrators::common::PathConfig;
 use nimbus::integrators::volpath::VolPath;
-use nimbus::scene::{BuildOptions, Scene, build_scene};
+use nimbus::scene::BuildOptions;
+use nimbus::setup::Setup;
 
 use nimbus::lights::LightKind;
 use nimbus::materials::Material;
@@ -15,7 +16,7 @@ use crate::common::{
     transport,
 };
 
-fn scene(text: &str, opts: &BuildOptions) -> Scene {
+fn scene(text: &str, opts: &BuildOptions) -> Setup {
     load_scene(text, opts)
 }
 
@@ -156,7 +157,8 @@ fn surfaces_and_sensors_match_pbrt_v4() {
         let reference = nimbus::imageio::read_exr(&dir.join(format!("../images/{name}.exr"))).unwrap();
         let render_seed = |seed| {
             let s =
-                build_scene(&desc, &BuildOptions { spp: Some(32), seed: Some(seed), ..Default::default() }).unwrap();
+                nimbus::setup::build(&desc, &BuildOptions { spp: Some(32), seed: Some(seed), ..Default::default() })
+                    .unwrap();
             render_scene(&s)
         };
         let (a, b) = (render_seed(11), render_seed(12));
@@ -260,7 +262,8 @@ fn film_sensors_are_read_with_their_parameters() {
         )
     };
     let desc = nimbus::parser::load_str(&film(r#""string sensor" "leica_m11""#), "s.pbrt").unwrap();
-    let e = build_scene(&desc, &BuildOptions::default()).err().expect("an unknown sensor is refused").to_string();
+    let e =
+        nimbus::setup::build(&desc, &BuildOptions::default()).err().expect("an unknown sensor is refused").to_string();
     assert!(
         e.starts_with("s.pbrt:2:12:") && e.contains("unknown sensor \"leica_m11\"") && e.contains("nikon_d850"),
         "{e}"

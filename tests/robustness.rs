@@ -3,7 +3,7 @@
 //! case does not expect.
 
 use nimbus::integrators::INTEGRATOR_NAMES;
-use nimbus::scene::{BuildOptions, build_scene};
+use nimbus::scene::BuildOptions;
 
 /// The radiance graph's documented constraints (its README, thesis Sec. 4.8), as its
 /// refusals name them.
@@ -43,7 +43,7 @@ fn render(text: &str, integrator: &str, spp: u32) -> Result<nimbus::imageio::Ima
         scene_file: Some(path.clone()),
         ..Default::default()
     };
-    let scene = build_scene(&desc, &opts).map_err(|e| e.to_string())?;
+    let scene = nimbus::setup::build(&desc, &opts).map_err(|e| e.to_string())?;
     let i = scene.integrator.create(&scene)?;
     let options = nimbus::render::RenderOptions { time_budget: None, quiet: true };
     Ok(nimbus::render::render(&scene, i.as_ref(), &options).image)

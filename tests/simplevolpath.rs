@@ -4,14 +4,15 @@
 use nimbus::imageio::Image;
 use nimbus::integrators::simplevolpath::{SimpleVolPath, SimpleVolPathSettings};
 use nimbus::integrators::volpath::{VolPath, VolPathSettings};
-use nimbus::scene::{BuildOptions, Scene, build_scene};
+use nimbus::scene::{BuildOptions, Scene};
+use nimbus::setup::Setup;
 
 use crate::common::{
     Estimate, assert_agree, assert_channels, channel_stats, grid_values, load_scene, media_header, medium_cube,
     reference_scenes, render_scene, render_with, reversed_sphere_images, scratch_dir,
 };
 
-fn scene(text: &str) -> Scene {
+fn scene(text: &str) -> Setup {
     load_scene(text, &BuildOptions::default())
 }
 
@@ -243,7 +244,7 @@ fn converges_to_volpath_on_every_shipped_scene() {
                 quick: true,
                 ..Default::default()
             };
-            render_scene(&build_scene(&desc, &opts).unwrap())
+            render_scene(&nimbus::setup::build(&desc, &opts).unwrap())
         };
         let (s1, s2) = (build("simplevolpath", 1), build("simplevolpath", 2));
         let (v1, v2) = (build("volpath", 3), build("volpath", 4));
@@ -267,7 +268,8 @@ WorldBegin
 LightSource "infinite" "rgb L" [1 1 1]"#;
     let desc = nimbus::parser::load_str(text, "t.pbrt").unwrap();
     let s =
-        build_scene(&desc, &BuildOptions { integrator: Some("simplevolpath".into()), ..Default::default() }).unwrap();
+        nimbus::setup::build(&desc, &BuildOptions { integrator: Some("simplevolpath".into()), ..Default::default() })
+            .unwrap();
     assert_eq!(s.integrator.name(), "simplevolpath");
     let p = s.integrator.settings::<SimpleVolPathSettings>().expect("simplevolpath's settings");
     assert_eq!(p.max_depth, 7);
@@ -275,6 +277,6 @@ LightSource "infinite" "rgb L" [1 1 1]"#;
     assert_eq!(s.integrator.create(&s).unwrap().name(), "simplevolpath");
     let bad = text.replace(r#""volpath" "integer maxdepth" 7"#, r#""simplevolpath" "float envfraction" -1"#);
     let desc = nimbus::parser::load_str(&bad, "t.pbrt").unwrap();
-    let e = build_scene(&desc, &BuildOptions::default()).err().expect("a negative weight is an error");
+    let e = nimbus::setup::build(&desc, &BuildOptions::default()).err().expect("a negative weight is an error");
     assert!(e.to_string().contains("envfraction"), "{e}");
 }

@@ -11,7 +11,7 @@ use std::path::Path;
 use nimbus::imageio::Image;
 use nimbus::integrators::INTEGRATOR_NAMES;
 use nimbus::render::{RenderOptions, render};
-use nimbus::scene::{BuildOptions, build_scene};
+use nimbus::scene::BuildOptions;
 
 use crate::common::{Estimate, assert_agree};
 
@@ -97,7 +97,7 @@ fn render_seed(
         scene_file: Some(file.to_path_buf()),
         ..Default::default()
     };
-    let scene = build_scene(desc, &opts).map_err(|e| e.to_string())?;
+    let scene = nimbus::setup::build(desc, &opts).map_err(|e| e.to_string())?;
     let i = scene.integrator.create(&scene)?;
     Ok(render(&scene, i.as_ref(), &RenderOptions { time_budget: None, quiet: true }).image)
 }

@@ -1,7 +1,7 @@
 //! Textures end to end: pbrt-v4's `ptex` (its filtering is checked against the Ptex library
 //! in `src/textures/ptex/filter.rs`, its rendering against pbrt-v4 in `pbrt_v4_parity`).
 
-use nimbus::scene::{BuildOptions, build_scene};
+use nimbus::scene::BuildOptions;
 
 use crate::common::scratch_dir;
 
@@ -51,7 +51,7 @@ fn ptex_errors_name_the_file_and_place() {
     for (texture, message) in cases {
         let text = scene(&texture, "");
         let desc = nimbus::parser::load_str(&text, "ptex.pbrt").unwrap();
-        let err = build_scene(&desc, &opts).err().unwrap_or_else(|| panic!("{texture}: built")).to_string();
+        let err = nimbus::setup::build(&desc, &opts).err().unwrap_or_else(|| panic!("{texture}: built")).to_string();
         assert!(err.contains(message) && err.starts_with("ptex.pbrt:7:"), "{texture}: {err}");
     }
     let text = scene(
@@ -59,7 +59,7 @@ fn ptex_errors_name_the_file_and_place() {
         "\"integer faceIndices\" [99]",
     );
     let desc = nimbus::parser::load_str(&text, "ptex.pbrt").unwrap();
-    let image = crate::common::render_scene(&build_scene(&desc, &opts).unwrap());
+    let image = crate::common::render_scene(&nimbus::setup::build(&desc, &opts).unwrap());
     assert!(image.pixels.iter().all(|p| p.is_finite()));
 }
 
@@ -80,7 +80,7 @@ fn ptex_face_indices_pick_the_face() {
         let text = scene(&texture, faces)
             .replace("xresolution\" 8 \"integer yresolution\" 8", "xresolution\" 32 \"integer yresolution\" 32");
         let desc = nimbus::parser::load_str(&text, "ptex.pbrt").unwrap();
-        crate::common::render_scene(&build_scene(&desc, &opts).unwrap())
+        crate::common::render_scene(&nimbus::setup::build(&desc, &opts).unwrap())
     };
     // Per channel, the mean of the middle 16×16 pixels and its standard error.
     let middle = |img: nimbus::imageio::Image| -> [(f64, f64); 3] {

@@ -13,8 +13,8 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
+use nimbus::scene::BuildOptions;
 use nimbus::scene::transport::SpectralMode;
-use nimbus::scene::{BuildOptions, build_scene};
 
 /// Arguments of `nimbus bench`.
 #[derive(clap::Args)]
@@ -130,10 +130,11 @@ fn options(spp: u32, seed: i32, mode: SpectralMode, integrator: Option<&str>) ->
 fn run_once(path: &Path, opts: &BuildOptions) -> Result<(f64, nimbus::imageio::Image, &'static str), String> {
     let t = Instant::now();
     let desc = nimbus::parser::load_file(path).map_err(|e| e.to_string())?;
-    let scene = build_scene(&desc, opts).map_err(|e| e.to_string())?;
-    let prepared = nimbus::integrators::registry::prepare(&scene)?;
+    let setup = nimbus::setup::build(&desc, opts).map_err(|e| e.to_string())?;
+    let prepared = setup.prepare()?;
+    let scene = &setup.scene;
     let r = nimbus::render::render(
-        &scene,
+        scene,
         prepared.integrator.as_ref(),
         &nimbus::render::RenderOptions { time_budget: None, quiet: true },
     );

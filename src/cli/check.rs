@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use anyhow::Result;
-use nimbus::scene::check_scene;
+use nimbus::setup::check_scene;
 
 /// Arguments of `nimbus check`.
 #[derive(clap::Args)]

@@ -234,8 +234,9 @@ fn plan(args: &ClusterArgs, scene: &Path, out: &Path) -> Result<Manifest> {
         ..Default::default()
     };
     // Building checks the scene and the integrator once here, not in every task.
-    let built = nimbus::scene::build_scene(&desc, &opts).map_err(|e| anyhow::anyhow!("{e}"))?;
-    let integrator = built.integrator.name();
+    let nimbus::setup::Setup { scene: built, integrator: method } =
+        nimbus::setup::build(&desc, &opts).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let integrator = method.name();
     // x0 x1 y0 y1, as --pixelbounds takes them.
     let fb = {
         let b = built.film_bounds;
@@ -256,7 +257,7 @@ fn plan(args: &ClusterArgs, scene: &Path, out: &Path) -> Result<Manifest> {
     ];
     let seed = built.sampler.seed;
     // The method says what it prepares before its renders; every render task then reads it.
-    let precompute = match built.integrator.precompute(&scene_abs).map_err(anyhow::Error::msg)? {
+    let precompute = match method.precompute(&scene_abs).map_err(anyhow::Error::msg)? {
         None => None,
         Some(Precompute::Command { args, file }) => {
             base.extend(["--precomputed".into(), out.join(&file).display().to_string()]);

@@ -12,7 +12,7 @@ use clap::{Args, Subcommand};
 use serde_json::json;
 
 use nimbus::integrators::radiancegraph::{self, config::GraphConfig, file, volume::Volume};
-use nimbus::scene::{BuildOptions, build_scene};
+use nimbus::scene::BuildOptions;
 
 /// `nimbus graph ...`
 #[derive(Args)]
@@ -76,8 +76,8 @@ fn build(args: &BuildArgs) -> Result<ExitCode> {
         }
     };
     let opts = BuildOptions { seed: args.seed, ..Default::default() };
-    let scene = match build_scene(&desc, &opts) {
-        Ok(s) => s,
+    let scene = match nimbus::setup::build(&desc, &opts) {
+        Ok(s) => s.scene,
         Err(e) => return fail(&args.scene, e.message),
     };
     // graph_maker: the config defaults to the scene's name with `.json`; outputs are named

@@ -7,8 +7,9 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 use anyhow::{Context, Result};
+use nimbus::scene::BuildOptions;
 use nimbus::scene::transport::SpectralMode;
-use nimbus::scene::{BuildOptions, build_scene, unused_parameters};
+use nimbus::setup::unused_parameters;
 
 /// Arguments of `nimbus render`.
 #[derive(clap::Args)]
@@ -131,13 +132,14 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
         pixel_bounds: args.pixelbounds.as_ref().map(|v| [v[0], v[1], v[2], v[3]]),
         spectral: args.spectral,
     };
-    let scene = match build_scene(&desc, &opts) {
+    let setup = match nimbus::setup::build(&desc, &opts) {
         Ok(s) => s,
         Err(e) => {
             scene_error(&e);
             return Ok(ExitCode::FAILURE);
         }
     };
+    let scene = &setup.scene;
     let mut warnings = scene.warnings.clone();
     warnings.extend(unused_parameters(&desc));
     for w in &warnings {
@@ -153,7 +155,7 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
     let t_built = Instant::now();
     let rss_before_setup = super::memory::rss_bytes();
     // A method's precomputation (guide training, graph building) counts in the budget.
-    let prepared = match nimbus::integrators::registry::prepare(&scene) {
+    let prepared = match setup.prepare() {
         Ok(p) => p,
         Err(e) => {
             eprintln!("{}: error: {e}", args.scene.display());
@@ -170,7 +172,7 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
     };
     let time_budget = prepared.remaining(args.time);
     let result = nimbus::render::render(
-        &scene,
+        scene,
         integrator.as_ref(),
         &nimbus::render::RenderOptions { time_budget, quiet: args.quiet },
     );

@@ -160,9 +160,9 @@ impl Prepared {
 /// Prepares the scene's method: the pipeline's own timed phase between building the scene
 /// and rendering it (`nimbus render`, `compare`, `bench`; `stress` and `cluster` run
 /// `render`).
-pub fn prepare(scene: &Scene) -> Result<Prepared, String> {
+pub fn prepare(settings: &dyn MethodSettings, scene: &Scene) -> Result<Prepared, String> {
     let t = std::time::Instant::now();
-    let integrator = scene.integrator.create(scene)?;
+    let integrator = settings.create(scene)?;
     Ok(Prepared { integrator, seconds: t.elapsed().as_secs_f64() })
 }
 

@@ -9,13 +9,15 @@ use crate::accel::ShapeStore;
 use crate::sampling::distribution::AliasTable;
 
 /// How lights are chosen for next-event estimation (pbrt-v4's `lightsampler`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum LightSamplerKind {
     /// Every light equally likely.
     Uniform,
     /// Proportional to emitted power.
     Power,
-    /// pbrt-v4's light BVH: spatially varying, by importance at the shading point.
+    /// pbrt-v4's light BVH: spatially varying, by importance at the shading point (pbrt-v4's
+    /// default for every integrator).
+    #[default]
     Bvh,
 }
 

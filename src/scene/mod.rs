@@ -10,11 +10,9 @@ pub mod textures;
 pub mod transport;
 
 mod build;
-mod check;
 mod spectra;
 
-pub use build::{BuildOptions, BuildStats, build_scene};
-pub use check::{SceneCheck, check_scene, unused_parameters};
+pub use build::{BuildOptions, BuildStats, SceneNeeds, build_scene};
 
 use glam::{Vec2, Vec3};
 use nimbus_parser::Warning;
@@ -24,7 +22,6 @@ use crate::accel::Surfaces;
 use crate::camera::{Camera, Differentials};
 use crate::film::filter::Filter;
 use crate::film::settings::FilmSettings;
-use crate::integrators::IntegratorSettings;
 use crate::lights::{Light, LightSampler, SceneSphere};
 use crate::materials::{Material, ShadingPerturbation, resolve};
 use crate::media::Medium;
@@ -47,8 +44,6 @@ pub struct Scene {
     pub sampler: SamplerSettings,
     /// The reconstruction filter.
     pub filter: Filter,
-    /// The integrator to use and its parameters.
-    pub integrator: IntegratorSettings,
     /// Surfaces and BVHs.
     pub surfaces: Surfaces,
     /// Materials, indexed by primitives.

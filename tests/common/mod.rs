@@ -88,10 +88,10 @@ pub fn grid_values(n: usize, v: &str) -> String {
     vec![v; n * n * n].join(" ")
 }
 
-/// Parses `text` and builds its scene; a failure panics with the located error.
-pub fn load_scene(text: &str, opts: &nimbus::scene::BuildOptions) -> nimbus::scene::Scene {
+/// Parses `text` and builds its scene and method; a failure panics with the located error.
+pub fn load_scene(text: &str, opts: &nimbus::scene::BuildOptions) -> nimbus::setup::Setup {
     let desc = nimbus::parser::load_str(text, "test.pbrt").unwrap_or_else(|e| panic!("{e}"));
-    nimbus::scene::build_scene(&desc, opts).unwrap_or_else(|e| panic!("{e}"))
+    nimbus::setup::build(&desc, opts).unwrap_or_else(|e| panic!("{e}"))
 }
 
 /// Renders `scene` with `integrator` at the scene's spp.
@@ -100,9 +100,9 @@ pub fn render_with(scene: &nimbus::scene::Scene, integrator: &dyn nimbus::integr
     nimbus::render::render(scene, integrator, &options).image
 }
 
-/// Renders `scene` with its own integrator.
-pub fn render_scene(scene: &nimbus::scene::Scene) -> Image {
-    render_with(scene, scene.integrator.create(scene).unwrap().as_ref())
+/// Renders the set-up scene with its own method.
+pub fn render_scene(setup: &nimbus::setup::Setup) -> Image {
+    render_with(&setup.scene, setup.prepare().unwrap().integrator.as_ref())
 }
 
 /// Per-channel image mean and its standard error from the pixel spread. The spread is noise

@@ -8,7 +8,8 @@ use nimbus::imageio::Image;
 use nimbus::metrics::{ErrorMetrics, error_metrics};
 use nimbus::parser::SceneDescription;
 use nimbus::render::{RenderOptions, render, render_with_passes};
-use nimbus::scene::{BuildOptions, Scene, build_scene, unused_parameters};
+use nimbus::scene::{BuildOptions, Scene};
+use nimbus::setup::unused_parameters;
 
 /// Equal time or equal spp.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -121,8 +122,9 @@ impl Reference {
         let hash = crate::cli::scene_hash::of_file(scene_path)?;
         let opts =
             BuildOptions { integrator: Some(REFERENCE.into()), spp: Some(spp), seed: Some(seed), ..Default::default() };
-        let scene = build_scene(desc, &opts).map_err(scene_error)?;
-        let (w, h) = film_size(&scene);
+        let setup = nimbus::setup::build(desc, &opts).map_err(scene_error)?;
+        let scene = &setup.scene;
+        let (w, h) = film_size(scene);
         if path.exists() {
             let why_not = match nimbus::imageio::read_exr(&path) {
                 Err(e) => Some(e),
@@ -151,8 +153,8 @@ impl Reference {
             say(format!("reference: not reusing {}: {}", path.display(), why_not.unwrap_or_default()));
         }
         say(format!("reference: rendering volpath at {spp} spp, seed {seed} -> {}", path.display()));
-        let integrator = scene.integrator.create(&scene).map_err(anyhow::Error::msg)?;
-        let result = render(&scene, integrator.as_ref(), &RenderOptions { time_budget: None, quiet });
+        let integrator = setup.prepare().map_err(anyhow::Error::msg)?.integrator;
+        let result = render(scene, integrator.as_ref(), &RenderOptions { time_budget: None, quiet });
         let mut image = result.image;
         image.metadata.insert("nimbus:integrator".into(), REFERENCE.into());
         image.metadata.insert("nimbus:spp".into(), result.spp.to_string());
@@ -234,10 +236,11 @@ pub fn run_integrator(s: &RunSetup<'_>) -> Result<Run> {
         seed: Some(s.seed),
         ..Default::default()
     };
-    let scene = build_scene(s.desc, &opts).map_err(scene_error)?;
-    let prepared = nimbus::integrators::registry::prepare(&scene).map_err(anyhow::Error::msg)?;
+    let setup = nimbus::setup::build(s.desc, &opts).map_err(scene_error)?;
+    let prepared = setup.prepare().map_err(anyhow::Error::msg)?;
+    let scene = &setup.scene;
     let (integrator, setup_seconds) = (&prepared.integrator, prepared.seconds);
-    let (w, h) = film_size(&scene);
+    let (w, h) = film_size(scene);
     let reference = &s.reference.image;
     anyhow::ensure!(
         (reference.width, reference.height) == (w, h),
@@ -266,7 +269,7 @@ pub fn run_integrator(s: &RunSetup<'_>) -> Result<Run> {
     let ends = checkpoint_spp(s.per_doubling, max_spp);
     let mut checkpoints = Vec::new();
     let result = render_with_passes(
-        &scene,
+        scene,
         integrator.as_ref(),
         &RenderOptions { time_budget: budget, quiet: true },
         &ends,

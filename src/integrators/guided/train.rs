@@ -308,8 +308,7 @@ pub fn train(scene: &Scene, settings: &GuidedSettings) -> Guide {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::integrators::IntegratorSettings;
-    use crate::scene::{BuildOptions, build_scene};
+    use crate::scene::BuildOptions;
     use glam::Vec2;
 
     /// A forward-scattering medium in a glass sphere (radius 0.9, η 1.4) lit only by a small
@@ -337,8 +336,8 @@ AttributeBegin
 AttributeEnd
 "#;
         let desc = nimbus_parser::load_str(text, "glass.pbrt").unwrap();
-        let scene = build_scene(&desc, &BuildOptions::default()).unwrap();
-        let settings = IntegratorSettings::from_entity(&desc.integrator, None).unwrap();
+        let crate::setup::Setup { scene, integrator: settings } =
+            crate::setup::build(&desc, &BuildOptions::default()).unwrap();
         let s = settings.settings::<GuidedSettings>().expect("guided's settings").clone();
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
         pool.install(|| train(&scene, &s))

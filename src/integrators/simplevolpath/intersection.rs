@@ -198,13 +198,13 @@ fn medium_hit<C: Channels>(
 mod tests {
     use super::*;
     use crate::color::average;
-    use crate::scene::{BuildOptions, build_scene};
+    use crate::scene::BuildOptions;
 
     /// The scene built for RGB transport (these tests trace RGB channels).
     fn scene(text: &str) -> Scene {
         let desc = nimbus_parser::load_str(text, "intersection.pbrt").unwrap_or_else(|e| panic!("{e}"));
         let opts = BuildOptions { spectral: Some(crate::scene::transport::SpectralMode::Off), ..Default::default() };
-        build_scene(&desc, &opts).unwrap_or_else(|e| panic!("{e}"))
+        crate::setup::build(&desc, &opts).unwrap_or_else(|e| panic!("{e}")).scene
     }
 
     /// The cube [-1, 1]³ bounding medium "m".

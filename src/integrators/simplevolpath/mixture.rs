@@ -390,7 +390,7 @@ mod tests {
     use crate::materials::bxdf::DiffuseBxdf;
     use crate::materials::bxdf::testing::integrate_sphere;
     use crate::sampling::chi_square::{TestRng, chi_square_test};
-    use crate::scene::{BuildOptions, build_scene};
+    use crate::scene::BuildOptions;
 
     /// Lights around the origin in empty space: a quad and a sphere light (different powers)
     /// and an environment image with a bright patch, so all three densities overlap.
@@ -409,7 +409,7 @@ AttributeBegin
   Shape "sphere" "float radius" 0.5
 AttributeEnd"#;
         let desc = nimbus_parser::load_str(text, "mixture.pbrt").unwrap();
-        let mut s = build_scene(&desc, &BuildOptions::default()).unwrap();
+        let mut s = crate::setup::build(&desc, &BuildOptions::default()).unwrap().scene;
         let mut img = Image::new(16, 16);
         for (k, p) in img.pixels.iter_mut().enumerate() {
             *p = Rgb::splat(if (k % 16) < 4 && k / 16 < 5 { 40.0 } else { 0.5 + (k % 7) as f32 * 0.1 });

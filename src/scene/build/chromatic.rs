@@ -19,7 +19,7 @@ pub(super) fn choose_transport(
     desc: &SceneDescription,
     opts: &BuildOptions,
     film: &FilmSettings,
-    integrator: &IntegratorSettings,
+    needs: &SceneNeeds,
     ctx: &Chromatic<'_>,
     subsurface: &[Option<SubsurfaceMedium>],
 ) -> Result<TransportChoice, Error> {
@@ -45,7 +45,7 @@ pub(super) fn choose_transport(
                 "the spectral film records spectra: it needs spectral transport, not --spectral off",
             ));
         }
-        if let Some(why) = integrator.spectral_film_refusal() {
+        if let Some(why) = needs.spectral_film_refusal {
             return Err(err(&desc.film.loc, why));
         }
         transport =

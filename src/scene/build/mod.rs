@@ -30,9 +30,9 @@ use crate::film::filter_settings::FilterSettings;
 use crate::film::settings::{FilmKind, FilmSettings};
 use crate::geometry::ply::read_ply;
 use crate::geometry::{Bounds3, MotionTransform};
-use crate::integrators::IntegratorSettings;
-use crate::integrators::registry::MethodInputs;
-use crate::lights::{EmissionImage, EnvironmentMap, Light, LightKind, LightSampler, PortalMap, SceneSphere};
+use crate::lights::{
+    EmissionImage, EnvironmentMap, Light, LightKind, LightSampler, LightSamplerKind, PortalMap, SceneSphere,
+};
 use crate::materials::{ConductorInput, HairAbsorption, Material, RoughnessTex, ShadingPerturbation};
 use crate::math::Frame;
 use crate::media::dense::DenseGrid;
@@ -76,7 +76,7 @@ pub struct BuildOptions {
     /// it).
     pub scene_file: Option<std::path::PathBuf>,
     /// `--precomputed` (`--graph-data`, `--guide-cache`): what the method prepared before
-    /// (see [`crate::integrators::registry::MethodInputs`]).
+    /// (the method reads it; the scene does not).
     pub precomputed: Option<std::path::PathBuf>,
     /// `--maxdepth`: the longest path, overriding the integrator's `maxdepth`.
     pub max_depth: Option<u32>,
@@ -92,6 +92,16 @@ pub struct BuildOptions {
     pub pixel_bounds: Option<[i32; 4]>,
     /// `--spectral auto|on|off`: overrides the scene's `Option "spectral"`.
     pub spectral: Option<SpectralMode>,
+}
+
+/// What the method that renders the scene asks of it. The scene knows no method: whoever
+/// pairs the two (`nimbus::setup`) asks the method's settings and passes this.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct SceneNeeds {
+    /// How next-event estimation picks a light (pbrt-v4's default, the light BVH).
+    pub light_sampler: LightSamplerKind,
+    /// Why the method cannot render a spectral film, when it cannot.
+    pub spectral_film_refusal: Option<&'static str>,
 }
 
 /// Time and memory spent building, for `--stats`.
@@ -113,14 +123,13 @@ fn err(loc: &FileLoc, message: impl Into<String>) -> Error {
     Error::new(loc, message)
 }
 
-/// Builds the render-time scene.
-pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions) -> Result<Scene, Error> {
+/// Builds the render-time scene for a method that asks `needs` of it.
+pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions, needs: &SceneNeeds) -> Result<Scene, Error> {
     let t0 = Instant::now();
     let mut warnings = desc.warnings.clone();
     animation_warnings(desc, &mut warnings);
     let View { film, camera, pixel_bounds, film_bounds, sampler, filter, sensor } = view(desc, opts, &mut warnings)?;
     let film_cs = film.color_space;
-    let integrator = integrator(desc, opts, &mut warnings)?;
 
     // Textures, in definition order (a texture may use those defined before it).
     let spectra = SpectrumResolver { film: film_cs, sensor: &sensor };
@@ -154,7 +163,7 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions) -> Result<Scene
         used_media: &used,
         spectra: &spectra,
     };
-    let transport = choose_transport(desc, opts, &film, &integrator, &ctx, &subsurface)?;
+    let transport = choose_transport(desc, opts, &film, needs, &ctx, &subsurface)?;
 
     let Media { media, ids: media_ids, subsurface: subsurface_media } =
         build_media(desc, &used, &spectra, transport.transport, &subsurface)?;
@@ -230,9 +239,7 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions) -> Result<Scene
         }
     }
     let infinite_lights = lights.iter().enumerate().filter(|(_, l)| l.is_infinite()).map(|(i, _)| i as u32).collect();
-    // pbrt-v4's default for every integrator is the light BVH.
-    let kind = integrator.light_sampler();
-    let light_sampler = LightSampler::new(&lights, &surfaces.shapes, &sphere, kind);
+    let light_sampler = LightSampler::new(&lights, &surfaces.shapes, &sphere, needs.light_sampler);
     let bumps = shading.iter().any(|s| matches!(s, ShadingPerturbation::Bump(_)));
     let footprint = (tb.textures.uses_footprint() || bumps)
         .then(|| crate::camera::Footprint::new(&camera, film.resolution, sampler.pixel_samples));
@@ -243,7 +250,6 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions) -> Result<Scene
         film_bounds,
         sampler,
         filter,
-        integrator,
         surfaces,
         materials,
         shading,

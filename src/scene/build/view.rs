@@ -1,5 +1,5 @@
 //! What the camera sees and how the film records it: film, camera, pixel bounds, sampler,
-//! filter and sensor, with the command line's overrides; and the integrator's settings.
+//! filter and sensor, with the command line's overrides.
 
 use super::*;
 
@@ -73,23 +73,6 @@ pub(super) fn view(desc: &SceneDescription, opts: &BuildOptions, warnings: &mut 
     let sensor = PixelSensor::new(&film.sensor, film.white_balance, film.iso, exposure, film_cs)
         .map_err(|m| err(desc.film.params.loc("sensor").unwrap_or(&desc.film.loc), m))?;
     Ok(View { film, camera, pixel_bounds, film_bounds, sampler, filter, sensor })
-}
-
-/// The integrator's settings, with `opts`' overrides (`--integrator`, `--maxdepth`) and the
-/// files from outside the scene it reads.
-pub(super) fn integrator(
-    desc: &SceneDescription,
-    opts: &BuildOptions,
-    warnings: &mut Vec<Warning>,
-) -> Result<IntegratorSettings, Error> {
-    let mut integrator = IntegratorSettings::from_entity(&desc.integrator, opts.integrator.as_deref())?;
-    warnings.extend(IntegratorSettings::substitution_note(&desc.integrator, opts.integrator.as_deref()));
-    integrator
-        .set_inputs(&MethodInputs { scene_file: opts.scene_file.as_deref(), precomputed: opts.precomputed.as_deref() });
-    if let Some(depth) = opts.max_depth {
-        integrator.set_max_depth(depth).map_err(|m| err(&desc.integrator.loc, m))?;
-    }
-    Ok(integrator)
 }
 
 pub(super) fn pixel_bounds(film: &FilmSettings, opts: &BuildOptions, loc: &FileLoc) -> Result<[u32; 4], Error> {

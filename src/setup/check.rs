@@ -5,17 +5,17 @@ use std::collections::BTreeMap;
 
 use nimbus_parser::{Entity, Error, ParameterDictionary, SceneDescription, ShapeEntity, Warning};
 
-use super::lights::{AreaLightSettings, LightSettings};
-use super::materials::MaterialSettings;
-use super::media::MediumSettings;
-use super::shapes::{ShapeKind, ShapeSettings};
-use super::textures::TextureSettings;
 use crate::camera::settings::{CameraSettings, Projection};
 use crate::film::filter_settings::FilterSettings;
 use crate::film::settings::FilmSettings;
 use crate::geometry::ply::read_ply;
 use crate::integrators::IntegratorSettings;
 use crate::samplers::settings::SamplerSettings;
+use crate::scene::lights::{AreaLightSettings, LightSettings};
+use crate::scene::materials::MaterialSettings;
+use crate::scene::media::MediumSettings;
+use crate::scene::shapes::{ShapeKind, ShapeSettings};
+use crate::scene::textures::TextureSettings;
 
 /// What `nimbus check` found.
 #[derive(Clone, Debug, PartialEq)]

@@ -8,6 +8,7 @@
 
 pub mod accel;
 pub mod camera;
+pub mod channels;
 pub mod color;
 pub mod film;
 pub mod geometry;

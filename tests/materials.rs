@@ -317,7 +317,7 @@ Shape "sphere" "float radius" 0.8"#,
     assert!(((a + s) - glam::Vec3::splat(2.0)).abs().max_element() < 1e-3, "σt = 1/mfp: {a} + {s}");
     let albedo = s / (a + s);
     assert!(albedo.x < albedo.y && albedo.y < albedo.z && albedo.z < 1.0, "{albedo}");
-    let table = nimbus::media::diffusion::DiffusionTable::new(0.0, 1.33);
+    let table = nimbus::materials::diffusion::DiffusionTable::new(0.0, 1.33);
     for (rho, r) in [(albedo.x, 0.2), (albedo.y, 0.5), (albedo.z, 0.8)] {
         assert!((table.rho_eff(rho) - r).abs() < 0.01, "ρ {rho}: ρ_eff {} vs {r}", table.rho_eff(rho));
     }

@@ -4,7 +4,7 @@
 use nimbus::scene::BuildOptions;
 use nimbus::setup::Setup;
 
-use nimbus::color::rgb_spectrum;
+use nimbus::channels::rgb_spectrum;
 use nimbus::lights::LightKind;
 use nimbus::media::MediumKind;
 use nimbus::spectra::{RgbRole, Sampled};

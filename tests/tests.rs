@@ -1,5 +1,6 @@
 //! End-to-end tests of the `nimbus` binary and library.
 
+mod architecture;
 mod bench;
 mod camera;
 mod check;

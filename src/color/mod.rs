@@ -1,11 +1,5 @@
-//! The channels light is carried in. nimbus transports either linear RGB in the film's
-//! color space ([`Rgb`]) or pbrt-v4's sampled spectra (four wavelengths per path), chosen per
-//! scene; everything that multiplies light — BSDFs, media, lights, the path loop — is
-//! written once, generic over [`Channels`], and monomorphised for each representation.
-
-mod channels;
-
-pub use channels::{Channels, pack_voxel, rgb_spectrum};
+//! Linear RGB: the film's color space values and what they are measured by. The spectral
+//! alternative lives in [`crate::spectra`]; [`crate::channels`] makes the two one interface.
 
 use glam::Vec3;
 

@@ -4,6 +4,7 @@
 
 pub mod common;
 pub mod guided;
+pub mod image_pass;
 pub mod pathgraph;
 pub mod radiancegraph;
 pub mod registry;
@@ -14,7 +15,8 @@ pub use registry::{INTEGRATOR_NAMES, MethodSettings, REFERENCE, canonical_name, 
 
 use nimbus_parser::{Entity, Error};
 
-use crate::color::{Channels, Rgb};
+use crate::channels::Channels;
+use crate::color::Rgb;
 use crate::geometry::Ray;
 use crate::samplers::Sampler;
 use crate::scene::Scene;
@@ -133,7 +135,7 @@ pub trait Integrator: Sync {
 }
 
 /// A method that estimates every pixel at once: one sample of the image from one pass of
-/// camera rays (see [`crate::render::ImagePass`]).
+/// camera rays (see [`image_pass::ImagePass`]).
 pub trait ImageIntegrator: Sync {
     /// One sample of every pixel: (accumulator index, filter weight, RGB radiance) for each
     /// camera ray of `pass`, handed to `out` in any order (no image-sized list of them is
@@ -141,7 +143,7 @@ pub trait ImageIntegrator: Sync {
     fn sample_image(
         &self,
         scene: &Scene,
-        pass: &crate::render::ImagePass<'_>,
+        pass: &image_pass::ImagePass<'_>,
         out: &mut dyn FnMut(PixelValue),
     ) -> RayStats;
 }

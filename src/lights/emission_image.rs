@@ -4,7 +4,8 @@
 use glam::Vec2;
 use nimbus_parser::ColorSpace;
 
-use crate::color::{Channels, Rgb, luminance};
+use crate::channels::Channels;
+use crate::color::{Rgb, luminance};
 use crate::imageio::Image;
 use crate::spectra::RgbRole;
 

@@ -8,7 +8,8 @@ use glam::{Affine3A, Vec2, Vec3};
 
 use nimbus_parser::ColorSpace;
 
-use crate::color::{Channels, Rgb, luminance};
+use crate::channels::Channels;
+use crate::color::{Rgb, luminance};
 use crate::imageio::Image;
 use crate::sampling::distribution::PiecewiseConstant2D;
 use crate::spectra::RgbRole;

@@ -22,7 +22,8 @@ use std::sync::Arc;
 use glam::{Vec2, Vec3};
 
 use crate::accel::{Geometry, NONE, ShapeStore, Surfaces};
-use crate::color::{Channels, Rgb, average};
+use crate::channels::Channels;
+use crate::color::{Rgb, average};
 use crate::math::Frame;
 use crate::sampling::warp;
 use crate::shapes::{SurfaceHit, triangle_sample};

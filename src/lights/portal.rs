@@ -11,7 +11,8 @@ use glam::{Affine3A, Vec2, Vec3};
 use nimbus_parser::ColorSpace;
 
 use super::envmap::nearest_radiance;
-use crate::color::{Channels, Rgb, average};
+use crate::channels::Channels;
+use crate::color::{Rgb, average};
 use crate::imageio::Image;
 use crate::math::Frame;
 use crate::sampling::warp::equal_area_sphere_to_square;

@@ -7,7 +7,7 @@ use super::bxdf::{
     Bxdf, CoatedConductorBase, CoatedConductorBxdf, CoatedDiffuseBxdf, ConductorBxdf, DielectricBxdf, DiffuseBxdf,
     DiffuseTransmissionBxdf, HairBxdf, ThinDielectricBxdf, TrowbridgeReitz,
 };
-use crate::color::Channels;
+use crate::channels::Channels;
 use crate::sampling::rng::murmur_hash64a;
 use crate::spectra::{RgbRole, SpectrumValue};
 use crate::textures::{Tex, TexContext, Textures};

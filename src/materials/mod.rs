@@ -2,6 +2,7 @@
 //! materials that create them at surface hits.
 
 pub mod bxdf;
+pub mod diffusion;
 mod material;
 pub mod measured;
 mod shading;

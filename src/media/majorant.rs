@@ -4,7 +4,8 @@
 
 use glam::{UVec3, Vec3, Vec4};
 
-use crate::color::{Channels, Rgb};
+use crate::channels::Channels;
+use crate::color::Rgb;
 use crate::geometry::Bounds3;
 
 /// What the values of a [`MajorantGrid`] cell bound.

@@ -11,7 +11,8 @@ use super::majorant::{Bands, DdaIterator, MajorantGrid, Segment};
 use super::rgbgrid::RgbGridMedium;
 use nimbus_parser::ColorSpace;
 
-use crate::color::{Channels, Rgb};
+use crate::channels::Channels;
+use crate::color::Rgb;
 use crate::geometry::{Bounds3, Ray};
 use crate::spectra::{BlackbodyRgbTable, SpectrumValue};
 

@@ -3,7 +3,6 @@
 
 pub mod cloud;
 pub mod dense;
-pub mod diffusion;
 pub mod grid;
 pub mod majorant;
 mod medium;

@@ -9,7 +9,7 @@ use nimbus_parser::ColorSpace;
 use super::dense::{DenseGrid, trilinear};
 use super::majorant::{Bands, MajorantGrid};
 use super::medium::MediumPoint;
-use crate::color::Channels;
+use crate::channels::Channels;
 use crate::geometry::Bounds3;
 use crate::spectra::{RgbRole, SigmoidPolynomial};
 
@@ -191,7 +191,7 @@ impl RgbGridMedium {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::color::pack_voxel;
+    use crate::channels::pack_voxel;
     use crate::media::Medium;
     use crate::media::MediumKind;
     use crate::spectra::{SampledSpectrum, SampledWavelengths};

@@ -17,7 +17,8 @@ use rayon::prelude::*;
 
 use super::{Accumulator, camera_sample};
 use crate::accel::NONE;
-use crate::color::{Channels, Rgb};
+use crate::channels::Channels;
+use crate::color::Rgb;
 use crate::geometry::Ray;
 use crate::integrators::common::media::{ShadowEstimate, ratio_tracking};
 use crate::integrators::common::path::{medium_after, shading_frame};

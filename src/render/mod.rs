@@ -10,18 +10,17 @@ use std::time::Instant;
 use glam::UVec2;
 use rayon::prelude::*;
 
-use crate::camera::CameraRay;
-use crate::color::{Channels, Rgb};
+use crate::color::Rgb;
 use crate::film::settings::FilmKind;
-use crate::geometry::Ray;
 use crate::imageio::Image;
 use crate::integrators::common::RayStats;
+use crate::integrators::image_pass::{ImagePass, RenderChannels, camera_ray};
 use crate::integrators::{ImageIntegrator, Integrator, PixelValue};
 use crate::samplers::settings::SamplerSettings;
 use crate::samplers::{CameraSample, Sampler, get_camera_sample};
 use crate::scene::Scene;
 use crate::scene::transport::Transport;
-use crate::spectra::{CIE_Y_INTEGRAL, N_SPECTRUM_SAMPLES, SampledSpectrum, SampledWavelengths};
+use crate::spectra::SampledSpectrum;
 
 /// Side of a square tile in pixels.
 const TILE: u32 = 16;
@@ -109,29 +108,6 @@ impl PixelSum {
     }
 }
 
-/// The camera ray of sample `s` of `pixel` (`None` when a realistic camera's lens stops it),
-/// its wavelengths and its filter weight, drawn in pbrt-v4's order.
-#[inline]
-fn camera_ray<C: Channels>(
-    scene: &Scene,
-    sampler: &mut Sampler,
-    pixel: UVec2,
-    s: u32,
-) -> (Option<CameraRay>, C::Lambda, f32) {
-    sampler.start_pixel_sample(pixel, s, 0);
-    // pbrt-v4 draws the wavelengths first; RGB draws the same dimension so the two
-    // representations see the same samples afterwards.
-    let u = sampler.get_1d();
-    let u = if scene.disable_wavelength_jitter { 0.5 } else { u };
-    // The spectral film samples its range uniformly, as pbrt-v4's does.
-    let lambda = match scene.film.kind {
-        FilmKind::Spectral { lambda_min, lambda_max, .. } => C::sample_lambda_uniform(u, lambda_min, lambda_max),
-        _ => C::sample_lambda(u),
-    };
-    let cs = get_camera_sample(sampler, pixel, &scene.filter);
-    (scene.camera.generate_ray(cs.p_film, cs.p_lens, scene.camera.time(cs.time)), lambda, cs.filter_weight)
-}
-
 /// The spectral film's bands: (count, λmin, λmax), or `None` for other films.
 fn spectral_bands(scene: &Scene) -> Option<(usize, f32, f32)> {
     match scene.film.kind {
@@ -147,85 +123,6 @@ fn camera_sample(scene: &Scene, sampler: &mut Sampler, pixel: UVec2, s: u32) -> 
     get_camera_sample(sampler, pixel, &scene.filter)
 }
 
-/// One whole-image sample: every pixel's camera ray for one sample index, handed to an
-/// [`ImageIntegrator`], in the representation the method asks for.
-pub struct ImagePass<'a> {
-    scene: &'a Scene,
-    sampler: &'a Sampler,
-    tiles: &'a [[u32; 4]],
-    origin: UVec2,
-    width: u32,
-    sample: u32,
-}
-
-/// A camera ray of an [`ImagePass`].
-#[derive(Clone, Copy, Debug)]
-pub struct PixelRay {
-    /// The pixel's index in the film (row-major within the pixel bounds).
-    pub index: u32,
-    /// The filter weight of the camera sample.
-    pub weight: f32,
-    /// The camera ray, or `None` when a realistic camera's lens stopped it: the sample then
-    /// brings back nothing, but its filter weight still counts (as in pbrt-v4).
-    pub ray: Option<CameraRay>,
-}
-
-impl ImagePass<'_> {
-    /// The sample index (0 for the first sample of every pixel).
-    pub fn sample_index(&self) -> u32 {
-        self.sample
-    }
-
-    /// The number of pixels the pass traces (one camera ray each).
-    pub fn pixel_count(&self) -> usize {
-        self.tiles.iter().map(|t| (t[2] - t[0]) as usize * (t[3] - t[1]) as usize).sum()
-    }
-
-    /// Traces every pixel's camera ray with `f`, in parallel over tiles. Each tile starts a
-    /// `T` with `init(tile index)` and ends with `done(tile index, T)`, which runs on the
-    /// tile's thread as soon as the tile is traced (so a caller can hand each tile storage from
-    /// a pool and give it back, or move a tile's results out while other tiles are running);
-    /// `done`'s results come in tile order, pixels in scanline order within a tile, whatever
-    /// the thread count. `f` gets the pixel's sampler positioned after the camera sample's
-    /// dimensions, as a per-ray integrator's `li` does.
-    pub fn trace_pixels<C: FilmChannels, T, U: Send>(
-        &self,
-        init: impl Fn(usize) -> T + Sync,
-        f: impl Fn(&mut T, PixelRay, &mut C::Lambda, &mut Sampler, &mut RayStats) + Sync,
-        done: impl Fn(usize, T) -> U + Sync,
-    ) -> (Vec<U>, RayStats) {
-        let results: Vec<(U, RayStats)> = self
-            .tiles
-            .par_iter()
-            .enumerate()
-            .map(|(i, tile)| {
-                let mut sampler = self.sampler.clone();
-                let mut stats = RayStats::default();
-                let mut t = init(i);
-                for y in tile[1]..tile[3] {
-                    for x in tile[0]..tile[2] {
-                        let pixel = UVec2::new(x, y);
-                        let (ray, mut lambda, weight) = camera_ray::<C>(self.scene, &mut sampler, pixel, self.sample);
-                        stats.camera += 1;
-                        let index = (y - self.origin.y) * self.width + (x - self.origin.x);
-                        f(&mut t, PixelRay { index, weight, ray }, &mut lambda, &mut sampler, &mut stats);
-                    }
-                }
-                (done(i, t), stats)
-            })
-            .collect();
-        let mut stats = RayStats::default();
-        let out = results
-            .into_iter()
-            .map(|(t, s)| {
-                stats.add(&s);
-                t
-            })
-            .collect();
-        (out, stats)
-    }
-}
-
 /// One whole-image sample from `method`, added to the film's pixels as the method hands
 /// them over (a per-pixel copy of the sums was 96 bytes a pixel at the process's peak).
 fn image_sample(
@@ -236,7 +133,7 @@ fn image_sample(
     acc: &mut Accumulator,
     sample: u32,
 ) -> RayStats {
-    let pass = ImagePass { scene, sampler, tiles, origin: acc.origin, width: acc.width, sample };
+    let pass = ImagePass::new(scene, sampler, tiles, acc.origin, acc.width, sample);
     let max = scene.film.max_component_value;
     let gbuffer = matches!(scene.film.kind, FilmKind::GBuffer { .. });
     // One sampler to replay the camera samples with (not a clone per pixel).
@@ -340,104 +237,9 @@ impl Accumulator {
     }
 }
 
-/// The channels a render can carry: how to ask an integrator for them and how a sample
-/// reaches the film.
-pub trait FilmChannels: Channels {
-    /// The integrator's estimate along `ray` in these channels.
-    fn li(
-        integrator: &dyn Integrator,
-        scene: &Scene,
-        ray: Ray,
-        lambda: &mut Self::Lambda,
-        sampler: &mut Sampler,
-        stats: &mut RayStats,
-    ) -> Self;
-
-    /// The sample as the film accumulates it.
-    fn to_film(self, lambda: &Self::Lambda, scene: &Scene) -> Rgb;
-
-    /// Adds the sample to a pixel's spectral-film bands `out` (Σ w·L per band, then Σ w per
-    /// band) as pbrt-v4's SpectralFilm does: clamped to `max`, scaled by the CIE Y integral
-    /// (which undoes the lights' photometric normalisation) and not divided by the uniform
-    /// wavelength density. Only spectral transport has bands.
-    fn add_to_bands(self, lambda: &Self::Lambda, weight: f32, max: f32, bands: (usize, f32, f32), out: &mut [f64]);
-}
-
-impl FilmChannels for Rgb {
-    #[inline]
-    fn li(
-        integrator: &dyn Integrator,
-        scene: &Scene,
-        ray: Ray,
-        lambda: &mut (),
-        sampler: &mut Sampler,
-        stats: &mut RayStats,
-    ) -> Rgb {
-        integrator.li_rgb(scene, ray, lambda, sampler, stats)
-    }
-
-    #[inline]
-    fn to_film(self, _lambda: &(), _scene: &Scene) -> Rgb {
-        self
-    }
-
-    fn add_to_bands(self, _lambda: &(), _weight: f32, _max: f32, _bands: (usize, f32, f32), _out: &mut [f64]) {
-        unreachable!("the spectral film forces spectral transport")
-    }
-}
-
-impl FilmChannels for SampledSpectrum {
-    #[inline]
-    fn li(
-        integrator: &dyn Integrator,
-        scene: &Scene,
-        ray: Ray,
-        lambda: &mut SampledWavelengths,
-        sampler: &mut Sampler,
-        stats: &mut RayStats,
-    ) -> SampledSpectrum {
-        integrator.li_spectral(scene, ray, lambda, sampler, stats)
-    }
-
-    /// pbrt-v4's RGB film: the sample's sensor RGB (imaging ratio included).
-    #[inline]
-    fn to_film(self, lambda: &SampledWavelengths, scene: &Scene) -> Rgb {
-        scene.sensor.to_sensor_rgb(self, lambda)
-    }
-
-    fn add_to_bands(
-        self,
-        lambda: &SampledWavelengths,
-        weight: f32,
-        max: f32,
-        bands: (usize, f32, f32),
-        out: &mut [f64],
-    ) {
-        let (n, min, range) = (bands.0, bands.1, bands.2 - bands.1);
-        let mut l = self;
-        if !(0..N_SPECTRUM_SAMPLES).all(|i| l[i].is_finite()) {
-            return;
-        }
-        let m = (0..N_SPECTRUM_SAMPLES).map(|i| l[i]).fold(0.0f32, f32::max);
-        if m > max {
-            l *= max / m;
-        }
-        for i in 0..N_SPECTRUM_SAMPLES {
-            // A wavelength a dispersive path dropped has no estimate (pbrt-v4 would add its
-            // zero and count its weight).
-            if lambda.pdf[i] == 0.0 {
-                continue;
-            }
-            let b = ((n as f32 * (lambda.lambda[i] - min) / range) as usize).min(n - 1);
-            out[b] += (weight * l[i]) as f64 * CIE_Y_INTEGRAL;
-            out[n + b] += weight as f64;
-        }
-    }
-}
-
 /// Renders samples `[first, first + count)` of every pixel in one tile.
 #[allow(clippy::too_many_arguments)]
-fn render_tile<C: FilmChannels>(
+fn render_tile<C: RenderChannels>(
     scene: &Scene,
     integrator: &dyn Integrator,
     sampler: &mut Sampler,
@@ -472,7 +274,7 @@ fn render_tile<C: FilmChannels>(
                 if let Some(b) = bands {
                     l.add_to_bands(&lambda, weight, max, b, &mut bands_out[band_start..]);
                 }
-                sum.add(l.to_film(&lambda, scene), weight, max, counted);
+                sum.add(l.to_film(&lambda, &scene.sensor), weight, max, counted);
             }
             let index = (y - acc_origin.y) * acc_width + (x - acc_origin.x);
             out.push((index, sum));

@@ -112,7 +112,7 @@ impl SpectrumResolver<'_> {
         if self.sensor.is_passthrough() {
             crate::spectra::convert_rgb(rgb, cs, self.film)
         } else {
-            let s = crate::color::rgb_spectrum(rgb, RgbRole::Illuminant, cs);
+            let s = crate::channels::rgb_spectrum(rgb, RgbRole::Illuminant, cs);
             self.sensor.film_rgb(|l| f64::from(s.eval(l as f32)))
         }
     }

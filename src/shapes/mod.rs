@@ -42,7 +42,7 @@ pub struct SurfaceHit {
 }
 
 /// The shading geometry's derivatives at a hit, which only bump and normal mapping need:
-/// computed on demand ([`crate::accel::Surfaces::derivatives`]) so that hits stay cheap.
+/// computed on demand (the accelerator's `Surfaces::derivatives`) so that hits stay cheap.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SurfaceDerivatives {
     /// Shading ∂p/∂u (for meshes with normals made perpendicular to ns, as pbrt-v4 does).

@@ -19,7 +19,8 @@ use glam::{Affine3A, Vec2, Vec3};
 
 use nimbus_parser::ColorSpace;
 
-use crate::color::{Channels, Rgb};
+use crate::channels::Channels;
+use crate::color::Rgb;
 use crate::imageio::Image;
 use crate::math::noise;
 use crate::spectra::{RgbRole, SpectrumValue};

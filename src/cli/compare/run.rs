@@ -118,7 +118,7 @@ impl Reference {
         say: &dyn Fn(String),
     ) -> Result<Reference> {
         let dir = scene_path.parent().unwrap_or(Path::new("."));
-        let path = dir.join(format!("{stem}.volpath-{spp}spp-seed{seed}.exr"));
+        let path = dir.join(format!("{stem}.{REFERENCE}-{spp}spp-seed{seed}.exr"));
         let hash = crate::cli::scene_hash::of_file(scene_path)?;
         let opts =
             BuildOptions { integrator: Some(REFERENCE.into()), spp: Some(spp), seed: Some(seed), ..Default::default() };
@@ -152,7 +152,7 @@ impl Reference {
             };
             say(format!("reference: not reusing {}: {}", path.display(), why_not.unwrap_or_default()));
         }
-        say(format!("reference: rendering volpath at {spp} spp, seed {seed} -> {}", path.display()));
+        say(format!("reference: rendering {REFERENCE} at {spp} spp, seed {seed} -> {}", path.display()));
         let integrator = setup.prepare().map_err(anyhow::Error::msg)?.integrator;
         let result = render(scene, integrator.as_ref(), &RenderOptions { time_budget: None, quiet });
         let mut image = result.image;

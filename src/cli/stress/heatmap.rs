@@ -51,7 +51,7 @@ where
     DB::ErrorType: 'static,
 {
     root.fill(&WHITE).map_err(plot_err)?;
-    let title = format!("relMSE relative to volpath at equal time ({} s per cell)", short(m.time));
+    let title = format!("relMSE relative to {REFERENCE} at equal time ({} s per cell)", short(m.time));
     root.draw(&Text::new(title, (LABEL, 22), text_style(18, BLACK, HPos::Left))).map_err(plot_err)?;
     for (j, name) in m.integrators.iter().enumerate() {
         let x = LABEL + COL * j as i32 + COL / 2;
@@ -105,7 +105,8 @@ where
                 .map_err(plot_err)?;
         }
     }
-    let note = "blue: lower relMSE than volpath; red: higher; orange outline: biased (b: mean off the reference)";
+    let note =
+        format!("blue: lower relMSE than {REFERENCE}; red: higher; orange outline: biased (b: mean off the reference)");
     root.draw(&Text::new(note, (LABEL, y + 50), text_style(12, BLACK, HPos::Left))).map_err(plot_err)?;
     root.present().map_err(plot_err)?;
     Ok(())

@@ -153,7 +153,7 @@ pub fn markdown(m: &Matrix) -> String {
     s.push_str(&verdict_table(m));
     s.push_str("\n## Conditions\n\n| condition | what varies | reference |\n|---|---|---|\n");
     for ((cond, what), spp) in m.conditions.iter().zip(&m.reference_spp) {
-        let _ = writeln!(s, "| {cond} | {what} | volpath, {spp} spp |");
+        let _ = writeln!(s, "| {cond} | {what} | {REFERENCE}, {spp} spp |");
     }
     s.push_str("\n## Refusals and failures\n\n");
     let mut any = false;

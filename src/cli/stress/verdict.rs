@@ -84,13 +84,13 @@ pub fn judge(cell: &Cell, baseline: Option<&Cell>) -> Verdict {
         return Verdict::Baseline;
     }
     let Some(baseline) = baseline.filter(|b| b.outcome == Outcome::Rendered) else {
-        return Verdict::Failed("volpath did not render this condition".into());
+        return Verdict::Failed(format!("{REFERENCE} did not render this condition"));
     };
     if let (Some(mem), Some(base)) = (cell.render_memory(), baseline.render_memory())
         && mem as f64 > MEMORY_FACTOR * base as f64
     {
         return Verdict::Failed(format!(
-            "{:.1} MiB resident, more than {MEMORY_FACTOR}x volpath's {:.1} MiB",
+            "{:.1} MiB resident, more than {MEMORY_FACTOR}x {REFERENCE}'s {:.1} MiB",
             mem as f64 / (1 << 20) as f64,
             base as f64 / (1 << 20) as f64
         ));

@@ -5,7 +5,8 @@
 
 use glam::Vec3;
 
-use crate::color::{Channels, Rgb};
+use crate::channels::Channels;
+use crate::color::Rgb;
 use crate::geometry::Ray;
 use crate::media::{Medium, MediumKind, MediumPoint};
 use crate::sampling::rng::Pcg32;
@@ -311,7 +312,8 @@ mod heterogeneous_tests {
         let space = nimbus_parser::ColorSpace::Srgb;
         let (c0, c1) = (Vec3::new(0.1, 0.2, 0.3), Vec3::new(0.4, 0.5, 0.6));
         let grid = |spectral| {
-            let v = [c0, c1].map(|c| crate::color::pack_voxel(c, crate::spectra::RgbRole::Unbounded, space, spectral));
+            let v =
+                [c0, c1].map(|c| crate::channels::pack_voxel(c, crate::spectra::RgbRole::Unbounded, space, spectral));
             let sa = DenseGrid::new(UVec3::new(2, 1, 1), v.to_vec()).unwrap();
             let bounds = Bounds3::new(Vec3::ZERO, Vec3::ONE);
             Medium::rgb_grid(
@@ -334,7 +336,7 @@ mod heterogeneous_tests {
         assert_eq!(mp.sigma_s, Rgb::ONE);
         let lambda = crate::spectra::SampledWavelengths::sample_visible(0.3);
         let mp = grid(true).sample_point::<crate::spectra::SampledSpectrum>(p, &lambda);
-        let want = crate::color::rgb_spectrum(c1, crate::spectra::RgbRole::Unbounded, space).sample(&lambda);
+        let want = crate::channels::rgb_spectrum(c1, crate::spectra::RgbRole::Unbounded, space).sample(&lambda);
         assert!((mp.sigma_a - want).abs().max_element() < 1e-6, "{} vs {want}", mp.sigma_a);
     }
 }

@@ -5,7 +5,8 @@
 
 use glam::Vec3;
 
-use crate::color::{Channels, Rgb};
+use crate::channels::Channels;
+use crate::color::Rgb;
 use crate::media::phase::HenyeyGreenstein;
 
 /// A scattering vertex: where the path scattered and how it continued.

@@ -14,7 +14,7 @@ use super::media::{ShadowEstimate, line_transmittance, sample_t_maj};
 use super::observer::{EmissionEvent, NeeEvent, NoObserver, PathObserver, VertexEvent};
 use super::shadow::transmittance;
 use crate::accel::{Hit, NONE};
-use crate::color::Channels;
+use crate::channels::Channels;
 use crate::geometry::Ray;
 use crate::lights::LightContext;
 use crate::materials::bxdf::{Bxdf, ReflTransFlags, TransportMode};

@@ -8,7 +8,7 @@ use super::RayStats;
 use super::media::{ShadowEstimate, ratio_tracking};
 use super::path::medium_after;
 use crate::accel::NONE;
-use crate::color::Channels;
+use crate::channels::Channels;
 use crate::geometry::{Ray, offset_origin_by};
 use crate::lights::LightSample;
 use crate::sampling::rng::Pcg32;

@@ -24,7 +24,7 @@ use std::path::Path;
 use super::RayIntegrator;
 use super::common::{GuidedSample, PathConfig, PathRecorder, PathStrategy, RayStats, trace_path};
 use super::registry::{Method, MethodInputs, MethodSettings, Precompute};
-use crate::color::Channels;
+use crate::channels::Channels;
 use crate::geometry::Ray;
 use crate::media::phase::HenyeyGreenstein;
 use crate::samplers::Sampler;

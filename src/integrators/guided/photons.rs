@@ -9,7 +9,7 @@ use std::f32::consts::PI;
 use glam::{Vec2, Vec3};
 
 use crate::accel::{Geometry, NONE};
-use crate::color::Channels;
+use crate::channels::Channels;
 use crate::geometry::{Ray, spawn_ray};
 use crate::integrators::common::media::sample_t_maj;
 use crate::integrators::common::{medium_after, shading_frame};

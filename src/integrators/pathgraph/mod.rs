@@ -20,12 +20,12 @@ use std::time::Instant;
 use rayon::prelude::*;
 
 use super::common::{NoObserver, PathConfig, RayStats, trace_path};
+use super::image_pass::{ImagePass, RenderChannels};
 use super::registry::{Method, MethodSettings};
 use super::{ImageIntegrator, Integrator, PixelValue};
 use crate::accel::NONE;
 use crate::color::Rgb;
 use crate::geometry::Ray;
-use crate::render::{FilmChannels, ImagePass};
 use crate::samplers::Sampler;
 use crate::scene::Scene;
 use crate::scene::transport::Transport;
@@ -127,7 +127,7 @@ impl PathGraph {
     /// and one path per pixel, each tile's in one block. Returns the blocks (start and length
     /// in the vertex store) in tile order: the canonical vertex order, which does not depend
     /// on the thread count, while the store's order does.
-    fn record<C: FilmChannels>(
+    fn record<C: RenderChannels>(
         &self,
         scene: &Scene,
         pass: &ImagePass<'_>,
@@ -165,7 +165,7 @@ impl PathGraph {
                     );
                 }
                 let lambda = *lambda;
-                rec.finish(px.index, px.weight, |x: C| x.to_film(&lambda, scene), v, p);
+                rec.finish(px.index, px.weight, |x: C| x.to_film(&lambda, &scene.sensor), v, p);
                 if let Some(c) = px.ray
                     && c.weight != 1.0
                 {

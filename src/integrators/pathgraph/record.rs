@@ -21,7 +21,8 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use crate::accel::NONE;
-use crate::color::{Channels, Rgb};
+use crate::channels::Channels;
+use crate::color::Rgb;
 use crate::integrators::common::{EmissionEvent, NeeEvent, PathRecorder, PathStrategy, VertexEvent};
 
 /// Graph vertices, struct of arrays.

@@ -7,7 +7,7 @@
 use glam::{IVec3, Vec2, Vec3};
 
 use super::volume::{Event, MAX_LIGHTS, sample_event};
-use crate::color::Channels;
+use crate::channels::Channels;
 use crate::color::Rgb;
 use crate::geometry::Ray;
 use crate::integrators::RayIntegrator;

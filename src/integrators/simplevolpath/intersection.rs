@@ -26,7 +26,8 @@
 use glam::{Vec2, Vec3};
 
 use crate::accel::{Hit, NONE};
-use crate::color::{Channels, Rgb};
+use crate::channels::Channels;
+use crate::color::Rgb;
 use crate::geometry::Ray;
 use crate::integrators::common::media::sample_t_maj;
 use crate::integrators::common::medium_after;

@@ -37,7 +37,8 @@ use glam::{Vec2, Vec3};
 
 use super::settings::SimpleVolPathSettings;
 use crate::accel::{Hit, NONE};
-use crate::color::{Channels, Rgb};
+use crate::channels::Channels;
+use crate::color::Rgb;
 use crate::lights::{LightContext, LightKind};
 use crate::materials::bxdf::{Bxdf, ReflTransFlags, TransportMode};
 use crate::math::Frame;

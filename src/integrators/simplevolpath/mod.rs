@@ -24,7 +24,7 @@ pub use settings::SimpleVolPathSettings;
 use super::RayIntegrator;
 use super::common::RayStats;
 use super::registry::{Method, MethodSettings};
-use crate::color::Channels;
+use crate::channels::Channels;
 use crate::geometry::Ray;
 use crate::samplers::Sampler;
 use crate::scene::Scene;

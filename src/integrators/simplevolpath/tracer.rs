@@ -24,7 +24,7 @@ use glam::{Vec2, Vec3};
 use super::intersection::{Event, Intersection, Seed, intersect};
 use super::mixture::{Mixture, Scatterer};
 use crate::accel::{Hit, NONE};
-use crate::color::Channels;
+use crate::channels::Channels;
 use crate::geometry::Ray;
 use crate::integrators::common::{RayStats, medium_after, shading_frame};
 use crate::lights::LightContext;

@@ -8,7 +8,7 @@ pub use settings::{LightSamplerKind, VolPathSettings};
 use super::RayIntegrator;
 use super::common::{NoObserver, PathConfig, RayStats, trace_path};
 use super::registry::{Method, MethodSettings};
-use crate::color::Channels;
+use crate::channels::Channels;
 use crate::geometry::Ray;
 use crate::samplers::Sampler;
 use crate::scene::Scene;

@@ -6,7 +6,8 @@ use glam::{Vec2, Vec3};
 use super::fresnel::fr_complex_channels;
 use super::microfacet::{TrowbridgeReitz, face_forward};
 use super::{BsdfSample, BxdfFlags, ReflTransFlags, TransportMode};
-use crate::color::{Channels, Rgb};
+use crate::channels::Channels;
+use crate::color::Rgb;
 use crate::math::{abs_cos_theta, reflect, same_hemisphere};
 
 /// A conductor with complex index of refraction η + i·k per channel.

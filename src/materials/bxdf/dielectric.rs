@@ -6,7 +6,7 @@ use glam::{Vec2, Vec3};
 use super::fresnel::fr_dielectric;
 use super::microfacet::{TrowbridgeReitz, face_forward};
 use super::{BsdfSample, BxdfFlags, ReflTransFlags, TransportMode};
-use crate::color::Channels;
+use crate::channels::Channels;
 use crate::math::{abs_cos_theta, cos_theta, reflect, refract, same_hemisphere, sqr};
 
 /// An interface with relative index of refraction η = η_inside/η_outside, where the inside

@@ -5,7 +5,8 @@ use std::f32::consts::FRAC_1_PI;
 use glam::{Vec2, Vec3};
 
 use super::{BsdfSample, BxdfFlags, ReflTransFlags, TransportMode};
-use crate::color::{Channels, Rgb};
+use crate::channels::Channels;
+use crate::color::Rgb;
 use crate::math::{abs_cos_theta, same_hemisphere};
 use crate::sampling::warp::{cosine_hemisphere, cosine_hemisphere_pdf};
 

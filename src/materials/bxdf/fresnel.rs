@@ -1,7 +1,7 @@
 //! Fresnel reflectance of dielectric and conducting interfaces (pbrt-v4 §9.3,
 //! `util/scattering.h`: `FrDielectric`, `FrComplex`).
 
-use crate::color::Channels;
+use crate::channels::Channels;
 use crate::math::{safe_sqrt, sqr};
 
 /// Unpolarized Fresnel reflectance of a dielectric interface: the mean of the squared

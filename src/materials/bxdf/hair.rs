@@ -12,7 +12,8 @@ use glam::{Vec2, Vec3};
 
 use super::fresnel::fr_dielectric;
 use super::{BsdfSample, BxdfFlags, ReflTransFlags, TransportMode};
-use crate::color::{Channels, Rgb};
+use crate::channels::Channels;
+use crate::color::Rgb;
 
 /// Scattering orders modelled explicitly; the rest are lumped into one term.
 const P_MAX: usize = 3;

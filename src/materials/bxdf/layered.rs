@@ -15,7 +15,8 @@ use std::f32::consts::PI;
 use glam::{Vec2, Vec3};
 
 use super::{BsdfSample, BxdfFlags, ConductorBxdf, DielectricBxdf, DiffuseBxdf, ReflTransFlags, TransportMode};
-use crate::color::{Channels, Rgb};
+use crate::channels::Channels;
+use crate::color::Rgb;
 use crate::math::{abs_cos_theta, same_hemisphere};
 use crate::media::phase::HenyeyGreenstein;
 use crate::sampling::rng::{Pcg32, hash_sample, hash_seed_vec3, hash_vec3};

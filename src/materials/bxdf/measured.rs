@@ -11,7 +11,8 @@ use std::sync::Arc;
 use glam::{Vec2, Vec3, Vec4};
 
 use super::{BsdfSample, BxdfFlags, ReflTransFlags, TransportMode};
-use crate::color::{Channels, Rgb};
+use crate::channels::Channels;
+use crate::color::Rgb;
 use crate::materials::measured::MeasuredData;
 use crate::math::same_hemisphere;
 

@@ -54,7 +54,8 @@ use std::ops::{BitAnd, BitOr, BitOrAssign, Not};
 
 use glam::{Vec2, Vec3};
 
-use crate::color::{Channels, Rgb};
+use crate::channels::Channels;
+use crate::color::Rgb;
 
 pub use conductor::ConductorBxdf;
 pub use dielectric::DielectricBxdf;

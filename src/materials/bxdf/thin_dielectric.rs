@@ -6,7 +6,7 @@ use glam::{Vec2, Vec3};
 
 use super::fresnel::fr_dielectric;
 use super::{BsdfSample, BxdfFlags, ReflTransFlags, TransportMode};
-use crate::color::Channels;
+use crate::channels::Channels;
 use crate::math::{abs_cos_theta, sqr};
 
 /// A thin slab with index of refraction η relative to its surroundings.

@@ -191,7 +191,7 @@ pub(super) fn material(
                     // reflectance, the coefficients then upsampled as unbounded RGB.
                     let r = tb.spectra.albedo(reflectance, cs).map_err(|x| err(loc, x.to_string()))?.rgb;
                     let mfp = unbounded(mfp)?.rgb * *scale;
-                    let table = crate::media::diffusion::DiffusionTable::new(*g, *eta);
+                    let table = crate::materials::diffusion::DiffusionTable::new(*g, *eta);
                     let (mut a, mut s) = ([0.0f32; 3], [0.0f32; 3]);
                     for c in 0..3 {
                         (a[c], s[c]) = table.coefficients(r[c].clamp(0.0, 1.0), mfp[c].max(f32::MIN_POSITIVE));

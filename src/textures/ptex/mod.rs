@@ -6,6 +6,8 @@
 
 mod file;
 mod filter;
+mod kernel;
+mod texels;
 mod triangle;
 
 use std::path::Path;

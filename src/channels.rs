@@ -1,10 +1,13 @@
-//! [`Channels`]: what the renderer needs of a light-carrying value, implemented by RGB and
-//! by pbrt-v4's sampled spectra.
+//! The channels light is carried in. nimbus transports either linear RGB in the film's
+//! color space ([`Rgb`]) or pbrt-v4's sampled spectra (four wavelengths per path), chosen per
+//! scene; everything that multiplies light — BSDFs, media, lights, the path loop — is
+//! written once, generic over [`Channels`], and monomorphised for each representation. Above
+//! both `color` (RGB) and `spectra`, which it joins.
 
 use std::fmt::Debug;
 use std::ops::{Add, AddAssign, Div, DivAssign, Index, Mul, MulAssign, Sub};
 
-use super::Rgb;
+use crate::color::Rgb;
 use nimbus_parser::ColorSpace;
 
 use crate::spectra::{

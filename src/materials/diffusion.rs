@@ -7,7 +7,7 @@
 
 use std::f32::consts::PI;
 
-use crate::materials::bxdf::fr_dielectric;
+use super::bxdf::fr_dielectric;
 use crate::media::phase::henyey_greenstein;
 
 const N_RHO: usize = 100;

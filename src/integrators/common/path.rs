@@ -10,10 +10,11 @@
 use glam::{Vec2, Vec3};
 
 use super::RayStats;
-use super::media::{ShadowEstimate, line_transmittance, sample_t_maj};
-use super::observer::{EmissionEvent, NeeEvent, NoObserver, PathObserver, VertexEvent};
-use super::shadow::transmittance;
+use super::direct::{Scatterer, extra_direct, sample_direct};
+use super::media::{line_transmittance, sample_t_maj};
+use super::observer::{EmissionEvent, PathObserver, VertexEvent};
 use crate::accel::{Hit, NONE};
+use crate::camera::Differentials;
 use crate::channels::Channels;
 use crate::geometry::Ray;
 use crate::lights::LightContext;
@@ -91,51 +92,56 @@ pub fn medium_after(scene: &Scene, hit: &Hit, w: Vec3, current: u32) -> u32 {
     if w.dot(hit.surface.n) > 0.0 { outside } else { inside }
 }
 
-/// What scatters at a vertex: a BSDF in a local frame, or a phase function.
-enum Scatterer<'a, C> {
-    Surface { bxdf: &'a Bxdf<C>, frame: &'a Frame, wo_local: Vec3 },
-    Medium { phase: HenyeyGreenstein, wo: Vec3 },
-}
-
-impl<C: Channels> Scatterer<'_, C> {
-    /// f·|cos| (or p) and the sampling density for direction `wi`.
-    #[inline]
-    fn eval(&self, wi: Vec3) -> (C, f32) {
-        match self {
-            Scatterer::Surface { bxdf, frame, wo_local } => {
-                let wl = frame.to_local(wi);
-                let f = bxdf.f(*wo_local, wl, TransportMode::Radiance) * wl.z.abs();
-                if f.is_zero() {
-                    return (f, 0.0);
-                }
-                (f, bxdf.pdf(*wo_local, wl, TransportMode::Radiance, ReflTransFlags::ALL))
-            }
-            Scatterer::Medium { phase, wo } => {
-                let p = phase.p(*wo, wi);
-                (C::splat(p), phase.pdf(*wo, wi))
-            }
-        }
-    }
-}
-
 /// Per-path state shared by the loop and its helpers.
 #[derive(Clone, Copy)]
-struct PathState<C: Channels> {
-    beta: C,
-    r_u: C,
-    r_l: C,
-    hero: usize,
+pub(super) struct PathState<C: Channels> {
+    pub(super) beta: C,
+    pub(super) r_u: C,
+    pub(super) r_l: C,
+    pub(super) hero: usize,
     /// What Russian roulette multiplies β by: the inverse of the factors path guiding put
     /// into β. Roulette on a guided path's β would kill the paths guiding sent towards the
     /// light (their factor is small because the guide's density there is high) and undo the
     /// guiding; on β·scale it survives as an unguided path would. 1 on unguided paths.
     rr_scale: f32,
     /// The path's time (its camera ray's): every ray of the path sees moving shapes there.
-    time: f32,
+    pub(super) time: f32,
+}
+
+/// One copy of a path between events: where it goes, what it carries, and what the next
+/// events need to know of the vertices before.
+struct Walk<C: Channels> {
+    ray: Ray,
+    medium: u32,
+    st: PathState<C>,
+    /// Scattering vertices so far.
+    depth: u32,
+    /// The last vertex scattered perfectly specularly: emission found next is not weighed
+    /// against light sampling.
+    specular_bounce: bool,
+    /// Some vertex so far scattered non-specularly (regularisation starts after it).
+    any_non_specular: bool,
+    /// Refraction's radiance scaling, undone for Russian roulette.
+    eta_scale: f32,
+    /// The previous scattering vertex and its shading normal (zero in media): the light
+    /// sampler's context there, which MIS needs again when a light is hit.
+    prev_p: Vec3,
+    prev_n: Vec3,
+    /// The extra light samples ([`PathConfig::extra_direct`]) were taken.
+    extra_done: bool,
+    /// The camera line's area lights have been estimated (`PathConfig::camera_line`): the
+    /// area lights the path reaches at depth 0 are then already counted.
+    line_done: bool,
+    /// The ray's differentials while it has them (pbrt-v4's `RayDifferential`): the camera
+    /// ray's, found at its first surface (`camera_diff` until then; crossing an `interface`
+    /// keeps them), then reflected or refracted ones after perfectly specular bounces;
+    /// textures filter over the footprint they give.
+    camera_diff: bool,
+    diff: Option<Differentials>,
 }
 
 /// A path copy left waiting after splitting at a medium vertex
-/// ([`super::PathStrategy::split_medium`]): the loop's state after that vertex, continuing along
+/// ([`super::PathStrategy::split_medium`]): the walk after that vertex, continuing along
 /// `ray`.
 #[derive(Clone, Copy)]
 struct Branch<C: Channels> {
@@ -149,8 +155,58 @@ struct Branch<C: Channels> {
     line_done: bool,
 }
 
+impl<C: Channels> Walk<C> {
+    /// A copy taken up where it was left: after a non-specular medium vertex, without
+    /// differentials.
+    fn resume(b: Branch<C>) -> Walk<C> {
+        Walk {
+            ray: b.ray,
+            medium: b.medium,
+            st: b.st,
+            depth: b.depth,
+            specular_bounce: false,
+            any_non_specular: true,
+            eta_scale: b.eta_scale,
+            prev_p: b.prev_p,
+            prev_n: Vec3::ZERO,
+            extra_done: b.extra_done,
+            line_done: b.line_done,
+            camera_diff: false,
+            diff: None,
+        }
+    }
+}
+
 /// Most path copies waiting at once; splitting makes fewer copies when it is full.
 const MAX_PENDING: usize = 16;
+
+/// How delta tracking through the current medium ended.
+enum Tracked {
+    /// Absorbed, or the path's weight vanished.
+    Ended,
+    /// Real scattering at this point.
+    Scattered(Vec3),
+    /// The segment's end (a surface, or infinity) was reached.
+    Reached,
+}
+
+/// The loop's context: what every event reads (scene, parameters, wavelengths) and adds to
+/// (the sampler's dimensions, the observer, the estimate, the waiting copies).
+struct Tracer<'a, C: Channels, O> {
+    scene: &'a Scene,
+    config: &'a PathConfig,
+    lambda: &'a mut C::Lambda,
+    sampler: &'a mut Sampler,
+    observer: &'a mut O,
+    stats: &'a mut RayStats,
+    /// A new hero channel at every vertex ([`PathConfig::hero_per_segment`] in chromatic media).
+    per_segment: bool,
+    camera_ray: Ray,
+    /// The estimate so far.
+    l: C,
+    pending: [Option<Branch<C>>; MAX_PENDING],
+    n_pending: usize,
+}
 
 /// Radiance arriving along `ray` (from the camera, in medium `medium`) at the wavelengths
 /// `lambda` (which a dispersive surface may cut down to the first), estimated by one path in
@@ -158,411 +214,468 @@ const MAX_PENDING: usize = 16;
 #[allow(clippy::too_many_arguments)]
 pub fn trace_path<C: Channels, O: PathObserver<C>>(
     scene: &Scene,
-    mut ray: Ray,
-    mut medium: u32,
+    ray: Ray,
+    medium: u32,
     lambda: &mut C::Lambda,
     sampler: &mut Sampler,
     config: &PathConfig,
     observer: &mut O,
     stats: &mut RayStats,
 ) -> C {
-    let mut l = C::ZERO;
     // Chromatic media need a randomly chosen hero channel for spectral MIS.
     let hero = if scene.has_chromatic_media { C::hero_channel(sampler.get_1d()) } else { 0 };
-    let per_segment = config.hero_per_segment && scene.has_chromatic_media;
-    let mut st = PathState { beta: C::ONE, r_u: C::ONE, r_l: C::ONE, hero, rr_scale: 1.0, time: ray.time };
-    let mut specular_bounce = false;
-    let mut any_non_specular = false;
-    let mut eta_scale = 1.0f32;
-    let mut depth = 0u32;
-    // The previous scattering vertex and its shading normal (zero in media): the light
-    // sampler's context there, which MIS needs again when a light is hit.
-    let mut prev_p = ray.o;
-    let mut prev_n = Vec3::ZERO;
-    let mut extra_done = false;
-    // The camera line's area lights have been estimated (`PathConfig::camera_line`): the
-    // area lights the path reaches at depth 0 are then already counted.
-    let mut line_done = false;
-    // The ray's differentials while it has them (pbrt-v4's `RayDifferential`): the camera
-    // ray's, found at its first surface (from the camera ray: crossing an `interface` keeps
-    // them), then reflected or refracted ones after perfectly specular bounces; textures
-    // filter over the footprint they give.
-    let camera_ray = ray;
-    let mut camera_diff = scene.footprint.is_some();
-    let mut diff = None;
+    let mut walk = Walk {
+        ray,
+        medium,
+        st: PathState { beta: C::ONE, r_u: C::ONE, r_l: C::ONE, hero, rr_scale: 1.0, time: ray.time },
+        depth: 0,
+        specular_bounce: false,
+        any_non_specular: false,
+        eta_scale: 1.0,
+        prev_p: ray.o,
+        prev_n: Vec3::ZERO,
+        extra_done: false,
+        line_done: false,
+        camera_diff: scene.footprint.is_some(),
+        diff: None,
+    };
+    let mut tracer = Tracer {
+        scene,
+        config,
+        lambda,
+        sampler,
+        observer,
+        stats,
+        per_segment: config.hero_per_segment && scene.has_chromatic_media,
+        camera_ray: ray,
+        l: C::ZERO,
+        pending: [None; MAX_PENDING],
+        n_pending: 0,
+    };
+    loop {
+        tracer.follow(&mut walk);
+        // This copy of the path ended: take up the next waiting one.
+        if tracer.n_pending == 0 {
+            break;
+        }
+        tracer.n_pending -= 1;
+        walk = Walk::resume(tracer.pending[tracer.n_pending].take().expect("pending path"));
+    }
+    tracer.l
+}
 
-    let mut pending = [None::<Branch<C>>; MAX_PENDING];
-    let mut n_pending = 0usize;
-    'paths: loop {
-        'bounce: loop {
-            stats.bounce += 1;
-            // The hero of this segment (one per path unless `hero_per_segment`).
-            let hero = st.hero;
-            let hit = scene.surfaces.intersect(&ray, f32::INFINITY);
-            if config.camera_line && depth == 0 && medium != NONE && !line_done {
-                line_done = true;
-                let c = line_emission(scene, ray, hit, medium, &st, lambda, stats);
-                if !c.is_zero() {
-                    l += c;
-                    observer.on_emission(&EmissionEvent { depth, contribution: c, pdf_light: 0.0 });
-                }
-            }
+impl<C: Channels, O: PathObserver<C>> Tracer<'_, C, O> {
+    /// Follows one copy of the path, event by event, until it ends: the segment to the next
+    /// surface (and the camera line's lights), delta tracking through its medium (scattering
+    /// there, or reaching the surface), escaping to the environment, or a surface's emission
+    /// and scattering.
+    #[inline(always)]
+    fn follow(&mut self, w: &mut Walk<C>) {
+        loop {
+            self.stats.bounce += 1;
+            let hit = self.scene.surfaces.intersect(&w.ray, f32::INFINITY);
+            self.camera_line(w, hit);
             // Area lights on the camera line (depth 0) once it has been estimated.
-            let line_counted = line_done && depth == 0;
-
-            // Delta tracking through the current medium up to the surface.
-            if medium != NONE {
-                let m = &scene.media[medium as usize];
-                let t_max = hit.as_ref().map_or(f32::INFINITY, |h| h.surface.t);
-                let mut rng =
-                    Pcg32::new(hash_sample(sampler.get_1d(), Vec2::ZERO), hash_sample(sampler.get_1d(), Vec2::ONE));
-                let u = sampler.get_1d();
-                let (mut scattered, mut terminated) = (false, false);
-                let mut scatter_p = Vec3::ZERO;
-                let t_maj =
-                    sample_t_maj::<C, _>(m, &ray, t_max, u, &mut rng, hero, lambda, |p, mp, sigma_maj, t_maj, rng| {
-                        if st.beta.is_zero() {
-                            terminated = true;
-                            return false;
-                        }
-                        // Medium emission, weighted by the chance of having reached it.
-                        if depth < config.max_depth && !mp.le.is_zero() {
-                            let pdf = sigma_maj[hero] * t_maj[hero];
-                            let betap = st.beta * t_maj / pdf;
-                            let r_e = st.r_u * sigma_maj * t_maj / pdf;
-                            if !r_e.is_zero() {
-                                let c = betap * mp.sigma_a * mp.le / r_e.average();
-                                l += c;
-                                observer.on_emission(&EmissionEvent { depth, contribution: c, pdf_light: 0.0 });
-                            }
-                        }
-                        // Choose absorption, real scattering or null scattering with the hero
-                        // channel's probabilities.
-                        let p_absorb = mp.sigma_a[hero] / sigma_maj[hero];
-                        let p_scatter = mp.sigma_s[hero] / sigma_maj[hero];
-                        let um = rng.uniform();
-                        if um < p_absorb {
-                            terminated = true;
-                            false
-                        } else if um < p_absorb + p_scatter {
-                            if depth >= config.max_depth {
-                                terminated = true;
-                                return false;
-                            }
-                            depth += 1;
-                            // In a gray medium these ratios are 1: only chromatic media pay for
-                            // spectral MIS.
-                            if m.chromatic {
-                                let pdf = t_maj[hero] * mp.sigma_s[hero];
-                                st.beta *= t_maj * mp.sigma_s / pdf;
-                                st.r_u *= t_maj * mp.sigma_s / pdf;
-                            }
-                            scattered = true;
-                            scatter_p = p;
-                            false
-                        } else {
-                            let sigma_n = (sigma_maj - mp.sigma_a - mp.sigma_s).max(C::ZERO);
-                            let pdf = t_maj[hero] * sigma_n[hero];
-                            if pdf == 0.0 {
-                                st.beta = C::ZERO;
-                            } else if m.chromatic {
-                                st.beta *= t_maj * sigma_n / pdf;
-                                st.r_u *= t_maj * sigma_n / pdf;
-                                st.r_l *= t_maj * sigma_maj / pdf;
-                            } else {
-                                st.r_l *= sigma_maj[hero] / sigma_n[hero];
-                            }
-                            !st.beta.is_zero() && !st.r_u.is_zero()
-                        }
-                    });
-                if terminated || st.beta.is_zero() || st.r_u.is_zero() {
-                    break 'bounce;
-                }
-                if scattered {
-                    (camera_diff, diff) = (false, None);
-                    if per_segment {
-                        end_segment(&mut st, sampler);
-                    }
-                    // Real scattering: next-event estimation, then sample the phase function.
-                    let phase = HenyeyGreenstein::new(m.g);
-                    let wo = -ray.d;
-                    // Next-event estimation as Russian roulette where the observer expects it to
-                    // find nothing (its probability divides what it finds).
-                    let nee_prob =
-                        if observer.guides() { observer.nee_medium_probability(medium, scatter_p) } else { 1.0 };
-                    if config.next_event && (nee_prob >= 1.0 || sampler.get_1d() < nee_prob) {
-                        let u_pick = sampler.get_1d();
-                        let u_light = sampler.get_2d();
-                        let sc = Scatterer::Medium { phase, wo };
-                        if let Some(c) = sample_direct(
-                            scene,
-                            scatter_p,
-                            None,
-                            medium,
-                            &sc,
-                            (u_pick, u_light),
-                            &st,
-                            lambda,
-                            depth - 1,
-                            observer,
-                            stats,
-                            true,
-                        ) {
-                            l += if nee_prob < 1.0 { c / nee_prob } else { c };
-                        }
-                        if config.extra_direct > 0 && !extra_done {
-                            extra_done = true;
-                            let c =
-                                extra_direct(scene, scatter_p, None, medium, &sc, &st, lambda, config, sampler, stats);
-                            observer.on_extra_direct(depth - 1, c);
-                        }
-                    }
-                    // Splitting where the observer guides and asks for it: the path continues in
-                    // several independent directions, each with its share of β (roulette's test
-                    // below sees β as it was before the split).
-                    let mut copies = 1u32;
-                    if observer.guides() {
-                        let beta = (st.beta / st.r_u.average()).average();
-                        let n = observer.split_medium(medium, scatter_p, beta);
-                        copies = n.clamp(1, (MAX_PENDING - n_pending) as u32 + 1);
-                        if copies > 1 {
-                            st.beta /= copies as f32;
-                            st.rr_scale *= copies as f32;
-                        }
-                    }
-                    let at_vertex = st;
-                    let mut next: Option<(Ray, PathState<C>)> = None;
-                    for _ in 0..copies {
-                        let mut st = at_vertex;
-                        // The continuation: (direction, phase value, β's factor, MIS density),
-                        // from the guide when the observer guides here, else from the phase
-                        // function.
-                        let guided = if observer.guides() {
-                            let u = sampler.get_1d();
-                            observer.guide_medium(medium, scatter_p, wo, &phase, u).map(|gs| (gs, phase.p(wo, gs.wi)))
-                        } else {
-                            None
-                        };
-                        let (wi, p, factor, pdf) = match guided {
-                            Some((gs, p)) => {
-                                // The phase function's own sampling has factor p/pdf = 1.
-                                st.rr_scale = (st.rr_scale / gs.weight).clamp(1e-20, 1e20);
-                                (gs.wi, p, gs.weight, gs.pdf)
-                            }
-                            None => {
-                                let u = sampler.get_2d();
-                                let Some(ps) = phase.sample_p(wo, u) else {
-                                    continue;
-                                };
-                                (ps.wi, ps.p, ps.p / ps.pdf, ps.pdf)
-                            }
-                        };
-                        if pdf == 0.0 || factor == 0.0 || !factor.is_finite() {
-                            continue;
-                        }
-                        observer.on_vertex(&VertexEvent {
-                            depth: depth - 1,
-                            p: scatter_p,
-                            n: Vec3::ZERO,
-                            wo,
-                            wi,
-                            pdf,
-                            f: C::splat(p),
-                            beta: st.beta,
-                            specular: false,
-                            in_medium: true,
-                            g: m.g,
-                            lambertian: false,
-                        });
-                        st.beta *= factor;
-                        st.r_l = st.r_u / pdf;
-                        let out = Ray::timed(scatter_p, wi, st.time);
-                        if rr(&mut st, eta_scale, depth, sampler) {
-                            continue;
-                        }
-                        if next.is_none() {
-                            next = Some((out, st));
-                        } else {
-                            pending[n_pending] = Some(Branch {
-                                ray: out,
-                                medium,
-                                st,
-                                depth,
-                                prev_p: scatter_p,
-                                eta_scale,
-                                extra_done,
-                                line_done,
-                            });
-                            n_pending += 1;
-                        }
-                    }
-                    let Some((out, st_next)) = next else { break 'bounce };
-                    (ray, st) = (out, st_next);
-                    prev_p = scatter_p;
-                    prev_n = Vec3::ZERO;
-                    specular_bounce = false;
-                    any_non_specular = true;
-                    continue;
-                }
-                if m.chromatic {
-                    let h = t_maj[hero];
-                    st.beta *= t_maj / h;
-                    st.r_u *= t_maj / h;
-                    st.r_l *= t_maj / h;
+            let line_counted = w.line_done && w.depth == 0;
+            if w.medium != NONE {
+                match self.track_medium(w, hit.as_ref()) {
+                    Tracked::Ended => return,
+                    Tracked::Scattered(p) if self.scatter_in_medium(w, p) => continue,
+                    Tracked::Scattered(_) => return,
+                    Tracked::Reached => {}
                 }
             }
+            let Some(hit) = hit else {
+                self.escape(w);
+                return;
+            };
+            if !line_counted {
+                self.surface_emission(w, &hit);
+            }
+            if !self.scatter_at_surface(w, hit) {
+                return;
+            }
+        }
+    }
 
-            let Some(mut hit) = hit else {
-                // Escaped: environment emission.
-                for &i in &scene.infinite_lights {
-                    let light = &scene.lights[i as usize];
-                    let le = light.le::<C>(ray.o, ray.d, lambda);
-                    if le.is_zero() {
+    /// The camera line's area lights, once, on the camera segment through a medium
+    /// ([`PathConfig::camera_line`]).
+    #[inline(always)]
+    fn camera_line(&mut self, w: &mut Walk<C>, hit: Option<Hit>) {
+        if self.config.camera_line && w.depth == 0 && w.medium != NONE && !w.line_done {
+            w.line_done = true;
+            let c = line_emission(self.scene, w.ray, hit, w.medium, &w.st, self.lambda, self.stats);
+            if !c.is_zero() {
+                self.l += c;
+                self.observer.on_emission(&EmissionEvent { depth: w.depth, contribution: c, pdf_light: 0.0 });
+            }
+        }
+    }
+
+    /// Delta tracking through the current medium up to the surface `hit` (or infinity),
+    /// adding the medium's emission on the way (PBR 4th ed. §14.2.2).
+    #[inline(always)]
+    fn track_medium(&mut self, w: &mut Walk<C>, hit: Option<&Hit>) -> Tracked {
+        let config = self.config;
+        let m = &self.scene.media[w.medium as usize];
+        let hero = w.st.hero;
+        let t_max = hit.map_or(f32::INFINITY, |h| h.surface.t);
+        let mut rng =
+            Pcg32::new(hash_sample(self.sampler.get_1d(), Vec2::ZERO), hash_sample(self.sampler.get_1d(), Vec2::ONE));
+        let u = self.sampler.get_1d();
+        let (mut scattered, mut terminated) = (false, false);
+        let mut scatter_p = Vec3::ZERO;
+        let (st, depth, l, observer) = (&mut w.st, &mut w.depth, &mut self.l, &mut *self.observer);
+        let t_maj =
+            sample_t_maj::<C, _>(m, &w.ray, t_max, u, &mut rng, hero, self.lambda, |p, mp, sigma_maj, t_maj, rng| {
+                if st.beta.is_zero() {
+                    terminated = true;
+                    return false;
+                }
+                // Medium emission, weighted by the chance of having reached it.
+                if *depth < config.max_depth && !mp.le.is_zero() {
+                    let pdf = sigma_maj[hero] * t_maj[hero];
+                    let betap = st.beta * t_maj / pdf;
+                    let r_e = st.r_u * sigma_maj * t_maj / pdf;
+                    if !r_e.is_zero() {
+                        let c = betap * mp.sigma_a * mp.le / r_e.average();
+                        *l += c;
+                        observer.on_emission(&EmissionEvent { depth: *depth, contribution: c, pdf_light: 0.0 });
+                    }
+                }
+                // Choose absorption, real scattering or null scattering with the hero channel's
+                // probabilities.
+                let p_absorb = mp.sigma_a[hero] / sigma_maj[hero];
+                let p_scatter = mp.sigma_s[hero] / sigma_maj[hero];
+                let um = rng.uniform();
+                if um < p_absorb {
+                    terminated = true;
+                    false
+                } else if um < p_absorb + p_scatter {
+                    if *depth >= config.max_depth {
+                        terminated = true;
+                        return false;
+                    }
+                    *depth += 1;
+                    // In a gray medium these ratios are 1: only chromatic media pay for spectral
+                    // MIS.
+                    if m.chromatic {
+                        let pdf = t_maj[hero] * mp.sigma_s[hero];
+                        st.beta *= t_maj * mp.sigma_s / pdf;
+                        st.r_u *= t_maj * mp.sigma_s / pdf;
+                    }
+                    scattered = true;
+                    scatter_p = p;
+                    false
+                } else {
+                    let sigma_n = (sigma_maj - mp.sigma_a - mp.sigma_s).max(C::ZERO);
+                    let pdf = t_maj[hero] * sigma_n[hero];
+                    if pdf == 0.0 {
+                        st.beta = C::ZERO;
+                    } else if m.chromatic {
+                        st.beta *= t_maj * sigma_n / pdf;
+                        st.r_u *= t_maj * sigma_n / pdf;
+                        st.r_l *= t_maj * sigma_maj / pdf;
+                    } else {
+                        st.r_l *= sigma_maj[hero] / sigma_n[hero];
+                    }
+                    !st.beta.is_zero() && !st.r_u.is_zero()
+                }
+            });
+        if terminated || w.st.beta.is_zero() || w.st.r_u.is_zero() {
+            return Tracked::Ended;
+        }
+        if scattered {
+            return Tracked::Scattered(scatter_p);
+        }
+        if m.chromatic {
+            let h = t_maj[hero];
+            w.st.beta *= t_maj / h;
+            w.st.r_u *= t_maj / h;
+            w.st.r_l *= t_maj / h;
+        }
+        Tracked::Reached
+    }
+
+    /// Real scattering in a medium at `p`: next-event estimation, then the phase function (or
+    /// the observer's guide) picks the continuation, split into several copies where the
+    /// observer asks. False when no copy continues.
+    #[inline(always)]
+    fn scatter_in_medium(&mut self, w: &mut Walk<C>, p: Vec3) -> bool {
+        let (scene, config, medium) = (self.scene, self.config, w.medium);
+        let m = &scene.media[medium as usize];
+        (w.camera_diff, w.diff) = (false, None);
+        if self.per_segment {
+            end_segment(&mut w.st, self.sampler);
+        }
+        let phase = HenyeyGreenstein::new(m.g);
+        let wo = -w.ray.d;
+        // Next-event estimation as Russian roulette where the observer expects it to find
+        // nothing (its probability divides what it finds).
+        let nee_prob = if self.observer.guides() { self.observer.nee_medium_probability(medium, p) } else { 1.0 };
+        if config.next_event && (nee_prob >= 1.0 || self.sampler.get_1d() < nee_prob) {
+            let u = (self.sampler.get_1d(), self.sampler.get_2d());
+            let sc = Scatterer::Medium { phase, wo };
+            let (st, depth) = (&w.st, w.depth - 1);
+            if let Some(c) =
+                sample_direct(scene, p, None, medium, &sc, u, st, self.lambda, depth, self.observer, self.stats, true)
+            {
+                self.l += if nee_prob < 1.0 { c / nee_prob } else { c };
+            }
+            if config.extra_direct > 0 && !w.extra_done {
+                w.extra_done = true;
+                let c = extra_direct(scene, p, None, medium, &sc, st, self.lambda, config, self.sampler, self.stats);
+                self.observer.on_extra_direct(depth, c);
+            }
+        }
+        // Splitting where the observer guides and asks for it: the path continues in several
+        // independent directions, each with its share of β (roulette's test below sees β as
+        // it was before the split).
+        let mut copies = 1u32;
+        if self.observer.guides() {
+            let beta = (w.st.beta / w.st.r_u.average()).average();
+            let n = self.observer.split_medium(medium, p, beta);
+            copies = n.clamp(1, (MAX_PENDING - self.n_pending) as u32 + 1);
+            if copies > 1 {
+                w.st.beta /= copies as f32;
+                w.st.rr_scale *= copies as f32;
+            }
+        }
+        let at_vertex = w.st;
+        let mut next: Option<(Ray, PathState<C>)> = None;
+        for _ in 0..copies {
+            let mut st = at_vertex;
+            // The continuation: (direction, phase value, β's factor, MIS density), from the
+            // guide when the observer guides here, else from the phase function.
+            let guided = if self.observer.guides() {
+                let u = self.sampler.get_1d();
+                self.observer.guide_medium(medium, p, wo, &phase, u).map(|gs| (gs, phase.p(wo, gs.wi)))
+            } else {
+                None
+            };
+            let (wi, f, factor, pdf) = match guided {
+                Some((gs, f)) => {
+                    // The phase function's own sampling has factor p/pdf = 1.
+                    st.rr_scale = (st.rr_scale / gs.weight).clamp(1e-20, 1e20);
+                    (gs.wi, f, gs.weight, gs.pdf)
+                }
+                None => {
+                    let u = self.sampler.get_2d();
+                    let Some(ps) = phase.sample_p(wo, u) else {
                         continue;
-                    }
-                    let (c, pdf_light) = if depth == 0 || specular_bounce || !config.next_event {
-                        (st.beta * le / st.r_u.average(), 0.0)
-                    } else {
-                        let pdf = scene.light_sampler.pmf(prev_p, prev_n, i as usize)
-                            * light.pdf_li(&LightContext { p: prev_p }, ray.d, None, &scene.surfaces.shapes);
-                        (st.beta * le / (st.r_u + st.r_l * pdf).average(), pdf)
                     };
-                    l += c;
-                    observer.on_emission(&EmissionEvent { depth, contribution: c, pdf_light });
+                    (ps.wi, ps.p, ps.p / ps.pdf, ps.pdf)
                 }
-                break;
             };
-            let s = &hit.surface;
-            let wo = -ray.d;
-
-            // Emission from an area light that was hit.
-            if hit.prim.area_light != NONE && !line_counted {
-                let light = &scene.lights[hit.prim.area_light as usize];
-                let le = light.emitted::<C>(s, wo, lambda, &scene.surfaces);
-                if !le.is_zero() {
-                    let (c, pdf_light) = if depth == 0 || specular_bounce || !config.next_event {
-                        (st.beta * le / st.r_u.average(), 0.0)
-                    } else {
-                        let pdf = scene.light_sampler.pmf(prev_p, prev_n, hit.prim.area_light as usize)
-                            * light.pdf_li(&LightContext { p: prev_p }, ray.d, Some(s), &scene.surfaces.shapes);
-                        (st.beta * le / (st.r_u + st.r_l * pdf).average(), pdf)
-                    };
-                    l += c;
-                    observer.on_emission(&EmissionEvent { depth, contribution: c, pdf_light });
-                }
-            }
-
-            if camera_diff {
-                camera_diff = false;
-                diff = scene.footprint.as_ref().and_then(|f| f.camera_differentials(&scene.camera, &camera_ray));
-            }
-            let (material, tex_ctx) = scene.surface_material(&mut hit, wo, diff.as_ref());
-            let s = &hit.surface;
-            let Some(mut bxdf) = material.bxdf::<C>(&scene.textures, &tex_ctx, lambda) else {
-                // An interface: cross it without counting a bounce.
-                medium = medium_after(scene, &hit, ray.d, medium);
-                ray = hit.spawn_ray(ray.d);
+            if pdf == 0.0 || factor == 0.0 || !factor.is_finite() {
                 continue;
-            };
-            if depth == config.max_depth {
-                break;
             }
-            depth += 1;
-            if per_segment {
-                end_segment(&mut st, sampler);
+            self.observer.on_vertex(&VertexEvent {
+                depth: w.depth - 1,
+                p,
+                n: Vec3::ZERO,
+                wo,
+                wi,
+                pdf,
+                f: C::splat(f),
+                beta: st.beta,
+                specular: false,
+                in_medium: true,
+                g: m.g,
+                lambertian: false,
+            });
+            st.beta *= factor;
+            st.r_l = st.r_u / pdf;
+            let out = Ray::timed(p, wi, st.time);
+            if rr(&mut st, w.eta_scale, w.depth, self.sampler) {
+                continue;
             }
-            if config.regularize && any_non_specular {
-                bxdf.regularize();
+            if next.is_none() {
+                next = Some((out, st));
+            } else {
+                self.pending[self.n_pending] = Some(Branch {
+                    ray: out,
+                    medium,
+                    st,
+                    depth: w.depth,
+                    prev_p: p,
+                    eta_scale: w.eta_scale,
+                    extra_done: w.extra_done,
+                    line_done: w.line_done,
+                });
+                self.n_pending += 1;
             }
-            let frame = shading_frame(&hit);
-            let wo_local = frame.to_local(wo);
+        }
+        let Some((out, st)) = next else { return false };
+        (w.ray, w.st) = (out, st);
+        (w.prev_p, w.prev_n) = (p, Vec3::ZERO);
+        (w.specular_bounce, w.any_non_specular) = (false, true);
+        true
+    }
 
-            // Next-event estimation.
-            if config.next_event && bxdf.flags().is_non_specular() {
-                let u_pick = sampler.get_1d();
-                let u_light = sampler.get_2d();
-                let sc = Scatterer::Surface { bxdf: &bxdf, frame: &frame, wo_local };
-                if let Some(c) = sample_direct(
+    /// The path escaped: the environment's emission, MIS-weighted against light sampling
+    /// where the previous vertex sampled lights.
+    #[inline(always)]
+    fn escape(&mut self, w: &Walk<C>) {
+        let scene = self.scene;
+        for &i in &scene.infinite_lights {
+            let light = &scene.lights[i as usize];
+            let le = light.le::<C>(w.ray.o, w.ray.d, self.lambda);
+            if le.is_zero() {
+                continue;
+            }
+            let st = &w.st;
+            let (c, pdf_light) = if w.depth == 0 || w.specular_bounce || !self.config.next_event {
+                (st.beta * le / st.r_u.average(), 0.0)
+            } else {
+                let pdf = scene.light_sampler.pmf(w.prev_p, w.prev_n, i as usize)
+                    * light.pdf_li(&LightContext { p: w.prev_p }, w.ray.d, None, &scene.surfaces.shapes);
+                (st.beta * le / (st.r_u + st.r_l * pdf).average(), pdf)
+            };
+            self.l += c;
+            self.observer.on_emission(&EmissionEvent { depth: w.depth, contribution: c, pdf_light });
+        }
+    }
+
+    /// Emission from an area light the path hit, MIS-weighted as [`Self::escape`]'s.
+    #[inline(always)]
+    fn surface_emission(&mut self, w: &Walk<C>, hit: &Hit) {
+        if hit.prim.area_light == NONE {
+            return;
+        }
+        let scene = self.scene;
+        let (s, st) = (&hit.surface, &w.st);
+        let light = &scene.lights[hit.prim.area_light as usize];
+        let le = light.emitted::<C>(s, -w.ray.d, self.lambda, &scene.surfaces);
+        if le.is_zero() {
+            return;
+        }
+        let (c, pdf_light) = if w.depth == 0 || w.specular_bounce || !self.config.next_event {
+            (st.beta * le / st.r_u.average(), 0.0)
+        } else {
+            let pdf = scene.light_sampler.pmf(w.prev_p, w.prev_n, hit.prim.area_light as usize)
+                * light.pdf_li(&LightContext { p: w.prev_p }, w.ray.d, Some(s), &scene.surfaces.shapes);
+            (st.beta * le / (st.r_u + st.r_l * pdf).average(), pdf)
+        };
+        self.l += c;
+        self.observer.on_emission(&EmissionEvent { depth: w.depth, contribution: c, pdf_light });
+    }
+
+    /// At a surface: an `interface` is crossed without counting a bounce; otherwise
+    /// next-event estimation, then the BSDF samples the continuation and Russian roulette
+    /// may end the path. False when the path ends.
+    #[inline(always)]
+    fn scatter_at_surface(&mut self, w: &mut Walk<C>, mut hit: Hit) -> bool {
+        let (scene, config) = (self.scene, self.config);
+        let wo = -w.ray.d;
+        if w.camera_diff {
+            w.camera_diff = false;
+            w.diff = scene.footprint.as_ref().and_then(|f| f.camera_differentials(&scene.camera, &self.camera_ray));
+        }
+        let (material, tex_ctx) = scene.surface_material(&mut hit, wo, w.diff.as_ref());
+        let Some(mut bxdf) = material.bxdf::<C>(&scene.textures, &tex_ctx, self.lambda) else {
+            // An interface: cross it without counting a bounce.
+            w.medium = medium_after(scene, &hit, w.ray.d, w.medium);
+            w.ray = hit.spawn_ray(w.ray.d);
+            return true;
+        };
+        if w.depth == config.max_depth {
+            return false;
+        }
+        w.depth += 1;
+        if self.per_segment {
+            end_segment(&mut w.st, self.sampler);
+        }
+        if config.regularize && w.any_non_specular {
+            bxdf.regularize();
+        }
+        let s = &hit.surface;
+        let frame = shading_frame(&hit);
+        let wo_local = frame.to_local(wo);
+
+        // Next-event estimation.
+        if config.next_event && bxdf.flags().is_non_specular() {
+            let u = (self.sampler.get_1d(), self.sampler.get_2d());
+            let sc = Scatterer::Surface { bxdf: &bxdf, frame: &frame, wo_local };
+            let (st, depth, medium) = (&w.st, w.depth - 1, w.medium);
+            if let Some(c) = sample_direct(
+                scene,
+                s.p,
+                Some(&hit),
+                medium,
+                &sc,
+                u,
+                st,
+                self.lambda,
+                depth,
+                self.observer,
+                self.stats,
+                true,
+            ) {
+                self.l += c;
+            }
+            if config.extra_direct > 0 && !w.extra_done {
+                w.extra_done = true;
+                let c = extra_direct(
                     scene,
                     s.p,
                     Some(&hit),
                     medium,
                     &sc,
-                    (u_pick, u_light),
-                    &st,
-                    lambda,
-                    depth - 1,
-                    observer,
-                    stats,
-                    true,
-                ) {
-                    l += c;
-                }
-                if config.extra_direct > 0 && !extra_done {
-                    extra_done = true;
-                    let c = extra_direct(scene, s.p, Some(&hit), medium, &sc, &st, lambda, config, sampler, stats);
-                    observer.on_extra_direct(depth - 1, c);
-                }
+                    st,
+                    self.lambda,
+                    config,
+                    self.sampler,
+                    self.stats,
+                );
+                self.observer.on_extra_direct(depth, c);
             }
+        }
 
-            // Continue the path by sampling the BSDF.
-            let uc = sampler.get_1d();
-            let u = sampler.get_2d();
-            let Some(bs) = bxdf.sample_f(wo_local, uc, u, TransportMode::Radiance, ReflTransFlags::ALL) else {
-                break;
-            };
-            let wi = frame.to_world(bs.wi);
-            let f_cos = bs.f * bs.wi.z.abs();
-            observer.on_vertex(&VertexEvent {
-                depth: depth - 1,
-                p: s.p,
-                n: s.ns,
-                wo,
-                wi,
-                pdf: bs.pdf,
-                f: f_cos,
-                beta: st.beta,
-                specular: bs.is_specular(),
-                in_medium: false,
-                g: 0.0,
-                lambertian: matches!(bxdf, Bxdf::Diffuse(_)),
-            });
-            st.beta *= f_cos / bs.pdf;
-            st.r_l = if bs.pdf_is_proportional {
-                st.r_u / bxdf.pdf(wo_local, bs.wi, TransportMode::Radiance, ReflTransFlags::ALL)
-            } else {
-                st.r_u / bs.pdf
-            };
-            diff = match diff {
-                Some(d) if bs.is_specular() => {
-                    scene.specular_differentials(&hit, &tex_ctx, &d, wo, wi, bs.is_transmission(), bs.eta)
-                }
-                _ => None,
-            };
-            specular_bounce = bs.is_specular();
-            any_non_specular |= !bs.is_specular();
-            if bs.is_transmission() {
-                eta_scale *= bs.eta * bs.eta;
+        // Continue the path by sampling the BSDF.
+        let uc = self.sampler.get_1d();
+        let u = self.sampler.get_2d();
+        let Some(bs) = bxdf.sample_f(wo_local, uc, u, TransportMode::Radiance, ReflTransFlags::ALL) else {
+            return false;
+        };
+        let wi = frame.to_world(bs.wi);
+        let f_cos = bs.f * bs.wi.z.abs();
+        self.observer.on_vertex(&VertexEvent {
+            depth: w.depth - 1,
+            p: s.p,
+            n: s.ns,
+            wo,
+            wi,
+            pdf: bs.pdf,
+            f: f_cos,
+            beta: w.st.beta,
+            specular: bs.is_specular(),
+            in_medium: false,
+            g: 0.0,
+            lambertian: matches!(bxdf, Bxdf::Diffuse(_)),
+        });
+        w.st.beta *= f_cos / bs.pdf;
+        w.st.r_l = if bs.pdf_is_proportional {
+            w.st.r_u / bxdf.pdf(wo_local, bs.wi, TransportMode::Radiance, ReflTransFlags::ALL)
+        } else {
+            w.st.r_u / bs.pdf
+        };
+        w.diff = match w.diff.take() {
+            Some(d) if bs.is_specular() => {
+                scene.specular_differentials(&hit, &tex_ctx, &d, wo, wi, bs.is_transmission(), bs.eta)
             }
-            prev_p = s.p;
-            prev_n = s.ns;
-            medium = medium_after(scene, &hit, wi, medium);
-            ray = hit.spawn_ray(wi);
-            if rr(&mut st, eta_scale, depth, sampler) {
-                break;
-            }
+            _ => None,
+        };
+        w.specular_bounce = bs.is_specular();
+        w.any_non_specular |= !bs.is_specular();
+        if bs.is_transmission() {
+            w.eta_scale *= bs.eta * bs.eta;
         }
-        // This copy of the path ended: take up the next waiting one.
-        if n_pending == 0 {
-            break 'paths;
-        }
-        n_pending -= 1;
-        let b = pending[n_pending].take().expect("pending path");
-        (ray, medium, st, depth, prev_p, eta_scale, extra_done, line_done) =
-            (b.ray, b.medium, b.st, b.depth, b.prev_p, b.eta_scale, b.extra_done, b.line_done);
-        (prev_n, specular_bounce, any_non_specular, camera_diff, diff) = (Vec3::ZERO, false, true, false, None);
+        (w.prev_p, w.prev_n) = (s.p, s.ns);
+        w.medium = medium_after(scene, &hit, wi, w.medium);
+        w.ray = hit.spawn_ray(wi);
+        !rr(&mut w.st, w.eta_scale, w.depth, self.sampler)
     }
-    l
 }
 
 /// The area-light emission along the straight line `ray` (starting in `medium`, first hitting
@@ -659,98 +772,4 @@ fn rr<C: Channels>(st: &mut PathState<C>, eta_scale: f32, depth: u32, sampler: &
         st.beta /= 1.0 - q;
     }
     false
-}
-
-/// The mean of `config.extra_direct` light samples at a vertex, by light sampling alone (so
-/// each is unbiased without the BSDF/phase technique). Their random numbers come from a
-/// generator seeded by one sampler dimension, so the count does not shift the sampler's
-/// dimensions for the rest of the path.
-#[allow(clippy::too_many_arguments)]
-fn extra_direct<C: Channels>(
-    scene: &Scene,
-    p: Vec3,
-    hit: Option<&Hit>,
-    medium: u32,
-    scatterer: &Scatterer<'_, C>,
-    st: &PathState<C>,
-    lambda: &C::Lambda,
-    config: &PathConfig,
-    sampler: &mut Sampler,
-    stats: &mut RayStats,
-) -> C {
-    let mut rng = Pcg32::new(hash_sample(sampler.get_1d(), Vec2::new(0.25, 0.75)), 0x9e37_79b9);
-    let mut sum = C::ZERO;
-    for _ in 0..config.extra_direct {
-        let u = (rng.uniform(), Vec2::new(rng.uniform(), rng.uniform()));
-        if let Some(c) =
-            sample_direct(scene, p, hit, medium, scatterer, u, st, lambda, 0, &mut NoObserver, stats, false)
-        {
-            sum += c;
-        }
-    }
-    sum / config.extra_direct as f32
-}
-
-/// One light sample at a vertex at `p` (on the surface `hit`, or inside `medium` when there
-/// is none), MIS-weighted against BSDF/phase sampling when `mis` (pbrt-v4's SampleLd), by
-/// light sampling alone otherwise. The shadow ray crosses `interface` surfaces and
-/// accumulates ratio-tracking transmittance through media.
-#[allow(clippy::too_many_arguments)]
-fn sample_direct<C: Channels, O: PathObserver<C>>(
-    scene: &Scene,
-    p: Vec3,
-    hit: Option<&Hit>,
-    medium: u32,
-    scatterer: &Scatterer<'_, C>,
-    (u_pick, u_light): (f32, Vec2),
-    st: &PathState<C>,
-    lambda: &C::Lambda,
-    depth: u32,
-    observer: &mut O,
-    stats: &mut RayStats,
-    mis: bool,
-) -> Option<C> {
-    let n_ctx = hit.map_or(Vec3::ZERO, |h| h.surface.ns);
-    let (index, pmf) = scene.light_sampler.sample(p, n_ctx, u_pick)?;
-    let light = &scene.lights[index];
-    let ls = light.sample_li::<C>(&LightContext { p }, u_light, &scene.surfaces, &scene.sphere, lambda)?;
-    if ls.pdf == 0.0 || ls.l.is_zero() {
-        return None;
-    }
-    let (f, pdf_scatter) = scatterer.eval(ls.wi);
-    if f.is_zero() {
-        return None;
-    }
-    // A shadow ray leaving a surface starts in the medium on the side it leaves towards.
-    let (n, shadow_medium) = match hit {
-        Some(h) => ((h.surface.n, h.surface.p_error), medium_after(scene, h, ls.wi, medium)),
-        None => ((Vec3::ZERO, 0.0), medium),
-    };
-    let ShadowEstimate { t_ray, r_u, r_l } =
-        transmittance(scene, p, n, shadow_medium, &ls, (st.hero, st.time), lambda, stats)?;
-    // Where the path is guided, the scattering technique MIS weighs against is the guide's
-    // (looked up only for unoccluded samples: inside a dielectric most are blocked).
-    let pdf_scatter = match scatterer {
-        Scatterer::Medium { phase, wo } if hit.is_none() && observer.guides() => {
-            observer.guide_medium_pdf(medium, p, *wo, phase, ls.wi).unwrap_or(pdf_scatter)
-        }
-        _ => pdf_scatter,
-    };
-    let pdf_light = pmf * ls.pdf;
-    let r_l = r_l * st.r_u * pdf_light;
-    let r_u = r_u * st.r_u * pdf_scatter;
-    let contribution = if ls.delta || !mis {
-        st.beta * f * t_ray * ls.l / r_l.average()
-    } else {
-        st.beta * f * t_ray * ls.l / (r_l + r_u).average()
-    };
-    observer.on_nee(&NeeEvent {
-        depth,
-        p,
-        wi: ls.wi,
-        pdf_light,
-        pdf_scatter: if ls.delta { 0.0 } else { pdf_scatter },
-        contribution,
-    });
-    Some(contribution)
 }

@@ -10,6 +10,7 @@ pub mod accel;
 pub mod camera;
 pub mod channels;
 pub mod color;
+pub mod error;
 pub mod film;
 pub mod geometry;
 pub mod imageio;
@@ -29,4 +30,5 @@ pub mod shapes;
 pub mod spectra;
 pub mod textures;
 
+pub use error::{Error, Result};
 pub use nimbus_parser as parser;

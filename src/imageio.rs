@@ -6,6 +6,7 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use crate::color::Rgb;
+use crate::error::{Error, Result};
 
 /// A linear RGB image, rows from the top.
 #[derive(Clone, Debug, PartialEq)]
@@ -81,7 +82,7 @@ fn temp_path(path: &Path) -> PathBuf {
     path.with_file_name(format!(".{name}.{}.tmp", std::process::id()))
 }
 
-fn write_atomically(path: &Path, write: impl FnOnce(&Path) -> Result<(), String>) -> Result<(), String> {
+fn write_atomically(path: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
     let tmp = temp_path(path);
     if let Err(e) = write(&tmp) {
         let _ = std::fs::remove_file(&tmp);
@@ -89,20 +90,31 @@ fn write_atomically(path: &Path, write: impl FnOnce(&Path) -> Result<(), String>
     }
     std::fs::rename(&tmp, path).map_err(|e| {
         let _ = std::fs::remove_file(&tmp);
-        format!("{}: {e}", path.display())
+        Error::io(path, "write", e)
     })
 }
 
-/// Writes `image` as `.exr` (32-bit float RGB) or `.png` (8-bit sRGB), chosen by extension.
-pub fn write_image(path: &Path, image: &Image) -> Result<(), String> {
-    match path.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase()) {
-        Some(e) if e == "exr" => write_atomically(path, |tmp| write_exr(tmp, image)),
-        Some(e) if e == "png" => write_atomically(path, |tmp| write_png(tmp, image)),
-        _ => Err(format!("{}: unsupported output format (use .exr or .png)", path.display())),
+/// An OpenEXR library error on `path` by kind: the file system's errors stay [`Error::Io`]
+/// (so that a missing file can be told apart), features the library lacks are
+/// [`Error::Unsupported`], the rest are [`Error::Malformed`]. The text stays "path: cause".
+fn exr_error(path: &Path, action: &'static str, e: exr::error::Error) -> Error {
+    match e {
+        exr::error::Error::Io(source) => Error::io(path, action, source),
+        exr::error::Error::NotSupported(_) => Error::Unsupported(format!("{}: {e}", path.display())),
+        other => Error::malformed(path, other.to_string()),
     }
 }
 
-fn write_exr(path: &Path, image: &crate::imageio::Image) -> Result<(), String> {
+/// Writes `image` as `.exr` (32-bit float RGB) or `.png` (8-bit sRGB), chosen by extension.
+pub fn write_image(path: &Path, image: &Image) -> Result<()> {
+    match path.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase()) {
+        Some(e) if e == "exr" => write_atomically(path, |tmp| write_exr(tmp, image)),
+        Some(e) if e == "png" => write_atomically(path, |tmp| write_png(tmp, image)),
+        _ => Err(Error::Unsupported(format!("{}: unsupported output format (use .exr or .png)", path.display()))),
+    }
+}
+
+fn write_exr(path: &Path, image: &crate::imageio::Image) -> Result<()> {
     use exr::meta::attribute::{AttributeValue, Text};
     use exr::prelude::*;
     let (w, h) = (image.width, image.height);
@@ -127,7 +139,7 @@ fn write_exr(path: &Path, image: &crate::imageio::Image) -> Result<(), String> {
                 (p.x, p.y, p.z)
             }),
         );
-        return Image::from_layer(layer).write().to_file(path).map_err(|e| format!("{}: {e}", path.display()));
+        return Image::from_layer(layer).write().to_file(path).map_err(|e| exr_error(path, "write", e));
     }
     let mut list: SmallVec<[AnyChannel<FlatSamples>; 4]> = SmallVec::new();
     for (c, name) in ["R", "G", "B"].iter().enumerate() {
@@ -135,12 +147,17 @@ fn write_exr(path: &Path, image: &crate::imageio::Image) -> Result<(), String> {
     }
     for (name, values) in &image.channels {
         if values.len() != w * h {
-            return Err(format!("{}: channel {name} has {} values for {w}x{h} pixels", path.display(), values.len()));
+            // Spelt out: exr's prelude brings its own `Error` into this function.
+            return Err(crate::error::Error::Invalid(format!(
+                "{}: channel {name} has {} values for {w}x{h} pixels",
+                path.display(),
+                values.len()
+            )));
         }
         list.push(AnyChannel::new(text(name), FlatSamples::F32(values.clone())));
     }
     let layer = Layer::new((w, h), attributes, Encoding::FAST_LOSSLESS, AnyChannels::sort(list));
-    Image::from_layer(layer).write().to_file(path).map_err(|e| format!("{}: {e}", path.display()))
+    Image::from_layer(layer).write().to_file(path).map_err(|e| exr_error(path, "write", e))
 }
 
 /// sRGB opto-electronic transfer function.
@@ -150,8 +167,13 @@ fn srgb_encode(v: f32) -> u8 {
     (s * 255.0 + 0.5) as u8
 }
 
-fn write_png(path: &Path, image: &Image) -> Result<(), String> {
-    let file = std::fs::File::create(path).map_err(|e| format!("{}: {e}", path.display()))?;
+fn write_png(path: &Path, image: &Image) -> Result<()> {
+    // The encoder's own errors are about the image (its size), not the file.
+    let err = |e: png::EncodingError| match e {
+        png::EncodingError::IoError(source) => Error::io(path, "write", source),
+        other => Error::Invalid(format!("{}: {other}", path.display())),
+    };
+    let file = std::fs::File::create(path).map_err(|e| Error::io(path, "create", e))?;
     let mut enc = png::Encoder::new(std::io::BufWriter::new(file), image.width as u32, image.height as u32);
     enc.set_color(png::ColorType::Rgb);
     enc.set_depth(png::BitDepth::Eight);
@@ -159,19 +181,22 @@ fn write_png(path: &Path, image: &Image) -> Result<(), String> {
     for (k, v) in &image.metadata {
         let _ = enc.add_text_chunk(k.clone(), v.clone());
     }
-    let mut writer = enc.write_header().map_err(|e| format!("{}: {e}", path.display()))?;
+    let mut writer = enc.write_header().map_err(err)?;
     let data: Vec<u8> =
         image.pixels.iter().flat_map(|p| [srgb_encode(p.x), srgb_encode(p.y), srgb_encode(p.z)]).collect();
-    writer.write_image_data(&data).map_err(|e| format!("{}: {e}", path.display()))?;
-    writer.finish().map_err(|e| format!("{}: {e}", path.display()))
+    writer.write_image_data(&data).map_err(err)?;
+    writer.finish().map_err(err)
 }
 
 /// Reads an EXR (linear) or PNG (sRGB-encoded 8 or 16 bit) image as linear RGB.
-pub fn read_image(path: &Path) -> Result<crate::imageio::Image, String> {
+pub fn read_image(path: &Path) -> Result<crate::imageio::Image> {
     match path.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase()) {
         Some(e) if e == "exr" => read_exr(path),
         Some(e) if e == "png" => read_png(path),
-        _ => Err(format!("{}: unsupported image format (nimbus reads .exr and .png)", path.display())),
+        _ => Err(Error::Unsupported(format!(
+            "{}: unsupported image format (nimbus reads .exr and .png)",
+            path.display()
+        ))),
     }
 }
 
@@ -180,14 +205,21 @@ fn srgb_decode(v: f32) -> f32 {
 }
 
 /// Reads a PNG, decoding sRGB to linear.
-pub fn read_png(path: &Path) -> Result<crate::imageio::Image, String> {
-    let err = |e: &dyn std::fmt::Display| format!("{}: {e}", path.display());
-    let file = std::fs::File::open(path).map_err(|e| err(&e))?;
+pub fn read_png(path: &Path) -> Result<crate::imageio::Image> {
+    // A file that ends early is corrupt, not unreadable: the decoder reports it as an I/O
+    // error of kind UnexpectedEof.
+    let err = |e: png::DecodingError| match e {
+        png::DecodingError::IoError(source) if source.kind() != std::io::ErrorKind::UnexpectedEof => {
+            Error::io(path, "read", source)
+        }
+        other => Error::malformed(path, other.to_string()),
+    };
+    let file = std::fs::File::open(path).map_err(|e| Error::io(path, "read", e))?;
     let mut decoder = png::Decoder::new(std::io::BufReader::new(file));
     decoder.set_transformations(png::Transformations::EXPAND);
-    let mut reader = decoder.read_info().map_err(|e| err(&e))?;
-    let mut buf = vec![0; reader.output_buffer_size().ok_or_else(|| err(&"image too large"))?];
-    let info = reader.next_frame(&mut buf).map_err(|e| err(&e))?;
+    let mut reader = decoder.read_info().map_err(err)?;
+    let mut buf = vec![0; reader.output_buffer_size().ok_or_else(|| Error::malformed(path, "image too large"))?];
+    let info = reader.next_frame(&mut buf).map_err(err)?;
     let (w, h) = (info.width as usize, info.height as usize);
     let channels = info.color_type.samples();
     let sixteen = info.bit_depth == png::BitDepth::Sixteen;
@@ -217,7 +249,7 @@ pub fn read_png(path: &Path) -> Result<crate::imageio::Image, String> {
 
 /// Reads the first RGB(A) layer of an OpenEXR file (an alpha other than 1 kept as channel
 /// `A`) and its text attributes.
-pub fn read_exr(path: &Path) -> Result<crate::imageio::Image, String> {
+pub fn read_exr(path: &Path) -> Result<crate::imageio::Image> {
     use exr::prelude::*;
     type Pixels = (usize, usize, Vec<Rgb>, Vec<f32>);
     let img = read_first_rgba_layer_from_file(
@@ -231,7 +263,7 @@ pub fn read_exr(path: &Path) -> Result<crate::imageio::Image, String> {
             alpha[pos.y() * *w + pos.x()] = a;
         },
     )
-    .map_err(|e| format!("{}: {e}", path.display()))?;
+    .map_err(|e| exr_error(path, "read", e))?;
     let (width, height, pixels, alpha) = img.layer_data.channel_data.pixels;
     let mut metadata = BTreeMap::new();
     for (k, v) in &img.layer_data.attributes.other {
@@ -240,7 +272,7 @@ pub fn read_exr(path: &Path) -> Result<crate::imageio::Image, String> {
         }
     }
     if pixels.iter().any(|p| !p.is_finite()) {
-        return Err(format!("{}: image contains NaN or infinite values", path.display()));
+        return Err(crate::error::Error::malformed(path, "image contains NaN or infinite values"));
     }
     let mut image = crate::imageio::Image { width, height, pixels, metadata, channels: Vec::new() };
     image.keep_alpha(alpha);
@@ -249,10 +281,10 @@ pub fn read_exr(path: &Path) -> Result<crate::imageio::Image, String> {
 
 /// Every channel of an OpenEXR file's first layer other than R, G, B and A, by name (a
 /// G-buffer's `Albedo.R`, `P.X`, ...), as 32-bit floats in row-major order.
-pub fn read_exr_channels(path: &Path) -> Result<Vec<(String, Vec<f32>)>, String> {
+pub fn read_exr_channels(path: &Path) -> Result<Vec<(String, Vec<f32>)>> {
     use exr::prelude::*;
-    let img = read_all_flat_layers_from_file(path).map_err(|e| format!("{}: {e}", path.display()))?;
-    let layer = img.layer_data.first().ok_or_else(|| format!("{}: no layer", path.display()))?;
+    let img = read_all_flat_layers_from_file(path).map_err(|e| exr_error(path, "read", e))?;
+    let layer = img.layer_data.first().ok_or_else(|| crate::error::Error::malformed(path, "no layer"))?;
     Ok(layer
         .channel_data
         .list
@@ -265,13 +297,13 @@ pub fn read_exr_channels(path: &Path) -> Result<Vec<(String, Vec<f32>)>, String>
 /// The first three channels of an image file in the order pbrt-v4 reads them, per pixel: for
 /// an OpenEXR file its channel list, which is sorted by name (B, G, R; with alpha A, B, G),
 /// and `None` for other formats (R, G, B) or files with fewer channels.
-pub fn pbrt_channel_order(path: &Path) -> Result<Option<Vec<Rgb>>, String> {
+pub fn pbrt_channel_order(path: &Path) -> Result<Option<Vec<Rgb>>> {
     use exr::prelude::*;
     if !path.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr")) {
         return Ok(None);
     }
-    let img = read_all_flat_layers_from_file(path).map_err(|e| format!("{}: {e}", path.display()))?;
-    let layer = img.layer_data.first().ok_or_else(|| format!("{}: no layer", path.display()))?;
+    let img = read_all_flat_layers_from_file(path).map_err(|e| exr_error(path, "read", e))?;
+    let layer = img.layer_data.first().ok_or_else(|| crate::error::Error::malformed(path, "no layer"))?;
     let mut channels: Vec<_> = layer.channel_data.list.iter().collect();
     channels.sort_by_key(|c| c.name.to_string());
     if channels.len() < 3 {

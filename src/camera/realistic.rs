@@ -10,6 +10,7 @@ use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
 use crate::camera::settings::{Aperture, RealisticSettings};
+use crate::error::{Error, Result};
 use crate::math::{quadratic, refract, sqr};
 use crate::samplers::radical_inverse;
 
@@ -110,11 +111,7 @@ pub struct RealisticLens {
 impl RealisticLens {
     /// [`RealisticLens::new`], or the same lens built before in this process (renders of one
     /// scene at several seeds or with several integrators find its exit pupil once).
-    pub fn shared(
-        settings: &RealisticSettings,
-        resolution: [u32; 2],
-        diagonal_mm: f32,
-    ) -> Result<Arc<RealisticLens>, String> {
+    pub fn shared(settings: &RealisticSettings, resolution: [u32; 2], diagonal_mm: f32) -> Result<Arc<RealisticLens>> {
         let key: LensKey = (settings.clone(), resolution, diagonal_mm.to_bits());
         let built = |b: &[(LensKey, Arc<RealisticLens>)]| b.iter().find(|(k, _)| *k == key).map(|(_, l)| l.clone());
         if let Some(lens) = built(&BUILT.lock().unwrap_or_else(|e| e.into_inner())) {
@@ -131,14 +128,15 @@ impl RealisticLens {
 
     /// The lens of `settings` focused at its focus distance, for a film of `resolution`
     /// pixels with a diagonal of `diagonal_mm`. Fails with pbrt-v4's reasons (no ray gets
-    /// through, the focus distance is too short for the lens).
-    pub fn new(settings: &RealisticSettings, resolution: [u32; 2], diagonal_mm: f32) -> Result<RealisticLens, String> {
+    /// through, the focus distance is too short for the lens: [`Error::Invalid`]) or an
+    /// aperture image's file error.
+    pub fn new(settings: &RealisticSettings, resolution: [u32; 2], diagonal_mm: f32) -> Result<RealisticLens> {
         Self::with_pupil_samples(settings, resolution, diagonal_mm, PUPIL_SAMPLES)
     }
 
     /// Whether a lens can be built (it lets light through and focuses at its distance),
     /// without finding its exit pupil: what `nimbus check` asks.
-    pub fn validate(settings: &RealisticSettings, resolution: [u32; 2], diagonal_mm: f32) -> Result<(), String> {
+    pub fn validate(settings: &RealisticSettings, resolution: [u32; 2], diagonal_mm: f32) -> Result<()> {
         Self::with_pupil_samples(settings, resolution, diagonal_mm, 0).map(|_| ())
     }
 
@@ -150,7 +148,7 @@ impl RealisticLens {
         resolution: [u32; 2],
         diagonal_mm: f32,
         samples: u32,
-    ) -> Result<RealisticLens, String> {
+    ) -> Result<RealisticLens> {
         let diagonal = diagonal_mm * 0.001;
         let aspect = resolution[1] as f32 / resolution[0] as f32;
         let x = (sqr(diagonal) / (1.0 + sqr(aspect))).sqrt();
@@ -173,7 +171,7 @@ impl RealisticLens {
         let aperture = settings.aperture.as_ref().map(aperture_image).transpose()?;
         let mut lens = RealisticLens { interfaces, half_extent, diagonal, pupil_bounds: Vec::new(), aperture };
         let last = lens.interfaces.len() - 1;
-        lens.interfaces[last].thickness = lens.focus_thick_lens(settings.focus_distance)?;
+        lens.interfaces[last].thickness = lens.focus_thick_lens(settings.focus_distance).map_err(Error::Invalid)?;
         if samples == 0 {
             return Ok(lens);
         }
@@ -404,7 +402,7 @@ fn intersect_element(radius: f32, z_center: f32, r: &LensRay) -> Option<(f32, Ve
 /// The aperture image of `aperture`: a built-in shape or an image file's mean of R, G and B,
 /// flipped bottom to top and scaled so that its mean is π/4 (a full circle's share of the
 /// square).
-fn aperture_image(aperture: &Aperture) -> Result<ApertureImage, String> {
+fn aperture_image(aperture: &Aperture) -> Result<ApertureImage> {
     let n = BUILTIN_APERTURE_RES;
     let centre = |x: usize, y: usize| {
         Vec2::new(-1.0 + 2.0 * (x as f32 + 0.5) / n as f32, -1.0 + 2.0 * (y as f32 + 0.5) / n as f32)
@@ -460,7 +458,7 @@ fn aperture_image(aperture: &Aperture) -> Result<ApertureImage, String> {
     };
     let mean = values.iter().map(|&v| f64::from(v)).sum::<f64>() / values.len().max(1) as f64;
     if mean <= 0.0 || mean.is_nan() {
-        return Err("the aperture image is black: no light would pass".into());
+        return Err(Error::invalid("the aperture image is black: no light would pass"));
     }
     let scale = (std::f64::consts::PI / 4.0 / mean) as f32;
     values.iter_mut().for_each(|v| *v *= scale);

@@ -253,7 +253,7 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode> {
             let mse = match &reference {
                 None => None,
                 Some(r) => {
-                    let m: Result<Vec<f64>, String> =
+                    let m: Result<Vec<f64>, nimbus::Error> =
                         images.iter().map(|i| nimbus::metrics::error_metrics(i, r).map(|e| e.mse)).collect();
                     match m {
                         Ok(m) => Some(m.iter().sum::<f64>() / m.len() as f64),

@@ -18,6 +18,8 @@ use std::f32::consts::PI;
 
 use glam::Vec3;
 
+use crate::error::{Error, Result};
+
 const NONE: u32 = u32::MAX;
 
 #[inline]
@@ -192,8 +194,14 @@ fn edge_key(a: u32, b: u32) -> (u32, u32) {
 /// Subdivides the triangles `indices` over `positions` `levels` times (pbrt-v4's
 /// `LoopSubdivide`). Vertices no triangle uses are dropped. Refuses meshes whose edges are
 /// shared by more than two triangles or whose neighbouring triangles disagree on their
-/// winding, where the one-rings Loop's rules need do not exist.
-pub fn loop_subdivide(positions: &[[f32; 3]], indices: &[u32], levels: u32) -> Result<Subdivided, String> {
+/// winding, where the one-rings Loop's rules need do not exist; these are
+/// [`Error::Invalid`].
+pub fn loop_subdivide(positions: &[[f32; 3]], indices: &[u32], levels: u32) -> Result<Subdivided> {
+    subdivide(positions, indices, levels).map_err(Error::Invalid)
+}
+
+/// [`loop_subdivide`], its errors as plain messages.
+fn subdivide(positions: &[[f32; 3]], indices: &[u32], levels: u32) -> Result<Subdivided, String> {
     if indices.is_empty() {
         return Err("no triangles".into());
     }
@@ -469,11 +477,11 @@ mod tests {
         let p = vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 1.0, 1.0]];
         // Three triangles on the edge 0–1.
         let e = loop_subdivide(&p, &[0, 1, 2, 1, 0, 3, 0, 1, 4], 1).unwrap_err();
-        assert!(e.contains("more than two"), "{e}");
+        assert!(e.to_string().contains("more than two"), "{e}");
         // Two triangles wound the same way across an edge.
         let e = loop_subdivide(&p, &[0, 1, 2, 0, 1, 3], 1).unwrap_err();
-        assert!(e.contains("opposite directions"), "{e}");
-        assert!(loop_subdivide(&p, &[0, 0, 1], 1).unwrap_err().contains("repeats"));
-        assert!(loop_subdivide(&p, &[0, 1, 2], 14).unwrap_err().contains("levels"));
+        assert!(e.to_string().contains("opposite directions"), "{e}");
+        assert!(loop_subdivide(&p, &[0, 0, 1], 1).unwrap_err().to_string().contains("repeats"));
+        assert!(loop_subdivide(&p, &[0, 1, 2], 14).unwrap_err().to_string().contains("levels"));
     }
 }

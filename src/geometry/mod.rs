@@ -10,6 +10,8 @@ pub mod obj;
 pub mod ply;
 mod ray;
 
+use crate::error::{Error, Result};
+
 pub use bounds::Bounds3;
 pub use motion::MotionTransform;
 pub use ray::{Ray, offset_origin, offset_origin_by, position_error, spawn_ray, spawn_ray_to};
@@ -35,23 +37,24 @@ pub struct MeshData {
 }
 
 impl MeshData {
-    /// Checks indices, array lengths and finiteness; `what` prefixes messages.
-    pub fn validate(&self, what: &str) -> Result<(), String> {
+    /// Checks indices, array lengths and finiteness; `what` prefixes messages. The errors are
+    /// [`Error::Invalid`]: `what` names the file where there is one.
+    pub fn validate(&self, what: &str) -> Result<()> {
         let n = self.positions.len();
         if let Some(&bad) = self.indices.iter().chain(&self.quads).find(|&&i| i as usize >= n) {
-            return Err(format!("{what}: vertex index {bad} out of range ({n} vertices)"));
+            return Err(Error::Invalid(format!("{what}: vertex index {bad} out of range ({n} vertices)")));
         }
         if !self.indices.len().is_multiple_of(3) {
-            return Err(format!("{what}: {} indices is not a multiple of 3", self.indices.len()));
+            return Err(Error::Invalid(format!("{what}: {} indices is not a multiple of 3", self.indices.len())));
         }
         if self.positions.iter().flatten().any(|c| !c.is_finite()) {
-            return Err(format!("{what}: non-finite vertex position"));
+            return Err(Error::Invalid(format!("{what}: non-finite vertex position")));
         }
         if !self.normals.is_empty() && self.normals.len() != n {
-            return Err(format!("{what}: {} normals for {n} vertices", self.normals.len()));
+            return Err(Error::Invalid(format!("{what}: {} normals for {n} vertices", self.normals.len())));
         }
         if !self.uvs.is_empty() && self.uvs.len() != n {
-            return Err(format!("{what}: {} texture coordinates for {n} vertices", self.uvs.len()));
+            return Err(Error::Invalid(format!("{what}: {} texture coordinates for {n} vertices", self.uvs.len())));
         }
         Ok(())
     }

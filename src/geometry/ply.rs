@@ -6,6 +6,7 @@ use std::io::Read;
 use std::path::Path;
 
 use super::MeshData;
+use crate::error::{Error, Result};
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 enum Scalar {
@@ -114,22 +115,34 @@ impl Body<'_> {
     }
 }
 
-/// Reads a PLY file (`.ply` or `.ply.gz`). Errors are plain messages; callers add the scene
+/// Reads a PLY file (`.ply` or `.ply.gz`). The errors name the file; callers add the scene
 /// location.
-pub fn read_ply(path: &Path) -> Result<MeshData, String> {
+pub fn read_ply(path: &Path) -> Result<MeshData> {
     let mut data = Vec::new();
-    let file = std::fs::File::open(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let file = std::fs::File::open(path).map_err(|e| Error::io(path, "read", e))?;
     if path.extension().is_some_and(|x| x == "gz") {
         flate2::read::MultiGzDecoder::new(std::io::BufReader::new(file)).read_to_end(&mut data)
     } else {
         std::io::BufReader::new(file).read_to_end(&mut data)
     }
-    .map_err(|e| format!("{}: {e}", path.display()))?;
-    parse_ply(&data).map_err(|e| format!("{}: {e}", path.display()))
+    .map_err(|e| match e.kind() {
+        // The gzip decoder reports a corrupt or truncated stream as an I/O error.
+        std::io::ErrorKind::InvalidData | std::io::ErrorKind::InvalidInput | std::io::ErrorKind::UnexpectedEof => {
+            Error::malformed(path, e.to_string())
+        }
+        _ => Error::io(path, "read", e),
+    })?;
+    parse(&data).map_err(|m| Error::malformed(path, m))
 }
 
-/// Parses PLY bytes.
-pub fn parse_ply(data: &[u8]) -> Result<MeshData, String> {
+/// Parses PLY bytes. Having no file to name, the errors are [`Error::Invalid`] with the
+/// message alone.
+pub fn parse_ply(data: &[u8]) -> Result<MeshData> {
+    parse(data).map_err(Error::Invalid)
+}
+
+/// [`parse_ply`] with the message alone, for [`read_ply`] to name the file.
+fn parse(data: &[u8]) -> Result<MeshData, String> {
     let header_end = find_header_end(data).ok_or("not a PLY file (no end_header)")?;
     let header = std::str::from_utf8(&data[..header_end.0]).map_err(|_| "PLY header is not text")?;
     let mut lines = header.lines();
@@ -370,10 +383,10 @@ property float nx\nproperty float ny\nproperty float nz\nelement face 1\npropert
     #[test]
     fn truncated_and_out_of_range_files_are_errors() {
         let text = "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\nend_header\n0 0 0\n";
-        assert!(parse_ply(text.as_bytes()).unwrap_err().contains("ends before"));
+        assert!(parse_ply(text.as_bytes()).unwrap_err().to_string().contains("ends before"));
         let text = "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\n\
                     element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n3 0 1 2\n";
-        assert!(parse_ply(text.as_bytes()).unwrap_err().contains("out of range"));
+        assert!(parse_ply(text.as_bytes()).unwrap_err().to_string().contains("out of range"));
         assert!(parse_ply(b"hello").is_err());
     }
 }

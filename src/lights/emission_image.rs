@@ -6,6 +6,7 @@ use nimbus_parser::ColorSpace;
 
 use crate::channels::Channels;
 use crate::color::{Rgb, luminance};
+use crate::error::{Error, Result};
 use crate::imageio::Image;
 use crate::spectra::RgbRole;
 
@@ -20,13 +21,16 @@ pub struct EmissionImage {
 
 impl EmissionImage {
     /// The emission image `image` in colour space `space`; like pbrt-v4, refuses an empty
-    /// image and one with infinite or NaN texels.
-    pub fn new(image: &Image, space: ColorSpace) -> Result<EmissionImage, String> {
+    /// image and one with infinite or NaN texels ([`Error::Invalid`]: the image may not come
+    /// from a file, so the caller names where it came from).
+    pub fn new(image: &Image, space: ColorSpace) -> Result<EmissionImage> {
         if image.width == 0 || image.height == 0 {
-            return Err("the emission image is empty".into());
+            return Err(Error::invalid("the emission image is empty"));
         }
         if image.pixels.iter().any(|p| !p.is_finite()) {
-            return Err("the image has infinite or not-a-number texels and so is not suitable as a light".into());
+            return Err(Error::invalid(
+                "the image has infinite or not-a-number texels and so is not suitable as a light",
+            ));
         }
         Ok(EmissionImage { width: image.width, height: image.height, pixels: image.pixels.clone(), space })
     }

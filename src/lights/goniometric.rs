@@ -5,6 +5,7 @@ use std::path::Path;
 
 use glam::{Affine3A, Vec2, Vec3};
 
+use crate::error::{Error, Result};
 use crate::sampling::warp::equal_area_sphere_to_square;
 
 /// The light's directional distribution: a square equal-area image of one channel, looked up
@@ -20,21 +21,24 @@ pub struct GoniometricImage {
 
 impl GoniometricImage {
     /// Reads `path` (EXR or PNG; RGB averaged per pixel) for a light placed by `world_from_light`.
-    pub fn read(path: &Path, world_from_light: &Affine3A) -> Result<GoniometricImage, String> {
+    /// An image that is not square or has a pixel that is not finite is [`Error::Malformed`]
+    /// (the file is not an equal-area map).
+    pub fn read(path: &Path, world_from_light: &Affine3A) -> Result<GoniometricImage> {
         let img = crate::imageio::read_image(path)?;
         if img.width != img.height {
-            return Err(format!(
-                "{}: image resolution ({}, {}) is not square, so it is not an equal-area map",
-                path.display(),
-                img.width,
-                img.height
+            return Err(Error::malformed(
+                path,
+                format!(
+                    "image resolution ({}, {}) is not square, so it is not an equal-area map",
+                    img.width, img.height
+                ),
             ));
         }
         let values: Vec<f32> = img.pixels.iter().map(|p| (p.x + p.y + p.z) / 3.0).collect();
         if let Some(v) = values.iter().find(|v| !v.is_finite()) {
-            return Err(format!(
-                "{}: a pixel is {v}, not a finite value, so the image cannot be a light",
-                path.display()
+            return Err(Error::malformed(
+                path,
+                format!("a pixel is {v}, not a finite value, so the image cannot be a light"),
             ));
         }
         Ok(GoniometricImage::new(img.width, values, world_from_light))

@@ -13,6 +13,7 @@ use nimbus_parser::ColorSpace;
 use super::envmap::nearest_radiance;
 use crate::channels::Channels;
 use crate::color::{Rgb, average};
+use crate::error::{Error, Result};
 use crate::imageio::Image;
 use crate::math::Frame;
 use crate::sampling::warp::equal_area_sphere_to_square;
@@ -44,12 +45,12 @@ impl PortalMap {
         world_from_light: Affine3A,
         scale: f32,
         portal: [Vec3; 4],
-    ) -> Result<PortalMap, String> {
+    ) -> Result<PortalMap> {
         if image.width != image.height || image.width == 0 {
-            return Err(format!(
+            return Err(Error::Invalid(format!(
                 "the portal light's image is {}x{}; pbrt-v4 environment maps are square equal-area images",
                 image.width, image.height
-            ));
+            )));
         }
         let frame = portal_frame(&portal)?;
         let n = image.width;
@@ -244,14 +245,16 @@ impl PortalMap {
 
 /// The portal's frame (x along corner 0 → 3, y along 0 → 1, z out of the scene through it),
 /// or why the corners are not a rectangle (pbrt-v4's checks: opposite edges parallel, corners
-/// at right angles).
-pub fn portal_frame(portal: &[Vec3; 4]) -> Result<Frame, String> {
+/// at right angles), which is [`Error::Invalid`].
+pub fn portal_frame(portal: &[Vec3; 4]) -> Result<Frame> {
     let edge = |a: usize, b: usize| (portal[b] - portal[a]).normalize_or_zero();
     let (p01, p12, p32, p03) = (edge(0, 1), edge(1, 2), edge(3, 2), edge(0, 3));
     let planar = (p01.dot(p32) - 1.0).abs() <= 1e-3 && (p12.dot(p03) - 1.0).abs() <= 1e-3;
     let square = [p01.dot(p12), p12.dot(p32), p32.dot(p03), p03.dot(p01)].iter().all(|d| d.abs() <= 1e-3);
     if !planar || !square {
-        return Err("the portal is not a rectangle (pbrt-v4 needs its 4 corners in order, at right angles)".into());
+        return Err(Error::invalid(
+            "the portal is not a rectangle (pbrt-v4 needs its 4 corners in order, at right angles)",
+        ));
     }
     Ok(Frame { x: p03, y: p01, z: p03.cross(p01) })
 }

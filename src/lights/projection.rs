@@ -8,6 +8,7 @@ use glam::{Affine3A, Vec2, Vec3};
 use nimbus_parser::ColorSpace;
 
 use crate::color::Rgb;
+use crate::error::{Error, Result};
 
 /// The projected image and its frustum.
 #[derive(Clone, Debug)]
@@ -30,11 +31,11 @@ const HITHER: f32 = 1e-3;
 
 impl ProjectionImage {
     /// Reads `path` (EXR or PNG) for a light placed by `world_from_light` with field of view
-    /// `fov` degrees.
-    pub fn read(path: &Path, fov: f32, world_from_light: &Affine3A) -> Result<ProjectionImage, String> {
+    /// `fov` degrees. An image with a pixel that is not finite is [`Error::Malformed`].
+    pub fn read(path: &Path, fov: f32, world_from_light: &Affine3A) -> Result<ProjectionImage> {
         let img = crate::imageio::read_image(path)?;
         if let Some(p) = img.pixels.iter().find(|p| !p.is_finite()) {
-            return Err(format!("{}: a pixel is {p}, not finite, so the image cannot be a light", path.display()));
+            return Err(Error::malformed(path, format!("a pixel is {p}, not finite, so the image cannot be a light")));
         }
         Ok(ProjectionImage::new(img.width, img.height, img.pixels, fov, world_from_light))
     }

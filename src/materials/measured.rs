@@ -11,6 +11,7 @@ use std::path::Path;
 use glam::Vec3;
 use nimbus_parser::ColorSpace;
 
+use crate::error::{Error, Result};
 use crate::sampling::piecewise_linear::PiecewiseLinear2D;
 use crate::spectra::{PiecewiseLinearSpectrum, spectrum_reflectance_rgb};
 
@@ -113,14 +114,22 @@ impl Field {
 
 impl MeasuredData {
     /// Reads `path`, checking the fields' shapes as pbrt-v4 does; RGB tables are made for
-    /// `film`'s color space.
-    pub fn read(path: &Path, film: ColorSpace) -> Result<MeasuredData, String> {
-        let bytes = std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
-        MeasuredData::from_bytes(&bytes, film).map_err(|m| format!("{}: {m}", path.display()))
+    /// `film`'s color space. A file that cannot be read is [`Error::Io`], one whose contents
+    /// are wrong [`Error::Malformed`].
+    pub fn read(path: &Path, film: ColorSpace) -> Result<MeasuredData> {
+        let bytes = std::fs::read(path).map_err(|e| Error::io(path, "read", e))?;
+        MeasuredData::parse(&bytes, film).map_err(|m| Error::malformed(path, m))
     }
 
-    /// [`MeasuredData::read`] from the file's bytes.
-    pub fn from_bytes(bytes: &[u8], film: ColorSpace) -> Result<MeasuredData, String> {
+    /// [`MeasuredData::read`] from the file's bytes. Having no file to name, the errors are
+    /// [`Error::Invalid`] with the message alone.
+    pub fn from_bytes(bytes: &[u8], film: ColorSpace) -> Result<MeasuredData> {
+        MeasuredData::parse(bytes, film).map_err(Error::Invalid)
+    }
+
+    /// [`MeasuredData::from_bytes`] with the message alone, for [`MeasuredData::read`] to name
+    /// the file.
+    fn parse(bytes: &[u8], film: ColorSpace) -> Result<MeasuredData, String> {
         let t = read_tensor(bytes)?;
         let get = |name: &str, dtype: u8, ndim: usize| -> Result<&Field, String> {
             let f = t.get(name).ok_or_else(|| format!("invalid BRDF file: no field \"{name}\""))?;
@@ -316,15 +325,21 @@ mod tests {
             assert!((r - s).abs() < 2e-3 * s, "channel {c}: {r} vs {s}");
         }
         assert!(
-            MeasuredData::from_bytes(&bytes[..bytes.len() / 2], ColorSpace::Srgb).unwrap_err().contains("past the end")
+            MeasuredData::from_bytes(&bytes[..bytes.len() / 2], ColorSpace::Srgb)
+                .unwrap_err()
+                .to_string()
+                .contains("past the end")
         );
         assert!(
-            MeasuredData::from_bytes(b"not a tensor file at all", ColorSpace::Srgb).unwrap_err().contains("header")
+            MeasuredData::from_bytes(b"not a tensor file at all", ColorSpace::Srgb)
+                .unwrap_err()
+                .to_string()
+                .contains("header")
         );
         let mut wrong = bytes.clone();
         wrong[12] = 2;
-        assert!(MeasuredData::from_bytes(&wrong, ColorSpace::Srgb).unwrap_err().contains("version"));
+        assert!(MeasuredData::from_bytes(&wrong, ColorSpace::Srgb).unwrap_err().to_string().contains("version"));
         let missing = write_tensor(&[("description", UINT8, vec![1], vec![b'x'])]);
-        assert!(MeasuredData::from_bytes(&missing, ColorSpace::Srgb).unwrap_err().contains("no field"));
+        assert!(MeasuredData::from_bytes(&missing, ColorSpace::Srgb).unwrap_err().to_string().contains("no field"));
     }
 }

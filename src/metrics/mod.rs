@@ -1,6 +1,7 @@
 //! Image comparison: parity with a reference judged as the pbrt-v4 references' README does
 //! (mean within a tolerance, 8×8 block differences consistent with noise).
 
+use crate::error::{Error, Result};
 use crate::imageio::Image;
 
 /// How a pair of renders with different seeds compares to a reference.
@@ -93,11 +94,15 @@ pub fn block_z_scores(a: &Image, b: &Image, reference: &Image) -> Vec<BlockZ> {
     out
 }
 
-/// Compares two renders `a`, `b` (different seeds, same spp) with `reference`.
-pub fn parity(a: &Image, b: &Image, reference: &Image) -> Result<Parity, String> {
+/// Compares two renders `a`, `b` (different seeds, same spp) with `reference`; images of
+/// different sizes are [`Error::Invalid`].
+pub fn parity(a: &Image, b: &Image, reference: &Image) -> Result<Parity> {
     for (name, img) in [("second render", b), ("reference", reference)] {
         if (img.width, img.height) != (a.width, a.height) {
-            return Err(format!("{name} is {}x{}, the render is {}x{}", img.width, img.height, a.width, a.height));
+            return Err(Error::Invalid(format!(
+                "{name} is {}x{}, the render is {}x{}",
+                img.width, img.height, a.width, a.height
+            )));
         }
     }
     let n = a.pixels.len() as f64;
@@ -161,13 +166,13 @@ pub struct ErrorMetrics {
     pub mean_reference: f64,
 }
 
-/// Compares `test` with `reference` (same size).
-pub fn error_metrics(test: &Image, reference: &Image) -> Result<ErrorMetrics, String> {
+/// Compares `test` with `reference` (same size; other sizes are [`Error::Invalid`]).
+pub fn error_metrics(test: &Image, reference: &Image) -> Result<ErrorMetrics> {
     if (test.width, test.height) != (reference.width, reference.height) {
-        return Err(format!(
+        return Err(Error::Invalid(format!(
             "image sizes differ: test is {}x{}, reference is {}x{}",
             test.width, test.height, reference.width, reference.height
-        ));
+        )));
     }
     let (mut se, mut rel, mut ae, mut pe, mut ne, mut st, mut sr) = (0.0f64, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
     for (a, b) in test.pixels.iter().zip(&reference.pixels) {

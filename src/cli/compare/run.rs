@@ -127,7 +127,7 @@ impl Reference {
         let (w, h) = film_size(scene);
         if path.exists() {
             let why_not = match nimbus::imageio::read_exr(&path) {
-                Err(e) => Some(e),
+                Err(e) => Some(e.to_string()),
                 Ok(image) => {
                     let meta = |k: &str| image.metadata.get(k).map(String::as_str);
                     let expected = [

@@ -54,7 +54,7 @@ pub(super) fn emission_image(
 ) -> Result<Option<Arc<EmissionImage>>, Error> {
     let Some(path) = &settings.image else { return Ok(None) };
     let loc = e.params.loc("filename").unwrap_or(&e.loc);
-    let what = |m: String| err(loc, format!("area light image {}: {m}", nimbus_parser::loc_shown(path)));
+    let what = |m: crate::error::Error| err(loc, format!("area light image {}: {m}", nimbus_parser::loc_shown(path)));
     let image = crate::imageio::read_image(path).map_err(what)?;
     let mut image = EmissionImage::new(&image, e.color_space).map_err(what)?;
     if rgb_transport {

@@ -183,18 +183,24 @@ impl TextureBuilder<'_> {
     }
 }
 
-pub(super) fn load_texture_image(path: &Path, encoding: &str) -> Result<crate::imageio::Image, String> {
+/// The image of an `imagemap` (or a normal map) at `path`, linear, its PNG values decoded by
+/// `encoding`: the file's errors as [`crate::imageio::read_image`] gives them, an encoding it
+/// does not know [`Error::Invalid`](crate::error::Error::Invalid).
+pub(super) fn load_texture_image(path: &Path, encoding: &str) -> crate::error::Result<crate::imageio::Image> {
     let is_png = path.extension().is_some_and(|x| x.eq_ignore_ascii_case("png"));
     let mut image = crate::imageio::read_image(path)?;
     if is_png && encoding != "sRGB" {
         // read_image decoded sRGB; re-encode and apply the requested encoding instead.
         let gamma = match encoding {
             "linear" => 1.0,
-            e if e.starts_with("gamma ") => {
-                e[6..].trim().parse::<f32>().map_err(|_| format!("imagemap: bad encoding \"{e}\""))?
-            }
+            e if e.starts_with("gamma ") => e[6..]
+                .trim()
+                .parse::<f32>()
+                .map_err(|_| crate::error::Error::Invalid(format!("imagemap: bad encoding \"{e}\"")))?,
             other => {
-                return Err(format!("imagemap: unknown encoding \"{other}\" (sRGB, linear or \"gamma g\")"));
+                return Err(crate::error::Error::Invalid(format!(
+                    "imagemap: unknown encoding \"{other}\" (sRGB, linear or \"gamma g\")"
+                )));
             }
         };
         let enc = |v: f32| {

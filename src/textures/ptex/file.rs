@@ -11,6 +11,7 @@ use std::sync::{Arc, RwLock};
 
 pub use super::texels::{Texel, Texels};
 use super::texels::{interleave, reduce, reduce_triangle, texels_from};
+use crate::error::{Error, Result};
 
 /// A texel's storage type (Ptex's `DataType`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -232,14 +233,26 @@ impl<'a> Bytes<'a> {
 }
 
 impl PtexFile {
-    /// Reads a Ptex file.
-    pub fn open(path: &Path) -> Result<PtexFile, String> {
-        let data = std::fs::read(path).map_err(|e| format!("cannot read \"{}\": {e}", path.display()))?;
-        PtexFile::parse(&data).map_err(|e| format!("\"{}\": {e}", path.display()))
+    /// Reads a Ptex file: [`Error::Io`] if it cannot be read, [`Error::Malformed`] if its
+    /// contents are not a Ptex file nimbus reads.
+    pub fn open(path: &Path) -> Result<PtexFile> {
+        let data = std::fs::read(path).map_err(|e| Error::io(path, "read", e))?;
+        // Every error of parse is about the bytes: with the file to name, they are the file's.
+        PtexFile::parse(&data).map_err(|e| match e {
+            Error::Invalid(m) => Error::malformed(path, m),
+            other => other,
+        })
     }
 
-    /// Parses a Ptex file's bytes.
-    pub fn parse(data: &[u8]) -> Result<PtexFile, String> {
+    /// Parses a Ptex file's bytes. Having no file to name, the errors are [`Error::Invalid`]
+    /// with the message alone.
+    pub fn parse(data: &[u8]) -> Result<PtexFile> {
+        PtexFile::parse_bytes(data).map_err(Error::Invalid)
+    }
+
+    /// [`PtexFile::parse`] with the message alone: the byte readers' errors are plain
+    /// messages, given their kind once at the public boundary.
+    fn parse_bytes(data: &[u8]) -> Result<PtexFile, String> {
         let mut h = Bytes::at(data, 0);
         if data.len() < 4 || h.u32()? != MAGIC {
             return Err("not a Ptex file".into());

@@ -12,6 +12,8 @@ mod triangle;
 
 use std::path::Path;
 
+use crate::error::{Error, Result};
+
 pub use file::PtexFile;
 
 /// How filtered values are decoded (pbrt-v4's `ColorEncoding`, default `gamma 2.2` here).
@@ -26,14 +28,14 @@ pub enum Encoding {
 }
 
 impl Encoding {
-    /// pbrt-v4's encoding names: `linear`, `sRGB`, `gamma <γ>`.
-    pub fn parse(s: &str) -> Result<Encoding, String> {
+    /// pbrt-v4's encoding names: `linear`, `sRGB`, `gamma <γ>`; another is [`Error::Invalid`].
+    pub fn parse(s: &str) -> Result<Encoding> {
         match s {
             "linear" => Ok(Encoding::Linear),
             "sRGB" => Ok(Encoding::Srgb),
             _ => match s.strip_prefix("gamma ").map(|g| g.trim().parse::<f32>()) {
                 Some(Ok(g)) if g.is_finite() => Ok(Encoding::Gamma(g)),
-                _ => Err(format!("unknown encoding \"{s}\" (linear, sRGB or \"gamma <value>\")")),
+                _ => Err(Error::Invalid(format!("unknown encoding \"{s}\" (linear, sRGB or \"gamma <value>\")"))),
             },
         }
     }
@@ -121,15 +123,16 @@ impl std::fmt::Debug for PtexTexture {
 }
 
 impl PtexTexture {
-    /// Loads `path`. pbrt-v4 reads one- and three-channel files only.
-    pub fn open(path: &Path, encoding: Encoding, scale: f32) -> Result<PtexTexture, String> {
+    /// Loads `path`. pbrt-v4 reads one- and three-channel files only: others are
+    /// [`Error::Unsupported`].
+    pub fn open(path: &Path, encoding: Encoding, scale: f32) -> Result<PtexTexture> {
         let file = PtexFile::open(path)?;
         if file.channels != 1 && file.channels != 3 {
-            return Err(format!(
+            return Err(Error::Unsupported(format!(
                 "\"{}\" has {} channels; ptex textures have one or three (as in pbrt-v4)",
                 path.display(),
                 file.channels
-            ));
+            )));
         }
         Ok(PtexTexture { file, encoding, scale })
     }

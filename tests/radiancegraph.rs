@@ -181,6 +181,14 @@ fn graph_build_and_render_from_the_file() {
     let out = render(&scene, &[]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     assert_eq!(nimbus::imageio::read_exr(&img).unwrap().pixels, from_file.pixels);
+    // `--precomputed` naming a missing file: the render builds the graph and saves it there,
+    // and the next render loads it; the same image both times.
+    let saved = dir.join("saved.graph");
+    for round in ["built and saved", "loaded"] {
+        let out = render(&scene, &["--precomputed", saved.to_str().unwrap()]);
+        assert!(out.status.success() && saved.exists(), "{round}: {}", String::from_utf8_lossy(&out.stderr));
+        assert_eq!(nimbus::imageio::read_exr(&img).unwrap().pixels, from_file.pixels, "{round}");
+    }
     // Another medium: the graph file is refused, naming the file and why.
     let other = dir.join("other.pbrt");
     std::fs::write(&other, cube_text(3.0, "graph", "")).unwrap();

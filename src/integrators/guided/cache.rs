@@ -4,6 +4,8 @@
 //! lights and its extent) and one of the training parameters, then the trees. A file from
 //! another scene, other training settings or another nimbus version is refused by name.
 
+use super::super::prepared::{FileKind, Header, read_file, write_file};
+use crate::error::Error;
 use crate::math::fnv::Fnv;
 use std::path::Path;
 
@@ -18,8 +20,15 @@ use crate::geometry::Bounds3;
 use crate::media::{Medium, MediumKind};
 use crate::scene::Scene;
 
-const MAGIC: &[u8; 8] = b"NIMBUSGD";
-const VERSION: u32 = 2;
+/// The guide cache's kind: its header is every prepared file's ([`super::super::prepared`]).
+const KIND: FileKind = FileKind {
+    magic: b"NIMBUSGD",
+    version: 2,
+    what: "guide cache",
+    remedy: "delete it or name another file to train anew",
+    settings: "training parameters (maxdepth, trainingiterations, photons, streethreshold, dtreethreshold, \
+               maxmemory or refractedshare)",
+};
 
 /// Probes a grid medium at 16³ points of its box (σa and σs), so equal media hash equally
 /// whatever file they were read from, and changed ones differently.
@@ -78,12 +87,9 @@ fn settings_hash(s: &GuidedSettings) -> u64 {
 }
 
 /// Writes the trees of `guide`, trained for `scene` with `settings`.
-pub fn save(path: &Path, scene: &Scene, settings: &GuidedSettings, guide: &Guide) -> Result<(), String> {
+pub fn save(path: &Path, scene: &Scene, settings: &GuidedSettings, guide: &Guide) -> crate::Result<()> {
     let mut out = Vec::new();
-    out.extend_from_slice(MAGIC);
-    out.extend_from_slice(&VERSION.to_le_bytes());
-    out.extend_from_slice(&scene_hash(scene).to_le_bytes());
-    out.extend_from_slice(&settings_hash(settings).to_le_bytes());
+    KIND.write_header(Header { scene_hash: scene_hash(scene), settings_hash: settings_hash(settings) }, &mut out);
     let s = &guide.stats;
     out.extend_from_slice(&s.photons.to_le_bytes());
     out.extend_from_slice(&s.deposits.to_le_bytes());
@@ -99,7 +105,7 @@ pub fn save(path: &Path, scene: &Scene, settings: &GuidedSettings, guide: &Guide
             }
         }
     }
-    std::fs::write(path, out).map_err(|e| format!("cannot write the guide cache {}: {e}", path.display()))
+    write_file(path, &out)
 }
 
 /// A cursor over a cache file's bytes that reports truncation.
@@ -139,28 +145,11 @@ impl Reader<'_> {
 }
 
 /// Reads trees saved for `scene` and `settings` from `path`.
-pub fn load(path: &Path, scene: &Scene, settings: &GuidedSettings) -> Result<Guide, String> {
-    let name = path.display();
-    let bytes = std::fs::read(path).map_err(|e| format!("cannot read the guide cache {name}: {e}"))?;
-    let mut r = Reader { bytes: &bytes, at: 0 };
-    let bad = |m: String| format!("the guide cache {name} cannot be used: {m}");
-    if r.take(8).map_err(bad)? != MAGIC {
-        return Err(bad("it is not a nimbus guide cache".into()));
-    }
-    let version = r.u32().map_err(bad)?;
-    if version != VERSION {
-        return Err(bad(format!("it was written by another nimbus (format {version}, this one reads {VERSION})")));
-    }
-    if r.u64().map_err(bad)? != scene_hash(scene) {
-        return Err(bad("it was trained for another scene (its media, lights or extent differ); \
-                        delete it or name another file to train anew"
-            .into()));
-    }
-    if r.u64().map_err(bad)? != settings_hash(settings) {
-        return Err(bad("it was trained with other training parameters (maxdepth, trainingiterations, photons, \
-                        streethreshold, dtreethreshold, maxmemory or refractedshare)"
-            .into()));
-    }
+pub fn load(path: &Path, scene: &Scene, settings: &GuidedSettings) -> crate::Result<Guide> {
+    let bytes = read_file(path)?;
+    let (_, body) = KIND.read_header(&bytes, path, Some(scene_hash(scene)), Some(settings_hash(settings)))?;
+    let mut r = Reader { bytes: body, at: 0 };
+    let bad = |m: String| Error::malformed(path, format!("the guide cache cannot be used: {m}"));
     let photons = r.u64().map_err(bad)?;
     let stats = TrainingStats {
         photons,
@@ -186,7 +175,7 @@ pub fn load(path: &Path, scene: &Scene, settings: &GuidedSettings) -> Result<Gui
             t => return Err(bad(format!("unknown tree tag {t}"))),
         });
     }
-    if r.at != bytes.len() {
+    if r.at != body.len() {
         return Err(bad("it has bytes after its trees".into()));
     }
     let active = trees.iter().map(Option::is_some).collect();

@@ -320,7 +320,7 @@ fn a_graph_too_large_for_memory_is_refused_by_name() {
     let config = GraphConfig::from_json(SMALL_CONFIG).unwrap();
     let radius = volume.radius * 2.0 / 1000.0 * 20.0;
     let build = |limit| radiancegraph::build::build_graph(&volume, &config.graph_builder, radius, 7, limit);
-    let err = build(64 << 10).err().expect("64 KiB holds no graph of this scene");
+    let err = build(64 << 10).err().expect("64 KiB holds no graph of this scene").to_string();
     assert!(err.contains("outgrew 0.0 GiB") && err.contains("radiusModifier") && err.contains("1/50 of"), "{err}");
     let (graph, report) = build(usize::MAX).unwrap();
     assert!(graph.len() > 1000 && report.peak.0 + report.peak.1 > 64 << 10);

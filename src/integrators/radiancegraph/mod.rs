@@ -113,7 +113,7 @@ impl RadianceGraphSettings {
 /// scene's config (or the defaults), keeping the largest bounce count it asks for, and saved
 /// to that file when one was named ([`load_or_prepare`]).
 pub fn create(settings: &RadianceGraphSettings, scene: &Scene) -> crate::Result<render::RadianceGraphIntegrator> {
-    let volume = Volume::new(scene).map_err(crate::Error::Invalid)?;
+    let volume = Volume::new(scene)?;
     let scene_hash = file::scene_hash(&volume);
     let mut build_peak = 0;
     let load = |path: &Path| {
@@ -131,7 +131,7 @@ pub fn create(settings: &RadianceGraphSettings, scene: &Scene) -> crate::Result<
             Some(path) => GraphConfig::from_file(path).map_err(|e| crate::Error::Invalid(e.to_string()))?,
             None => GraphConfig::default(),
         };
-        let (graphs, stats) = build(scene, &config, None, scene.sampler.seed as u64).map_err(crate::Error::Invalid)?;
+        let (graphs, stats) = build(scene, &config, None, scene.sampler.seed as u64)?;
         build_peak = stats.stages.iter().map(|s| s.peak_bytes).max().unwrap_or(0);
         let largest = (0..graphs.graphs.len()).max_by_key(|&i| graphs.graphs[i].bounces).expect("bounces has an entry");
         Ok(graphs.file(largest, scene_hash, file::config_hash(&config), stats.node_radius))
@@ -244,12 +244,12 @@ pub fn build(
     config: &GraphConfig,
     node_radius: Option<f32>,
     seed: u64,
-) -> Result<(Graphs, GraphStats), String> {
+) -> crate::Result<(Graphs, GraphStats)> {
     let volume = Volume::new(scene)?;
     // Sec. 4.3.1: the default radius is the scene's diameter / 1000 (the thesis's code).
     let radius = node_radius.unwrap_or(volume.radius * 2.0 / 1000.0 * config.graph_builder.radius_modifier);
     if !(radius > 0.0 && radius.is_finite()) {
-        return Err(format!("the node radius must be positive (it is {radius})"));
+        return Err(crate::Error::Invalid(format!("the node radius must be positive (it is {radius})")));
     }
     let mut stages = Vec::new();
     let t = Instant::now();
@@ -258,7 +258,7 @@ pub fn build(
     let edges_more_than_once = graph.edges_more_than_once();
     stages.push(Stage { name: "build", seconds: t.elapsed().as_secs_f64(), peak_bytes: report.peak.0 + report.peak.1 });
     if graph.is_empty() {
-        return Err("no light path scattered in the medium: the graph is empty".into());
+        return Err(crate::Error::invalid("no light path scattered in the medium: the graph is empty"));
     }
     let t = Instant::now();
     let (positions, transport, runs) = graph.into_parts();

@@ -124,5 +124,5 @@ fn motion_pbrt_v4_does_not_support_is_refused_or_warned() {
         &BuildOptions { integrator: Some("radiancegraph".into()), ..Default::default() },
     );
     let e = scene.integrator.create(&scene).err().expect("radiancegraph refuses motion");
-    assert!(e.contains("static scene"), "{e}");
+    assert!(e.to_string().contains("static scene"), "{e}");
 }

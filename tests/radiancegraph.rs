@@ -181,6 +181,14 @@ fn graph_build_and_render_from_the_file() {
     let out = render(&scene, &[]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     assert_eq!(nimbus::imageio::read_exr(&img).unwrap().pixels, from_file.pixels);
+    // `--precomputed` naming a missing file: the render builds the graph and saves it there,
+    // and the next render loads it; the same image both times.
+    let saved = dir.join("saved.graph");
+    for round in ["built and saved", "loaded"] {
+        let out = render(&scene, &["--precomputed", saved.to_str().unwrap()]);
+        assert!(out.status.success() && saved.exists(), "{round}: {}", String::from_utf8_lossy(&out.stderr));
+        assert_eq!(nimbus::imageio::read_exr(&img).unwrap().pixels, from_file.pixels, "{round}");
+    }
     // Another medium: the graph file is refused, naming the file and why.
     let other = dir.join("other.pbrt");
     std::fs::write(&other, cube_text(3.0, "graph", "")).unwrap();
@@ -312,7 +320,7 @@ fn a_graph_too_large_for_memory_is_refused_by_name() {
     let config = GraphConfig::from_json(SMALL_CONFIG).unwrap();
     let radius = volume.radius * 2.0 / 1000.0 * 20.0;
     let build = |limit| radiancegraph::build::build_graph(&volume, &config.graph_builder, radius, 7, limit);
-    let err = build(64 << 10).err().expect("64 KiB holds no graph of this scene");
+    let err = build(64 << 10).err().expect("64 KiB holds no graph of this scene").to_string();
     assert!(err.contains("outgrew 0.0 GiB") && err.contains("radiusModifier") && err.contains("1/50 of"), "{err}");
     let (graph, report) = build(usize::MAX).unwrap();
     assert!(graph.len() > 1000 && report.peak.0 + report.peak.1 > 64 << 10);

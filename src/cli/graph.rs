@@ -119,18 +119,9 @@ fn build(args: &BuildArgs) -> Result<ExitCode> {
     std::fs::create_dir_all(&dir).map_err(|e| anyhow::anyhow!("{}: cannot create: {e}", dir.display()))?;
     let (scene_hash, config_hash) = (file::scene_hash(&volume), file::config_hash(&config));
     let mut written = Vec::new();
-    for g in &graphs.graphs {
+    for (i, g) in graphs.graphs.iter().enumerate() {
         let path = dir.join(format!("{stem}_d{}.txt", g.bounces_done + 1));
-        let f = file::GraphFile {
-            scene_hash,
-            config_hash,
-            bounces: g.bounces,
-            bounces_done: g.bounces_done,
-            node_radius: stats.node_radius,
-            positions: graphs.positions.clone(),
-            ranges: graphs.ranges.clone(),
-            radiance: g.radiance.clone(),
-        };
+        let f = graphs.file(i, scene_hash, config_hash, stats.node_radius);
         if let Err(e) = f.write(&path) {
             eprintln!("error: {e}");
             return Ok(ExitCode::FAILURE);

@@ -45,11 +45,10 @@ pub struct RenderArgs {
     /// Render with this integrator instead of the scene's (drop-in comparison).
     #[arg(long)]
     integrator: Option<String>,
-    /// What the method prepared before rendering, refused when it was prepared for another
-    /// scene: `radiancegraph`'s graph file (from `nimbus graph build`, the thesis's
-    /// `--graph-data`; without it the graph is built first, with the scene's `.json` config
-    /// if there is one), `guided`'s trained trees (`--guide-cache`: loaded when the file
-    /// matches the scene, else trained and saved there for later renders and other cameras).
+    /// What the method prepares before rendering (a radiance graph, the thesis's
+    /// `--graph-data`; a guide's trained trees, `--guide-cache`): loaded when the file exists
+    /// (and refused when it was prepared for another scene or other settings), else prepared
+    /// now and saved there, for later renders and other cameras.
     #[arg(long, value_name = "FILE", visible_aliases = ["graph-data", "guide-cache"])]
     precomputed: Option<PathBuf>,
     /// Longest light path, overriding the integrator's `maxdepth` (the radiance-graph

@@ -6,6 +6,7 @@ pub mod common;
 pub mod guided;
 pub mod image_pass;
 pub mod pathgraph;
+pub mod prepared;
 pub mod radiancegraph;
 pub mod registry;
 pub mod simplevolpath;

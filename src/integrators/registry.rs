@@ -61,8 +61,8 @@ pub struct MethodInputs<'a> {
     /// `.json` config).
     pub scene_file: Option<&'a Path>,
     /// `--precomputed` (`--graph-data`, `--guide-cache`): what the method prepared before,
-    /// for it to load (each method's README says whether a missing file is prepared and
-    /// saved or is an error).
+    /// loaded when it exists, else prepared and saved there (the same rule for every method:
+    /// [`super::prepared::load_or_prepare`]).
     pub precomputed: Option<&'a Path>,
 }
 
@@ -112,7 +112,7 @@ pub trait MethodSettings: SettingsBox + std::fmt::Debug + Send + Sync + Any {
     fn method(&self) -> &'static Method;
 
     /// Sets the longest path (`--maxdepth`); methods without one say so.
-    fn set_max_depth(&mut self, depth: u32) -> Result<(), String>;
+    fn set_max_depth(&mut self, depth: u32) -> crate::Result<()>;
 
     /// Takes the files from outside the scene it reads (none by default).
     fn set_inputs(&mut self, _inputs: &MethodInputs<'_>) {}
@@ -128,7 +128,7 @@ pub trait MethodSettings: SettingsBox + std::fmt::Debug + Send + Sync + Any {
     }
 
     /// The job `nimbus cluster` runs before the method's render tasks, for `scene_file`.
-    fn precompute(&self, _scene_file: &Path) -> Result<Option<Precompute>, String> {
+    fn precompute(&self, _scene_file: &Path) -> crate::Result<Option<Precompute>> {
         Ok(None)
     }
 
@@ -136,7 +136,7 @@ pub trait MethodSettings: SettingsBox + std::fmt::Debug + Send + Sync + Any {
     /// scene's lights: methods may build per-scene tables here, and methods that precompute
     /// do it here: the radiance graph loads or builds its graph, guiding trains). Fails with
     /// a message for the user when the precomputation cannot run.
-    fn create(&self, scene: &Scene) -> Result<Box<dyn Integrator>, String>;
+    fn create(&self, scene: &Scene) -> crate::Result<Box<dyn Integrator>>;
 }
 
 /// A method ready to render a scene, and what preparing it took.
@@ -160,7 +160,7 @@ impl Prepared {
 /// Prepares the scene's method: the pipeline's own timed phase between building the scene
 /// and rendering it (`nimbus render`, `compare`, `bench`; `stress` and `cluster` run
 /// `render`).
-pub fn prepare(settings: &dyn MethodSettings, scene: &Scene) -> Result<Prepared, String> {
+pub fn prepare(settings: &dyn MethodSettings, scene: &Scene) -> crate::Result<Prepared> {
     let t = std::time::Instant::now();
     let integrator = settings.create(scene)?;
     Ok(Prepared { integrator, seconds: t.elapsed().as_secs_f64() })

@@ -34,7 +34,7 @@ impl std::ops::Deref for Setup {
 impl Setup {
     /// Prepares the method for the scene: its own timed phase between building the scene and
     /// rendering it (see [`registry::prepare`]).
-    pub fn prepare(&self) -> Result<Prepared, String> {
+    pub fn prepare(&self) -> crate::Result<Prepared> {
         registry::prepare(&*self.integrator, &self.scene)
     }
 }

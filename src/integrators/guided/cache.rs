@@ -4,6 +4,8 @@
 //! lights and its extent) and one of the training parameters, then the trees. A file from
 //! another scene, other training settings or another nimbus version is refused by name.
 
+use super::super::prepared::{FileKind, Header, read_file, write_file};
+use crate::error::Error;
 use crate::math::fnv::Fnv;
 use std::path::Path;
 
@@ -18,8 +20,15 @@ use crate::geometry::Bounds3;
 use crate::media::{Medium, MediumKind};
 use crate::scene::Scene;
 
-const MAGIC: &[u8; 8] = b"NIMBUSGD";
-const VERSION: u32 = 2;
+/// The guide cache's kind: its header is every prepared file's ([`super::super::prepared`]).
+const KIND: FileKind = FileKind {
+    magic: b"NIMBUSGD",
+    version: 2,
+    what: "guide cache",
+    remedy: "delete it or name another file to train anew",
+    settings: "training parameters (maxdepth, trainingiterations, photons, streethreshold, dtreethreshold, \
+               maxmemory or refractedshare)",
+};
 
 /// Probes a grid medium at 16³ points of its box (σa and σs), so equal media hash equally
 /// whatever file they were read from, and changed ones differently.
@@ -78,12 +87,9 @@ fn settings_hash(s: &GuidedSettings) -> u64 {
 }
 
 /// Writes the trees of `guide`, trained for `scene` with `settings`.
-pub fn save(path: &Path, scene: &Scene, settings: &GuidedSettings, guide: &Guide) -> Result<(), String> {
+pub fn save(path: &Path, scene: &Scene, settings: &GuidedSettings, guide: &Guide) -> crate::Result<()> {
     let mut out = Vec::new();
-    out.extend_from_slice(MAGIC);
-    out.extend_from_slice(&VERSION.to_le_bytes());
-    out.extend_from_slice(&scene_hash(scene).to_le_bytes());
-    out.extend_from_slice(&settings_hash(settings).to_le_bytes());
+    KIND.write_header(Header { scene_hash: scene_hash(scene), settings_hash: settings_hash(settings) }, &mut out);
     let s = &guide.stats;
     out.extend_from_slice(&s.photons.to_le_bytes());
     out.extend_from_slice(&s.deposits.to_le_bytes());
@@ -99,95 +105,87 @@ pub fn save(path: &Path, scene: &Scene, settings: &GuidedSettings, guide: &Guide
             }
         }
     }
-    std::fs::write(path, out).map_err(|e| format!("cannot write the guide cache {}: {e}", path.display()))
+    write_file(path, &out)
+}
+
+/// Why a guide cache's contents cannot be used (after its header was accepted).
+fn bad(path: &Path, why: impl std::fmt::Display) -> Error {
+    Error::malformed(path, format!("the guide cache cannot be used: {why}"))
 }
 
 /// A cursor over a cache file's bytes that reports truncation.
 pub struct Reader<'a> {
     bytes: &'a [u8],
     at: usize,
+    path: &'a Path,
 }
 
 impl Reader<'_> {
     /// The next `n` bytes.
-    pub fn take(&mut self, n: usize) -> Result<&[u8], String> {
-        let end = self.at.checked_add(n).filter(|&e| e <= self.bytes.len()).ok_or("the file is truncated")?;
+    pub fn take(&mut self, n: usize) -> crate::Result<&[u8]> {
+        let end = self
+            .at
+            .checked_add(n)
+            .filter(|&e| e <= self.bytes.len())
+            .ok_or_else(|| bad(self.path, "the file is truncated"))?;
         let s = &self.bytes[self.at..end];
         self.at = end;
         Ok(s)
     }
     /// A little-endian u32.
-    pub fn u32(&mut self) -> Result<u32, String> {
+    pub fn u32(&mut self) -> crate::Result<u32> {
         Ok(u32::from_le_bytes(self.take(4)?.try_into().unwrap()))
     }
     /// A little-endian u64.
-    pub fn u64(&mut self) -> Result<u64, String> {
+    pub fn u64(&mut self) -> crate::Result<u64> {
         Ok(u64::from_le_bytes(self.take(8)?.try_into().unwrap()))
     }
     /// A little-endian f32.
-    pub fn f32(&mut self) -> Result<f32, String> {
+    pub fn f32(&mut self) -> crate::Result<f32> {
         Ok(f32::from_le_bytes(self.take(4)?.try_into().unwrap()))
     }
     /// A count of items of at least `item_bytes` each, checked against what is left.
-    pub fn count(&mut self, item_bytes: usize) -> Result<usize, String> {
+    pub fn count(&mut self, item_bytes: usize) -> crate::Result<usize> {
         let n = self.u32()? as usize;
         if n.saturating_mul(item_bytes) > self.bytes.len() - self.at {
-            return Err(format!("a count of {n} exceeds the file"));
+            return Err(bad(self.path, format!("a count of {n} exceeds the file")));
         }
         Ok(n)
     }
 }
 
 /// Reads trees saved for `scene` and `settings` from `path`.
-pub fn load(path: &Path, scene: &Scene, settings: &GuidedSettings) -> Result<Guide, String> {
-    let name = path.display();
-    let bytes = std::fs::read(path).map_err(|e| format!("cannot read the guide cache {name}: {e}"))?;
-    let mut r = Reader { bytes: &bytes, at: 0 };
-    let bad = |m: String| format!("the guide cache {name} cannot be used: {m}");
-    if r.take(8).map_err(bad)? != MAGIC {
-        return Err(bad("it is not a nimbus guide cache".into()));
-    }
-    let version = r.u32().map_err(bad)?;
-    if version != VERSION {
-        return Err(bad(format!("it was written by another nimbus (format {version}, this one reads {VERSION})")));
-    }
-    if r.u64().map_err(bad)? != scene_hash(scene) {
-        return Err(bad("it was trained for another scene (its media, lights or extent differ); \
-                        delete it or name another file to train anew"
-            .into()));
-    }
-    if r.u64().map_err(bad)? != settings_hash(settings) {
-        return Err(bad("it was trained with other training parameters (maxdepth, trainingiterations, photons, \
-                        streethreshold, dtreethreshold, maxmemory or refractedshare)"
-            .into()));
-    }
-    let photons = r.u64().map_err(bad)?;
+pub fn load(path: &Path, scene: &Scene, settings: &GuidedSettings) -> crate::Result<Guide> {
+    let bytes = read_file(path)?;
+    let (_, body) = KIND.read_header(&bytes, path, Some(scene_hash(scene)), Some(settings_hash(settings)))?;
+    let mut r = Reader { bytes: body, at: 0, path };
+    let photons = r.u64()?;
     let stats = TrainingStats {
         photons,
         // Round k traces photons·2^k after the pilot.
         rounds: ((photons.saturating_sub(super::train::PILOT) / settings.photons.max(1) as u64) + 1).ilog2(),
-        deposits: r.u64().map_err(bad)?,
-        seconds: f64::from_le_bytes(r.take(8).map_err(bad)?.try_into().unwrap()),
+        deposits: r.u64()?,
+        seconds: f64::from_le_bytes(r.take(8)?.try_into().unwrap()),
     };
-    let n = r.count(1).map_err(bad)?;
+    let n = r.count(1)?;
     if n != scene.media.len() {
-        return Err(bad(format!("it has trees for {n} media, the scene has {}", scene.media.len())));
+        return Err(bad(path, format!("it has trees for {n} media, the scene has {}", scene.media.len())));
     }
     let (mut trees, mut refracted) = (Vec::with_capacity(n), Vec::with_capacity(n));
     for _ in 0..n {
-        let share = r.f32().map_err(bad)?;
+        let share = r.f32()?;
         if !(0.0..=1.0).contains(&share) {
-            return Err(bad(format!("a medium's refracted share is {share}")));
+            return Err(bad(path, format!("a medium's refracted share is {share}")));
         }
         refracted.push(share);
-        trees.push(match r.take(1).map_err(bad)?[0] {
+        trees.push(match r.take(1)?[0] {
             0 => None,
-            1 => Some(SdTree::read(&mut r).map_err(bad)?),
-            t => return Err(bad(format!("unknown tree tag {t}"))),
+            1 => Some(SdTree::read(&mut r)?),
+            t => return Err(bad(path, format!("unknown tree tag {t}"))),
         });
     }
-    if r.at != bytes.len() {
-        return Err(bad("it has bytes after its trees".into()));
+    if r.at != body.len() {
+        return Err(bad(path, "it has bytes after its trees"));
     }
     let active = trees.iter().map(Option::is_some).collect();
     Ok(Guide { trees, refracted, active, stats, fluence: Vec::new() })
@@ -219,7 +217,7 @@ impl SdTree {
         }
     }
 
-    fn read(r: &mut Reader<'_>) -> Result<SdTree, String> {
+    fn read(r: &mut Reader<'_>) -> crate::Result<SdTree> {
         let mut v = [0.0f32; 6];
         for x in &mut v {
             *x = r.f32()?;
@@ -248,8 +246,8 @@ impl SdTree {
                 }
                 dn.push((sums, children));
             }
-            dtrees.push(DTree::from_parts(count, dn)?);
+            dtrees.push(DTree::from_parts(count, dn).map_err(|e| bad(r.path, e))?);
         }
-        SdTree::from_parts(bounds, nodes, dtrees)
+        SdTree::from_parts(bounds, nodes, dtrees).map_err(|e| bad(r.path, e))
     }
 }

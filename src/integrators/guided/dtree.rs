@@ -92,16 +92,16 @@ impl DTree {
 
     /// A tree from [`DTree::parts`], checked: children come after their parent and exist,
     /// energies are finite and not negative.
-    pub fn from_parts(count: u64, nodes: Vec<NodeParts>) -> Result<DTree, String> {
+    pub fn from_parts(count: u64, nodes: Vec<NodeParts>) -> crate::Result<DTree> {
         if nodes.is_empty() {
-            return Err("a directional tree has no nodes".into());
+            return Err(crate::Error::invalid("a directional tree has no nodes"));
         }
         for (i, (sums, children)) in nodes.iter().enumerate() {
             if sums.iter().any(|s| !(s.is_finite() && *s >= 0.0)) {
-                return Err(format!("directional node {i} has an invalid energy"));
+                return Err(crate::Error::Invalid(format!("directional node {i} has an invalid energy")));
             }
             if children.iter().any(|&c| c != 0 && (c as usize <= i || c as usize >= nodes.len())) {
-                return Err(format!("directional node {i} has an invalid child"));
+                return Err(crate::Error::Invalid(format!("directional node {i} has an invalid child")));
             }
         }
         Ok(DTree { nodes: nodes.into_iter().map(|(sums, children)| Node { sums, children }).collect(), count })

@@ -23,6 +23,7 @@ use std::path::Path;
 
 use super::RayIntegrator;
 use super::common::{GuidedSample, PathConfig, PathRecorder, PathStrategy, RayStats, trace_path};
+use super::prepared::{Source, load_or_prepare};
 use super::registry::{Method, MethodInputs, MethodSettings, Precompute};
 use crate::channels::Channels;
 use crate::geometry::Ray;
@@ -44,7 +45,7 @@ impl MethodSettings for GuidedSettings {
         &METHOD
     }
 
-    fn set_max_depth(&mut self, depth: u32) -> Result<(), String> {
+    fn set_max_depth(&mut self, depth: u32) -> crate::Result<()> {
         self.max_depth = depth;
         Ok(())
     }
@@ -56,11 +57,11 @@ impl MethodSettings for GuidedSettings {
     }
 
     /// Training happens in the first render whose cache file is missing.
-    fn precompute(&self, _scene_file: &Path) -> Result<Option<Precompute>, String> {
+    fn precompute(&self, _scene_file: &Path) -> crate::Result<Option<Precompute>> {
         Ok(Some(Precompute::FirstRender { file: "guide.cache".into() }))
     }
 
-    fn create(&self, scene: &Scene) -> Result<Box<dyn super::Integrator>, String> {
+    fn create(&self, scene: &Scene) -> crate::Result<Box<dyn super::Integrator>> {
         Ok(Box::new(create(self, scene)?))
     }
 }
@@ -78,19 +79,19 @@ pub struct Guided {
     split: (f32, u32),
 }
 
-/// Trains the guide (or loads it from the cache file) and creates the integrator.
-pub fn create(settings: &GuidedSettings, scene: &Scene) -> Result<Guided, String> {
-    let (mut guide, source) = match &settings.cache {
-        Some(path) if path.exists() => {
-            let g = cache::load(path, scene, settings)?;
-            (g, format!("loaded from {}", path.display()))
-        }
-        Some(path) => {
-            let g = train::train(scene, settings);
-            cache::save(path, scene, settings, &g)?;
-            (g, format!("trained, saved to {}", path.display()))
-        }
-        None => (train::train(scene, settings), "trained".to_string()),
+/// Trains the guide (or loads it from the cache file, [`load_or_prepare`]) and creates the
+/// integrator.
+pub fn create(settings: &GuidedSettings, scene: &Scene) -> crate::Result<Guided> {
+    let (mut guide, source) = load_or_prepare(
+        settings.cache.as_deref(),
+        |path| cache::load(path, scene, settings),
+        || Ok(train::train(scene, settings)),
+        |path, guide| cache::save(path, scene, settings, guide),
+    )?;
+    let source = match source {
+        Source::Prepared => "trained".to_string(),
+        Source::Saved(path) => format!("trained, saved to {}", path.display()),
+        Source::Loaded(path) => format!("loaded from {}", path.display()),
     };
     guide.activate(settings.refracted_share);
     let media = guide

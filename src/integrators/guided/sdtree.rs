@@ -55,15 +55,15 @@ impl SdTree {
 
     /// A tree from [`SdTree::parts`], checked: axes are x, y or z, children come after their
     /// parent and exist, leaves name existing directional trees.
-    pub fn from_parts(bounds: Bounds3, nodes: Vec<(u8, u32, u32)>, dtrees: Vec<DTree>) -> Result<SdTree, String> {
+    pub fn from_parts(bounds: Bounds3, nodes: Vec<(u8, u32, u32)>, dtrees: Vec<DTree>) -> crate::Result<SdTree> {
         if nodes.is_empty() || !(bounds.min.is_finite() && bounds.max.is_finite() && bounds.min.cmple(bounds.max).all())
         {
-            return Err("a spatial tree has no nodes or invalid bounds".into());
+            return Err(crate::Error::invalid("a spatial tree has no nodes or invalid bounds"));
         }
         for (i, &(axis, child, dtree)) in nodes.iter().enumerate() {
             let bad_child = child != 0 && (child as usize <= i || child as usize + 1 >= nodes.len());
             if axis > 2 || bad_child || (child == 0 && dtree as usize >= dtrees.len()) {
-                return Err(format!("spatial node {i} is invalid"));
+                return Err(crate::Error::Invalid(format!("spatial node {i} is invalid")));
             }
         }
         let nodes = nodes.into_iter().map(|(axis, child, dtree)| Node { axis, child, dtree }).collect();

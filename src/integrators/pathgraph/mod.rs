@@ -44,7 +44,7 @@ impl MethodSettings for PathGraphSettings {
         &METHOD
     }
 
-    fn set_max_depth(&mut self, depth: u32) -> Result<(), String> {
+    fn set_max_depth(&mut self, depth: u32) -> crate::Result<()> {
         self.max_depth = depth;
         Ok(())
     }
@@ -53,7 +53,7 @@ impl MethodSettings for PathGraphSettings {
         Some("pathgraph accumulates RGB and cannot write the spectral film (use \"rgb\" or \"gbuffer\")")
     }
 
-    fn create(&self, scene: &Scene) -> Result<Box<dyn Integrator>, String> {
+    fn create(&self, scene: &Scene) -> crate::Result<Box<dyn Integrator>> {
         Ok(Box::new(create(self, scene)?))
     }
 }
@@ -107,7 +107,7 @@ struct Report {
 }
 
 /// Creates the integrator.
-pub fn create(settings: &PathGraphSettings, scene: &Scene) -> Result<PathGraph, String> {
+pub fn create(settings: &PathGraphSettings, scene: &Scene) -> crate::Result<PathGraph> {
     Ok(PathGraph {
         settings: settings.clone(),
         config: PathConfig {

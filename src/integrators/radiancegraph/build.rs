@@ -111,7 +111,7 @@ pub fn build_graph(
     radius: f32,
     seed: u64,
     memory_limit: usize,
-) -> Result<(BuildGraph, BuildReport), String> {
+) -> crate::Result<(BuildGraph, BuildReport)> {
     let mut graph = BuildGraph::new(radius);
     let mut report = BuildReport::default();
     let max_depth = config.max_depth as usize;
@@ -154,7 +154,12 @@ pub fn build_graph(
             },
         );
         if report.peak.0 + report.peak.1 > memory_limit {
-            return Err(too_large(&graph, memory_limit, ((b * batch) as u64 * per_start, total), volume));
+            return Err(crate::Error::Invalid(too_large(
+                &graph,
+                memory_limit,
+                ((b * batch) as u64 * per_start, total),
+                volume,
+            )));
         }
         pending = Some(traced);
     }
@@ -165,7 +170,7 @@ pub fn build_graph(
     reinforce(volume, config, &mut graph, seed, report.light_paths, &mut report);
     report.note_memory(&graph);
     if report.peak.0 + report.peak.1 > memory_limit {
-        return Err(too_large(&graph, memory_limit, (total, total), volume));
+        return Err(crate::Error::Invalid(too_large(&graph, memory_limit, (total, total), volume)));
     }
     Ok((graph, report))
 }

@@ -7,18 +7,24 @@
 //! node). 20 bytes per node for one light; the thesis's text file holds the same in ≈ 60.
 
 use crate::math::fnv::Fnv;
-use std::io::{Read, Write};
 use std::path::Path;
 
 use glam::Vec3;
 
+use super::super::prepared::{FileKind, Header, read_file, write_file};
 use super::config::GraphConfig;
 use super::volume::Volume;
 use crate::color::Rgb;
+use crate::error::{Error, Result};
 
-const MAGIC: &[u8; 8] = b"NIMBUSRG";
-/// The format this nimbus writes and reads.
-pub const VERSION: u32 = 1;
+/// The graph file's kind: its header is every prepared file's ([`super::super::prepared`]).
+pub const KIND: FileKind = FileKind {
+    magic: b"NIMBUSRG",
+    version: 1,
+    what: "graph",
+    remedy: "rebuild it with `nimbus graph build`",
+    settings: "graph config",
+};
 
 /// What a graph file holds.
 #[derive(Clone, Debug, PartialEq)]
@@ -77,13 +83,10 @@ pub fn config_hash(config: &GraphConfig) -> u64 {
 
 impl GraphFile {
     /// Writes the file.
-    pub fn write(&self, path: &Path) -> Result<(), String> {
+    pub fn write(&self, path: &Path) -> Result<()> {
         let n = self.positions.len();
         let mut out = Vec::with_capacity(64 + n * (16 + 4 * self.radiance.len()));
-        out.extend_from_slice(MAGIC);
-        out.extend_from_slice(&VERSION.to_le_bytes());
-        out.extend_from_slice(&self.scene_hash.to_le_bytes());
-        out.extend_from_slice(&self.config_hash.to_le_bytes());
+        KIND.write_header(Header { scene_hash: self.scene_hash, settings_hash: self.config_hash }, &mut out);
         out.extend_from_slice(&self.bounces.to_le_bytes());
         out.extend_from_slice(&self.bounces_done.to_le_bytes());
         out.extend_from_slice(&self.node_radius.to_le_bytes());
@@ -96,53 +99,33 @@ impl GraphFile {
         for l in &self.radiance {
             l.iter().for_each(|x| out.extend_from_slice(&x.to_le_bytes()));
         }
-        let mut f = std::fs::File::create(path).map_err(|e| format!("{}: cannot write: {e}", path.display()))?;
-        f.write_all(&out).map_err(|e| format!("{}: cannot write: {e}", path.display()))
+        write_file(path, &out)
     }
 
     /// Reads a file; `expected_scene` refuses a graph built for another scene.
-    pub fn read(path: &Path, expected_scene: Option<u64>) -> Result<GraphFile, String> {
-        let shown = path.display();
-        let mut bytes = Vec::new();
-        std::fs::File::open(path)
-            .and_then(|mut f| f.read_to_end(&mut bytes))
-            .map_err(|e| format!("{shown}: cannot read graph file: {e}"))?;
-        let mut r = Reader { b: &bytes, at: 0 };
-        let bad = |what: &str| format!("{shown}: not a nimbus graph file ({what})");
-        if r.take(8).ok_or_else(|| bad("too short"))? != MAGIC {
-            return Err(
-                if bytes.starts_with(b"free")
-                    || bytes.starts_with(b"basic")
-                    || bytes.first().is_some_and(u8::is_ascii_digit)
-                {
-                    format!(
-                        "{shown}: a text graph file (the thesis's graph_maker writes those); nimbus reads graphs built by `nimbus graph build`"
-                    )
-                } else {
-                    bad("no NIMBUSRG signature")
-                },
-            );
-        }
-        let version = r.u32().ok_or_else(|| bad("truncated header"))?;
-        if version != VERSION {
-            return Err(format!(
-                "{shown}: graph format version {version}, this nimbus reads version {VERSION}: rebuild it with `nimbus graph build`"
-            ));
-        }
-        let header = (|| Some((r.u64()?, r.u64()?, r.u32()?, r.u32()?, r.f32()?, r.u32()?, r.u64()?)))();
-        let (scene_hash, config_hash, bounces, bounces_done, node_radius, lights, n) =
-            header.ok_or_else(|| bad("truncated header"))?;
-        if let Some(expected) = expected_scene
-            && expected != scene_hash
+    pub fn read(path: &Path, expected_scene: Option<u64>) -> Result<GraphFile> {
+        let bytes = read_file(path)?;
+        let bad = |what: &str| Error::malformed(path, format!("not a nimbus graph file ({what})"));
+        if !bytes.starts_with(KIND.magic)
+            && (bytes.starts_with(b"free")
+                || bytes.starts_with(b"basic")
+                || bytes.first().is_some_and(u8::is_ascii_digit))
         {
-            return Err(format!(
-                "{shown}: this graph was built for another scene (its medium, bounds or lights differ from this scene's): rebuild it with `nimbus graph build`"
-            ));
+            return Err(Error::Unsupported(format!(
+                "{}: a text graph file (the thesis's graph_maker writes those); nimbus reads graphs built by `nimbus graph build`",
+                path.display()
+            )));
         }
+        // Any config: the graph's builder chose it, and rendering reads none.
+        let (header, body) = KIND.read_header(&bytes, path, expected_scene, None)?;
+        let (scene_hash, config_hash) = (header.scene_hash, header.settings_hash);
+        let mut r = Reader { b: body, at: 0 };
+        let fields = (|| Some((r.u32()?, r.u32()?, r.f32()?, r.u32()?, r.u64()?)))();
+        let (bounces, bounces_done, node_radius, lights, n) = fields.ok_or_else(|| bad("truncated header"))?;
         let n = usize::try_from(n).map_err(|_| bad("node count"))?;
         let need = n.checked_mul(16 + 4 * lights as usize).ok_or_else(|| bad("node count"))?;
-        if bytes.len() - r.at != need {
-            return Err(bad(&format!("{} bytes of node data, {n} nodes need {need}", bytes.len() - r.at)));
+        if body.len() - r.at != need {
+            return Err(bad(&format!("{} bytes of node data, {n} nodes need {need}", body.len() - r.at)));
         }
         let mut floats = |k: usize| (0..k).map(|_| r.f32().expect("length checked")).collect::<Vec<f32>>();
         let p = floats(3 * n);
@@ -221,9 +204,9 @@ mod tests {
         let short = GraphFile::read(&f, None);
         std::fs::remove_dir_all(&dir).unwrap();
         assert_eq!(back.unwrap(), sample());
-        assert!(other.unwrap_err().contains("built for another scene"));
-        assert!(version.unwrap_err().contains("graph format version 99, this nimbus reads version 1"));
-        assert!(text.unwrap_err().contains("a text graph file"));
-        assert!(short.unwrap_err().contains("not a nimbus graph file"));
+        assert!(other.unwrap_err().to_string().contains("built for another scene"));
+        assert!(version.unwrap_err().to_string().contains("graph format version 99, this nimbus reads version 1"));
+        assert!(text.unwrap_err().to_string().contains("a text graph file"));
+        assert!(short.unwrap_err().to_string().contains("not a nimbus graph file"));
     }
 }

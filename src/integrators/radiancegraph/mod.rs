@@ -24,6 +24,7 @@ use glam::Vec3;
 use render::RadianceCache;
 use volume::Volume;
 
+use super::prepared::load_or_prepare;
 use super::registry::{Method, MethodInputs, MethodSettings, Precompute};
 use crate::scene::Scene;
 
@@ -41,15 +42,17 @@ impl MethodSettings for RadianceGraphSettings {
 
     /// The method has no such parameter: its light paths' depth is the graph config's, and
     /// saying so beats ignoring the flag.
-    fn set_max_depth(&mut self, _depth: u32) -> Result<(), String> {
-        Err("--maxdepth: radiancegraph has no maxdepth; its light paths' depth is the graph config's \
+    fn set_max_depth(&mut self, _depth: u32) -> crate::Result<()> {
+        Err(crate::Error::Invalid(
+            "--maxdepth: radiancegraph has no maxdepth; its light paths' depth is the graph config's \
              graphBuilder.maxDepth"
-            .into())
+                .into(),
+        ))
     }
 
-    /// The precomputed file is a graph `nimbus graph build` wrote (it must exist); without
-    /// one the graph is built with the scene's config, graph_maker's default: the scene's
-    /// name with `.json`.
+    /// The precomputed file is a graph (`nimbus graph build` writes them): loaded when it
+    /// exists, else built and saved there. The graph is built with the scene's config,
+    /// graph_maker's default: the scene's name with `.json`.
     fn set_inputs(&mut self, inputs: &MethodInputs<'_>) {
         self.graph_data = inputs.precomputed.map(Path::to_path_buf);
         self.config = inputs.scene_file.map(|f| f.with_extension("json")).filter(|c| c.exists());
@@ -57,10 +60,10 @@ impl MethodSettings for RadianceGraphSettings {
 
     /// `nimbus graph build` with the scene's config, writing the graph of its largest bounce
     /// count as graph_maker names it.
-    fn precompute(&self, scene_file: &Path) -> Result<Option<Precompute>, String> {
+    fn precompute(&self, scene_file: &Path) -> crate::Result<Option<Precompute>> {
         let config_path = scene_file.with_extension("json");
         let config = if config_path.exists() {
-            GraphConfig::from_file(&config_path).map_err(|e| e.to_string())?
+            GraphConfig::from_file(&config_path).map_err(|e| crate::Error::Invalid(e.to_string()))?
         } else {
             GraphConfig::default()
         };
@@ -70,7 +73,7 @@ impl MethodSettings for RadianceGraphSettings {
         Ok(Some(Precompute::Command { args, file: format!("graph/{stem}_d{depth}.txt") }))
     }
 
-    fn create(&self, scene: &Scene) -> Result<Box<dyn super::Integrator>, String> {
+    fn create(&self, scene: &Scene) -> crate::Result<Box<dyn super::Integrator>> {
         Ok(Box::new(create(self, scene)?))
     }
 }
@@ -105,34 +108,36 @@ impl RadianceGraphSettings {
     }
 }
 
-/// The integrator for `scene`: from the graph file, or from a graph built now with the
-/// scene's config (or the defaults), keeping the largest bounce count it asks for.
-pub fn create(settings: &RadianceGraphSettings, scene: &Scene) -> Result<render::RadianceGraphIntegrator, String> {
+/// The integrator for `scene`: from the graph file when it exists (`--precomputed`, the
+/// thesis's `--graph-data`: it must be this scene's), else from a graph built now with the
+/// scene's config (or the defaults), keeping the largest bounce count it asks for, and saved
+/// to that file when one was named ([`load_or_prepare`]).
+pub fn create(settings: &RadianceGraphSettings, scene: &Scene) -> crate::Result<render::RadianceGraphIntegrator> {
     let volume = Volume::new(scene)?;
+    let scene_hash = file::scene_hash(&volume);
     let mut build_peak = 0;
-    let cache = match &settings.graph_data {
-        Some(path) => {
-            let f = file::GraphFile::read(path, Some(file::scene_hash(&volume)))?;
-            if f.radiance.len() != volume.lights.len() {
-                return Err(format!(
-                    "{}: the graph has {} lights, the scene {}",
-                    path.display(),
-                    f.radiance.len(),
-                    volume.lights.len()
-                ));
-            }
-            RadianceCache::new(f.positions, f.ranges, f.radiance)
+    let load = |path: &Path| {
+        let f = file::GraphFile::read(path, Some(scene_hash))?;
+        if f.radiance.len() != volume.lights.len() {
+            return Err(crate::Error::mismatch(
+                path,
+                format!("the graph has {} lights, the scene {}", f.radiance.len(), volume.lights.len()),
+            ));
         }
-        None => {
-            let config = match &settings.config {
-                Some(path) => GraphConfig::from_file(path).map_err(|e| e.to_string())?,
-                None => GraphConfig::default(),
-            };
-            let (graphs, stats) = build(scene, &config, None, scene.sampler.seed as u64)?;
-            build_peak = stats.stages.iter().map(|s| s.peak_bytes).max().unwrap_or(0);
-            graphs.into_largest()
-        }
+        Ok(f)
     };
+    let prepare = || {
+        let config = match &settings.config {
+            Some(path) => GraphConfig::from_file(path).map_err(|e| crate::Error::Invalid(e.to_string()))?,
+            None => GraphConfig::default(),
+        };
+        let (graphs, stats) = build(scene, &config, None, scene.sampler.seed as u64)?;
+        build_peak = stats.stages.iter().map(|s| s.peak_bytes).max().unwrap_or(0);
+        let largest = (0..graphs.graphs.len()).max_by_key(|&i| graphs.graphs[i].bounces).expect("bounces has an entry");
+        Ok(graphs.file(largest, scene_hash, file::config_hash(&config), stats.node_radius))
+    };
+    let (f, _) = load_or_prepare(settings.graph_data.as_deref(), load, prepare, |path, f| f.write(path))?;
+    let cache = RadianceCache::new(f.positions, f.ranges, f.radiance);
     Ok(render_integrator(&volume, cache).with_estimator(settings.estimator).with_build_peak(build_peak))
 }
 
@@ -210,6 +215,21 @@ impl Graphs {
         RadianceCache::new(self.positions.clone(), self.ranges.clone(), self.graphs[i].radiance.clone())
     }
 
+    /// Graph `i` as a graph file: the nodes, its radiance, and what it was built for and with.
+    pub fn file(&self, i: usize, scene_hash: u64, config_hash: u64, node_radius: f32) -> file::GraphFile {
+        let g = &self.graphs[i];
+        file::GraphFile {
+            scene_hash,
+            config_hash,
+            bounces: g.bounces,
+            bounces_done: g.bounces_done,
+            node_radius,
+            positions: self.positions.clone(),
+            ranges: self.ranges.clone(),
+            radiance: g.radiance.clone(),
+        }
+    }
+
     /// The radiance cache of the graph with the most bounces, consuming the build.
     pub fn into_largest(mut self) -> RadianceCache {
         let i = (0..self.graphs.len()).max_by_key(|&i| self.graphs[i].bounces).expect("bounces has an entry");
@@ -224,12 +244,12 @@ pub fn build(
     config: &GraphConfig,
     node_radius: Option<f32>,
     seed: u64,
-) -> Result<(Graphs, GraphStats), String> {
+) -> crate::Result<(Graphs, GraphStats)> {
     let volume = Volume::new(scene)?;
     // Sec. 4.3.1: the default radius is the scene's diameter / 1000 (the thesis's code).
     let radius = node_radius.unwrap_or(volume.radius * 2.0 / 1000.0 * config.graph_builder.radius_modifier);
     if !(radius > 0.0 && radius.is_finite()) {
-        return Err(format!("the node radius must be positive (it is {radius})"));
+        return Err(crate::Error::Invalid(format!("the node radius must be positive (it is {radius})")));
     }
     let mut stages = Vec::new();
     let t = Instant::now();
@@ -238,7 +258,7 @@ pub fn build(
     let edges_more_than_once = graph.edges_more_than_once();
     stages.push(Stage { name: "build", seconds: t.elapsed().as_secs_f64(), peak_bytes: report.peak.0 + report.peak.1 });
     if graph.is_empty() {
-        return Err("no light path scattered in the medium: the graph is empty".into());
+        return Err(crate::Error::invalid("no light path scattered in the medium: the graph is empty"));
     }
     let t = Instant::now();
     let (positions, transport, runs) = graph.into_parts();

@@ -20,9 +20,12 @@ pub fn node_tree(points: &[Vec3]) -> NodeTree {
 
 /// searchR of Eq. 4.21 for every node, with `k` neighbours. Fails when the graph has no more
 /// than `k` nodes (the thesis stops there too).
-pub fn search_ranges(points: &[Vec3], k: usize) -> Result<Vec<f32>, String> {
+pub fn search_ranges(points: &[Vec3], k: usize) -> crate::Result<Vec<f32>> {
     if k == 0 || points.len() <= k {
-        return Err(format!("the graph has {} nodes, too few for {k} neighbours per node", points.len()));
+        return Err(crate::Error::Invalid(format!(
+            "the graph has {} nodes, too few for {k} neighbours per node",
+            points.len()
+        )));
     }
     let tree = node_tree(points);
     // avgD(a) and NN(a, 1..=k), in parallel, into flat arrays (k entries per node).
@@ -67,6 +70,6 @@ mod tests {
     #[test]
     fn too_few_nodes_is_an_error() {
         let points = [Vec3::ZERO, Vec3::X];
-        assert!(search_ranges(&points, 2).unwrap_err().contains("2 nodes, too few for 2 neighbours"));
+        assert!(search_ranges(&points, 2).unwrap_err().to_string().contains("2 nodes, too few for 2 neighbours"));
     }
 }

@@ -74,7 +74,7 @@ pub enum Event {
 
 impl<'a> Volume<'a> {
     /// Checks the method's constraints; the error lists every violated one.
-    pub fn new(scene: &'a Scene) -> Result<Volume<'a>, String> {
+    pub fn new(scene: &'a Scene) -> crate::Result<Volume<'a>> {
         let mut violated = Vec::new();
         let medium = match scene.media.as_slice() {
             [m] => Some(m),
@@ -149,10 +149,10 @@ impl<'a> Volume<'a> {
             );
         }
         if !violated.is_empty() {
-            return Err(format!(
+            return Err(crate::Error::Unsupported(format!(
                 "the radiance-graph method needs {}",
                 violated.iter().map(|v| format!("\n  - {v}")).collect::<String>()
-            ));
+            )));
         }
         let bounds = surfaces.bounds();
         Ok(Volume {

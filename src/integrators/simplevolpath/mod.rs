@@ -43,12 +43,12 @@ impl MethodSettings for SimpleVolPathSettings {
         &METHOD
     }
 
-    fn set_max_depth(&mut self, depth: u32) -> Result<(), String> {
+    fn set_max_depth(&mut self, depth: u32) -> crate::Result<()> {
         self.max_depth = depth;
         Ok(())
     }
 
-    fn create(&self, scene: &Scene) -> Result<Box<dyn super::Integrator>, String> {
+    fn create(&self, scene: &Scene) -> crate::Result<Box<dyn super::Integrator>> {
         Ok(Box::new(SimpleVolPath::new(self, scene)))
     }
 }

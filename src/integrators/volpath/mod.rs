@@ -25,7 +25,7 @@ impl MethodSettings for VolPathSettings {
         &METHOD
     }
 
-    fn set_max_depth(&mut self, depth: u32) -> Result<(), String> {
+    fn set_max_depth(&mut self, depth: u32) -> crate::Result<()> {
         self.max_depth = depth;
         Ok(())
     }
@@ -34,7 +34,7 @@ impl MethodSettings for VolPathSettings {
         self.light_sampler
     }
 
-    fn create(&self, _scene: &Scene) -> Result<Box<dyn super::Integrator>, String> {
+    fn create(&self, _scene: &Scene) -> crate::Result<Box<dyn super::Integrator>> {
         Ok(Box::new(VolPath::new(self)))
     }
 }

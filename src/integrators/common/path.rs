@@ -397,6 +397,26 @@ impl<C: Channels, O: PathObserver<C>> Tracer<'_, C, O> {
         Tracked::Reached
     }
 
+    /// Next-event estimation at the vertex at `p` (on the surface `hit`, else in the walk's
+    /// medium), divided by `prob`, the chance it was taken; then the extra light samples
+    /// ([`PathConfig::extra_direct`]) at the first vertex that samples lights.
+    #[inline(always)]
+    fn next_event(&mut self, w: &mut Walk<C>, p: Vec3, hit: Option<&Hit>, sc: &Scatterer<'_, C>, prob: f32) {
+        let (scene, config, medium) = (self.scene, self.config, w.medium);
+        let u = (self.sampler.get_1d(), self.sampler.get_2d());
+        let (st, depth) = (&w.st, w.depth - 1);
+        if let Some(c) =
+            sample_direct(scene, p, hit, medium, sc, u, st, self.lambda, depth, self.observer, self.stats, true)
+        {
+            self.l += if prob < 1.0 { c / prob } else { c };
+        }
+        if config.extra_direct > 0 && !w.extra_done {
+            w.extra_done = true;
+            let c = extra_direct(scene, p, hit, medium, sc, st, self.lambda, config, self.sampler, self.stats);
+            self.observer.on_extra_direct(depth, c);
+        }
+    }
+
     /// Real scattering in a medium at `p`: next-event estimation, then the phase function (or
     /// the observer's guide) picks the continuation, split into several copies where the
     /// observer asks. False when no copy continues.
@@ -414,19 +434,7 @@ impl<C: Channels, O: PathObserver<C>> Tracer<'_, C, O> {
         // nothing (its probability divides what it finds).
         let nee_prob = if self.observer.guides() { self.observer.nee_medium_probability(medium, p) } else { 1.0 };
         if config.next_event && (nee_prob >= 1.0 || self.sampler.get_1d() < nee_prob) {
-            let u = (self.sampler.get_1d(), self.sampler.get_2d());
-            let sc = Scatterer::Medium { phase, wo };
-            let (st, depth) = (&w.st, w.depth - 1);
-            if let Some(c) =
-                sample_direct(scene, p, None, medium, &sc, u, st, self.lambda, depth, self.observer, self.stats, true)
-            {
-                self.l += if nee_prob < 1.0 { c / nee_prob } else { c };
-            }
-            if config.extra_direct > 0 && !w.extra_done {
-                w.extra_done = true;
-                let c = extra_direct(scene, p, None, medium, &sc, st, self.lambda, config, self.sampler, self.stats);
-                self.observer.on_extra_direct(depth, c);
-            }
+            self.next_event(w, p, None, &Scatterer::Medium { phase, wo }, nee_prob);
         }
         // Splitting where the observer guides and asks for it: the path continues in several
         // independent directions, each with its share of β (roulette's test below sees β as
@@ -595,41 +603,7 @@ impl<C: Channels, O: PathObserver<C>> Tracer<'_, C, O> {
 
         // Next-event estimation.
         if config.next_event && bxdf.flags().is_non_specular() {
-            let u = (self.sampler.get_1d(), self.sampler.get_2d());
-            let sc = Scatterer::Surface { bxdf: &bxdf, frame: &frame, wo_local };
-            let (st, depth, medium) = (&w.st, w.depth - 1, w.medium);
-            if let Some(c) = sample_direct(
-                scene,
-                s.p,
-                Some(&hit),
-                medium,
-                &sc,
-                u,
-                st,
-                self.lambda,
-                depth,
-                self.observer,
-                self.stats,
-                true,
-            ) {
-                self.l += c;
-            }
-            if config.extra_direct > 0 && !w.extra_done {
-                w.extra_done = true;
-                let c = extra_direct(
-                    scene,
-                    s.p,
-                    Some(&hit),
-                    medium,
-                    &sc,
-                    st,
-                    self.lambda,
-                    config,
-                    self.sampler,
-                    self.stats,
-                );
-                self.observer.on_extra_direct(depth, c);
-            }
+            self.next_event(w, s.p, Some(&hit), &Scatterer::Surface { bxdf: &bxdf, frame: &frame, wo_local }, 1.0);
         }
 
         // Continue the path by sampling the BSDF.

@@ -62,7 +62,7 @@ impl Camera {
         world_from_camera: &DMat4,
         full_resolution: [u32; 2],
         diagonal_mm: f32,
-    ) -> Result<Camera, String> {
+    ) -> crate::error::Result<Camera> {
         let res = Vec2::new(full_resolution[0] as f32, full_resolution[1] as f32);
         let frame = settings.frame_aspect_ratio.unwrap_or(res.x / res.y);
         let (screen_min, screen_max) = match settings.screen_window {

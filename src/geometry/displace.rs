@@ -21,12 +21,11 @@ pub fn displace(
     world: &Affine3A,
     edge_length: f32,
     displacement: impl Fn(Vec3, Vec2) -> f32,
-) -> Result<MeshData, String> {
+) -> crate::error::Result<MeshData> {
     if mesh.uvs.is_empty() {
-        return Err(
-            "displacement needs per-vertex uv coordinates, which this mesh does not have (pbrt-v4 requires them too)"
-                .into(),
-        );
+        return Err(crate::error::Error::invalid(
+            "displacement needs per-vertex uv coordinates, which this mesh does not have (pbrt-v4 requires them too)",
+        ));
     }
     let mut p: Vec<Vec3> = mesh.positions.iter().map(|&v| Vec3::from(v)).collect();
     let mut uv: Vec<Vec2> = mesh.uvs.iter().map(|&v| Vec2::from(v)).collect();
@@ -54,9 +53,9 @@ pub fn displace(
             if d01 < edge_length && d12 < edge_length && d20 < edge_length {
                 out.extend_from_slice(&[v0, v1, v2]);
                 if out.len() / 3 > MAX_TRIANGLES {
-                    return Err(format!(
+                    return Err(crate::error::Error::Invalid(format!(
                         "displacement with \"edgelength\" {edge_length} makes more than {MAX_TRIANGLES} triangles; give a larger one"
-                    ));
+                    )));
                 }
                 continue;
             }
@@ -166,6 +165,6 @@ mod tests {
         }
         let mut no_uv = quad();
         no_uv.uvs.clear();
-        assert!(displace(&no_uv, &Affine3A::IDENTITY, 0.1, |_, _| 0.0).unwrap_err().contains("uv"));
+        assert!(displace(&no_uv, &Affine3A::IDENTITY, 0.1, |_, _| 0.0).unwrap_err().to_string().contains("uv"));
     }
 }

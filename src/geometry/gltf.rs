@@ -6,16 +6,17 @@ use std::path::Path;
 use glam::{Mat3, Mat4, Vec3};
 
 use super::MeshData;
+use crate::error::{Error, Result};
 
 /// Reads the triangle meshes of a `.gltf`/`.glb` file's default scene, in scene space.
-pub fn read_gltf(path: &Path) -> Result<Vec<MeshData>, String> {
-    let gltf = gltf::Gltf::open(path).map_err(|e| format!("gltfmesh: {}: {e}", path.display()))?;
+pub fn read_gltf(path: &Path) -> Result<Vec<MeshData>> {
+    let gltf = gltf::Gltf::open(path).map_err(|e| Error::malformed(path, format!("gltfmesh: {e}")))?;
     let buffers = load_buffers(&gltf, path)?;
     let doc = gltf.document;
     let scene = doc
         .default_scene()
         .or_else(|| doc.scenes().next())
-        .ok_or_else(|| format!("gltfmesh: {}: no scene", path.display()))?;
+        .ok_or_else(|| Error::malformed(path, "gltfmesh: no scene"))?;
     let mut out = Vec::new();
     let mut stack: Vec<(gltf::Node, Mat4)> = scene.nodes().map(|n| (n, Mat4::IDENTITY)).collect();
     while let Some((node, parent)) = stack.pop() {
@@ -24,12 +25,12 @@ pub fn read_gltf(path: &Path) -> Result<Vec<MeshData>, String> {
             let nm = Mat3::from_mat4(m).inverse().transpose();
             for prim in mesh.primitives() {
                 if prim.mode() != gltf::mesh::Mode::Triangles {
-                    return Err(format!("gltfmesh: {}: only triangle primitives are supported", path.display()));
+                    return Err(Error::malformed(path, "gltfmesh: only triangle primitives are supported"));
                 }
                 let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d[..]));
                 let positions: Vec<[f32; 3]> = reader
                     .read_positions()
-                    .ok_or_else(|| format!("gltfmesh: {}: primitive without positions", path.display()))?
+                    .ok_or_else(|| Error::malformed(path, "gltfmesh: primitive without positions"))?
                     .map(|p| m.transform_point3(Vec3::from(p)).into())
                     .collect();
                 let normals: Vec<[f32; 3]> = reader
@@ -49,36 +50,35 @@ pub fn read_gltf(path: &Path) -> Result<Vec<MeshData>, String> {
         stack.extend(node.children().map(|c| (c, m)));
     }
     if out.is_empty() {
-        return Err(format!("gltfmesh: {}: no meshes in the scene", path.display()));
+        return Err(Error::malformed(path, "gltfmesh: no meshes in the scene"));
     }
     Ok(out)
 }
 
 /// Buffer data: the GLB blob, external `.bin` files (relative to the glTF file) or base64
 /// `data:` URIs. Textures are not needed, so images are never read.
-fn load_buffers(gltf: &gltf::Gltf, path: &Path) -> Result<Vec<Vec<u8>>, String> {
+fn load_buffers(gltf: &gltf::Gltf, path: &Path) -> Result<Vec<Vec<u8>>> {
     let dir = path.parent().unwrap_or(Path::new("."));
     gltf.document
         .buffers()
         .map(|b| {
             let data = match b.source() {
                 gltf::buffer::Source::Bin => {
-                    gltf.blob.clone().ok_or_else(|| format!("gltfmesh: {}: missing binary chunk", path.display()))?
+                    gltf.blob.clone().ok_or_else(|| Error::malformed(path, "gltfmesh: missing binary chunk"))?
                 }
                 gltf::buffer::Source::Uri(uri) if uri.starts_with("data:") => {
                     let (_, payload) = uri
                         .split_once(";base64,")
-                        .ok_or_else(|| format!("gltfmesh: {}: unsupported data URI", path.display()))?;
-                    base64_decode(payload)
-                        .ok_or_else(|| format!("gltfmesh: {}: invalid base64 buffer", path.display()))?
+                        .ok_or_else(|| Error::malformed(path, "gltfmesh: unsupported data URI"))?;
+                    base64_decode(payload).ok_or_else(|| Error::malformed(path, "gltfmesh: invalid base64 buffer"))?
                 }
                 gltf::buffer::Source::Uri(uri) => {
                     let file = dir.join(uri.replace("%20", " "));
-                    std::fs::read(&file).map_err(|e| format!("gltfmesh: {}: {e}", file.display()))?
+                    std::fs::read(&file).map_err(|e| Error::io(&file, "read the glTF buffer", e))?
                 }
             };
             if data.len() < b.length() {
-                return Err(format!("gltfmesh: {}: buffer {} is shorter than declared", path.display(), b.index()));
+                return Err(Error::malformed(path, format!("gltfmesh: buffer {} is shorter than declared", b.index())));
             }
             Ok(data)
         })

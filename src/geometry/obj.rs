@@ -3,12 +3,13 @@
 use std::path::Path;
 
 use super::MeshData;
+use crate::error::{Error, Result};
 
 /// Reads every object of an OBJ file as a triangle mesh (polygons are triangulated).
-pub fn read_obj(path: &Path) -> Result<Vec<MeshData>, String> {
+pub fn read_obj(path: &Path) -> Result<Vec<MeshData>> {
     let options = tobj::LoadOptions { triangulate: true, single_index: true, ..Default::default() };
     let (models, _materials) =
-        tobj::load_obj(path, &options).map_err(|e| format!("objmesh: {}: {e}", path.display()))?;
+        tobj::load_obj(path, &options).map_err(|e| Error::malformed(path, format!("objmesh: {e}")))?;
     let mut out = Vec::with_capacity(models.len());
     for m in models {
         let mesh = m.mesh;
@@ -23,7 +24,7 @@ pub fn read_obj(path: &Path) -> Result<Vec<MeshData>, String> {
         out.push(data);
     }
     if out.iter().all(|m| m.indices.is_empty()) {
-        return Err(format!("objmesh: {}: no faces", path.display()));
+        return Err(Error::malformed(path, "objmesh: no faces"));
     }
     Ok(out)
 }

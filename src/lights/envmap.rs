@@ -33,12 +33,12 @@ impl EnvironmentMap {
         space: ColorSpace,
         world_from_light: Affine3A,
         scale: f32,
-    ) -> Result<EnvironmentMap, String> {
+    ) -> crate::error::Result<EnvironmentMap> {
         if image.width != image.height || image.width == 0 {
-            return Err(format!(
+            return Err(crate::error::Error::Invalid(format!(
                 "environment image is {}x{}; pbrt-v4 environment maps are square equal-area octahedral images",
                 image.width, image.height
-            ));
+            )));
         }
         let size = image.width;
         let pixels: Vec<Rgb> = image.pixels.iter().map(|p| p.max(Rgb::ZERO) * scale).collect();

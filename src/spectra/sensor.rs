@@ -188,7 +188,7 @@ impl PixelSensor {
         iso: f32,
         exposure_time: f32,
         output: ColorSpace,
-    ) -> Result<PixelSensor, String> {
+    ) -> crate::error::Result<PixelSensor> {
         let cs = rgb_color_space(output);
         let imaging_ratio = exposure_time * iso / 100.0;
         let wb = if name != "cie1931" && white_balance_k == 0.0 { 6500.0 } else { white_balance_k };
@@ -215,10 +215,10 @@ impl PixelSensor {
             });
         }
         let [r, g, b] = camera_curves(name).ok_or_else(|| {
-            format!(
+            crate::error::Error::Unsupported(format!(
                 "unknown sensor \"{name}\" (pbrt-v4's sensors: cie1931, {})",
                 camera_sensors().collect::<Vec<_>>().join(", ")
-            )
+            ))
         })?;
         let curves = [dense(|l| r.eval(l)), dense(|l| g.eval(l)), dense(|l| b.eval(l))];
         let at = |c: &Dense, l: f64| f64::from(c[(l - LAMBDA_MIN) as usize]);
@@ -250,8 +250,9 @@ impl PixelSensor {
                     * (sensor_white_y / sensor_white_g)
             })
             .collect();
-        let xyz_from_sensor_rgb = least_squares(&camera, &target)
-            .ok_or_else(|| format!("sensor \"{name}\": the XYZ-from-sensor matrix could not be solved"))?;
+        let xyz_from_sensor_rgb = least_squares(&camera, &target).ok_or_else(|| {
+            crate::error::Error::Invalid(format!("sensor \"{name}\": the XYZ-from-sensor matrix could not be solved"))
+        })?;
         Ok(PixelSensor {
             name: name.to_string(),
             curves,
@@ -356,7 +357,7 @@ mod tests {
             assert!(s.xyz_from_sensor_rgb().determinant().abs() > 0.0, "{name}");
             assert!(!s.is_passthrough());
         }
-        let err = PixelSensor::new("leica_m11", 0.0, 100.0, 1.0, ColorSpace::Srgb).unwrap_err();
+        let err = PixelSensor::new("leica_m11", 0.0, 100.0, 1.0, ColorSpace::Srgb).unwrap_err().to_string();
         assert!(err.contains("leica_m11") && err.contains("nikon_d850"), "{err}");
         let cie = PixelSensor::new("cie1931", 0.0, 100.0, 1.0, ColorSpace::Srgb).unwrap();
         assert!(cie.is_passthrough());

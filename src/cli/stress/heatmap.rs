@@ -18,7 +18,7 @@ const ROW: i32 = 30;
 const COL: i32 = 128;
 const LABEL: i32 = 150;
 const TOP: i32 = 70;
-const BOTTOM: i32 = 90;
+const BOTTOM: i32 = 90 + 18;
 
 /// Ratios are coloured on a log₂ scale saturating at this many doublings.
 const SATURATE: f64 = 3.0;
@@ -108,6 +108,9 @@ where
     let note =
         format!("blue: lower relMSE than {REFERENCE}; red: higher; orange outline: biased (b: mean off the reference)");
     root.draw(&Text::new(note, (LABEL, y + 50), text_style(12, BLACK, HPos::Left))).map_err(plot_err)?;
+    // What went wrong, counted: failures and biased cells side by side.
+    root.draw(&Text::new(super::report::counts(m), (LABEL, y + 68), text_style(12, BLACK, HPos::Left)))
+        .map_err(plot_err)?;
     root.present().map_err(plot_err)?;
     Ok(())
 }

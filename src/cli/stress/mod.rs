@@ -4,7 +4,7 @@
 //! own process and gets a verdict against volpath's cell on the same condition.
 //!
 //! - `cell.rs`: one cell, rendered by a child process and measured.
-//! - `verdict.rs`: better / same / worse / refused / failed, and bias.
+//! - `verdict.rs`: better / same / worse / biased / refused / failed.
 //! - `report.rs`: `stress.csv` and `stress.md`.
 //! - `heatmap.rs`: integrator × condition, coloured by the relMSE ratio to volpath.
 
@@ -206,6 +206,7 @@ pub fn run(args: &StressArgs) -> Result<ExitCode> {
     heatmap::draw(&matrix, &args.out.join("heatmap"))?;
     print!("{}", report::verdict_table(&matrix));
     say(format!("wrote {}", args.out.display()));
+    say(report::counts(&matrix));
     let failed = matrix.cells.iter().filter(|(_, v)| matches!(v, Verdict::Failed(_))).count();
     if failed > 0 {
         eprintln!("error: {failed} cell(s) failed (crash, hang, NaN/Inf or memory): see stress.md");

@@ -107,13 +107,28 @@ fn entry(m: &Matrix, cell: &Cell, v: &Verdict) -> String {
         Verdict::Baseline => "1x".to_string(),
         Verdict::Refused(_) => "refused".to_string(),
         Verdict::Failed(_) => "**FAILED**".to_string(),
+        Verdict::Biased(bias) => format!("**biased** {:+.1} %, {}", 100.0 * bias, ratio_text(cell, baseline)),
         _ => format!("{} {}", v.label(), ratio_text(cell, baseline)),
     };
-    if verdict::biased(cell) {
+    if verdict::biased(cell) && !matches!(v, Verdict::Biased(_)) {
         let bias = cell.measured.as_ref().map_or(0.0, |x| x.bias);
         let _ = write!(s, ", biased {:+.1} %", 100.0 * bias);
     }
     s
+}
+
+/// The cells that went wrong, counted: failed (crash, hang, NaN/Inf, memory) and biased
+/// (a wrong mean), beside those rendered and refused.
+pub fn counts(m: &Matrix) -> String {
+    let n = |f: fn(&Verdict) -> bool| m.cells.iter().filter(|(_, v)| f(v)).count();
+    format!(
+        "{} cells: {} failed, {} biased, {} refused, {} rendered within noise of the reference's mean.",
+        m.cells.len(),
+        n(|v| matches!(v, Verdict::Failed(_))),
+        n(|v| matches!(v, Verdict::Biased(_))),
+        n(|v| matches!(v, Verdict::Refused(_))),
+        n(|v| matches!(v, Verdict::Baseline | Verdict::Better | Verdict::Same | Verdict::Worse)),
+    )
 }
 
 /// Conditions as rows, integrators as columns: each cell's verdict and relMSE ratio.
@@ -139,8 +154,9 @@ pub fn markdown(m: &Matrix) -> String {
         "# nimbus stress: {} conditions x {} integrators, {} s per cell, seed {}\n\n\
          Each cell: the relMSE ratio to volpath's at equal time (the method's precomputation counted), \
          a verdict (better or worse beyond twice the ratio's standard error and beyond {}x; refused; \
-         FAILED for a crash, a hang, NaN/Inf samples or more than {}x volpath's memory), and a bias mark \
-         where the image mean is more than {} standard errors and {} % off the reference.\n\n",
+         FAILED for a crash, a hang, NaN/Inf samples or more than {}x volpath's memory; biased where \
+         the image mean is more than {} standard errors and {} % off the reference, whatever the ratio).\n\n\
+         {}\n\n",
         m.conditions.len(),
         m.integrators.len(),
         short(m.time),
@@ -149,19 +165,26 @@ pub fn markdown(m: &Matrix) -> String {
         verdict::MEMORY_FACTOR,
         verdict::BIAS_Z,
         100.0 * verdict::BIAS_RELATIVE,
+        counts(m),
     );
     s.push_str(&verdict_table(m));
     s.push_str("\n## Conditions\n\n| condition | what varies | reference |\n|---|---|---|\n");
     for ((cond, what), spp) in m.conditions.iter().zip(&m.reference_spp) {
         let _ = writeln!(s, "| {cond} | {what} | {REFERENCE}, {spp} spp |");
     }
-    s.push_str("\n## Refusals and failures\n\n");
+    s.push_str("\n## Refusals, failures and biased cells\n\n");
     let mut any = false;
     for (c, v) in &m.cells {
-        if let Verdict::Refused(why) | Verdict::Failed(why) = v {
-            let _ = writeln!(s, "- {} on {}: {}: {why}", c.integrator, c.condition, v.label());
-            any = true;
-        }
+        let why = match v {
+            Verdict::Refused(why) | Verdict::Failed(why) => why.clone(),
+            Verdict::Biased(bias) => {
+                let z = c.measured.as_ref().map_or(0.0, |x| x.bias_z);
+                format!("mean {:+.1} % off the reference ({z:+.1} standard errors)", 100.0 * bias)
+            }
+            _ => continue,
+        };
+        let _ = writeln!(s, "- {} on {}: {}: {why}", c.integrator, c.condition, v.label());
+        any = true;
     }
     if !any {
         s.push_str("None.\n");

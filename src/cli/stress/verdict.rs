@@ -14,6 +14,9 @@ pub enum Verdict {
     Same,
     /// Higher relMSE than volpath, beyond noise.
     Worse,
+    /// The image's mean is off the reference beyond noise ([`biased`]): a wrong answer, counted
+    /// beside failures whatever its relMSE (the bias, as a fraction of the reference's mean).
+    Biased(f64),
     /// The method declined the scene: why.
     Refused(String),
     /// A failure the stress test exists to catch: crash, hang, NaN/Inf, memory.
@@ -28,6 +31,7 @@ impl Verdict {
             Verdict::Better => "better",
             Verdict::Same => "same",
             Verdict::Worse => "worse",
+            Verdict::Biased(_) => "biased",
             Verdict::Refused(_) => "refused",
             Verdict::Failed(_) => "FAILED",
         }
@@ -41,9 +45,10 @@ pub const SAME_FACTOR: f64 = 1.25;
 /// Memory a method may use over volpath's on the same scene (its precomputed structure aside).
 pub const MEMORY_FACTOR: f64 = 2.0;
 
-/// A biased cell: its mean is more than 4 standard errors and more than 1 % off the
-/// reference's.
-pub const BIAS_Z: f64 = 4.0;
+/// A biased cell: its mean is more than 3 standard errors and more than 1 % off the
+/// reference's (both: a significant offset too small to matter, or a large one within the
+/// noise of a short render, is not a verdict).
+pub const BIAS_Z: f64 = 3.0;
 /// See [`BIAS_Z`].
 pub const BIAS_RELATIVE: f64 = 0.01;
 
@@ -81,7 +86,8 @@ pub fn judge(cell: &Cell, baseline: Option<&Cell>) -> Verdict {
         ));
     }
     if cell.integrator == REFERENCE {
-        return Verdict::Baseline;
+        // The reference method off its own converged image is a finding, not a baseline.
+        return if biased(cell) { Verdict::Biased(m.bias) } else { Verdict::Baseline };
     }
     let Some(baseline) = baseline.filter(|b| b.outcome == Outcome::Rendered) else {
         return Verdict::Failed(format!("{REFERENCE} did not render this condition"));
@@ -94,6 +100,9 @@ pub fn judge(cell: &Cell, baseline: Option<&Cell>) -> Verdict {
             mem as f64 / (1 << 20) as f64,
             base as f64 / (1 << 20) as f64
         ));
+    }
+    if biased(cell) {
+        return Verdict::Biased(m.bias);
     }
     match ratio(cell, baseline) {
         None => Verdict::Same,
@@ -183,5 +192,10 @@ mod tests {
         assert!(biased(&cell("m", 1e-3, 1e-5, 0.03, 9.0, 1)));
         assert!(!biased(&cell("m", 1e-3, 1e-5, 0.03, 2.0, 1)), "within noise");
         assert!(!biased(&cell("m", 1e-3, 1e-5, 0.002, 9.0, 1)), "significant but under 1 %");
+        // A biased cell's verdict says so whatever its relMSE; failures still outrank it.
+        let base = cell(REFERENCE, 1e-3, 1e-5, 0.0, 0.0, 10 << 20);
+        assert_eq!(judge(&cell("m", 0.5e-3, 1e-5, -0.05, -6.0, 10 << 20), Some(&base)), Verdict::Biased(-0.05));
+        assert!(matches!(judge(&cell("m", 0.5e-3, 1e-5, -0.05, -6.0, 25 << 20), Some(&base)), Verdict::Failed(_)));
+        assert_eq!(judge(&cell(REFERENCE, 1e-3, 1e-5, 0.02, 3.5, 1), None), Verdict::Biased(0.02));
     }
 }

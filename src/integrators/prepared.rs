@@ -110,16 +110,6 @@ pub enum Source {
     Prepared,
 }
 
-impl std::fmt::Display for Source {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            Source::Loaded(p) => write!(f, "loaded from {}", p.display()),
-            Source::Saved(p) => write!(f, "prepared, saved to {}", p.display()),
-            Source::Prepared => f.write_str("prepared"),
-        }
-    }
-}
-
 /// `--precomputed FILE`, the same for every method: a file that exists is loaded (and must
 /// match the scene and settings: `load` refuses it otherwise); a missing one is prepared and
 /// saved there; without a file the method prepares and keeps nothing.

@@ -269,7 +269,7 @@ impl<C: Channels, O: PathObserver<C>> Tracer<'_, C, O> {
     /// surface (and the camera line's lights), delta tracking through its medium (scattering
     /// there, or reaching the surface), escaping to the environment, or a surface's emission
     /// and scattering.
-    #[inline(always)]
+    #[inline]
     fn follow(&mut self, w: &mut Walk<C>) {
         loop {
             self.stats.bounce += 1;
@@ -300,7 +300,7 @@ impl<C: Channels, O: PathObserver<C>> Tracer<'_, C, O> {
 
     /// The camera line's area lights, once, on the camera segment through a medium
     /// ([`PathConfig::camera_line`]).
-    #[inline(always)]
+    #[inline]
     fn camera_line(&mut self, w: &mut Walk<C>, hit: Option<Hit>) {
         if self.config.camera_line && w.depth == 0 && w.medium != NONE && !w.line_done {
             w.line_done = true;
@@ -314,7 +314,7 @@ impl<C: Channels, O: PathObserver<C>> Tracer<'_, C, O> {
 
     /// Delta tracking through the current medium up to the surface `hit` (or infinity),
     /// adding the medium's emission on the way (PBR 4th ed. §14.2.2).
-    #[inline(always)]
+    #[inline]
     fn track_medium(&mut self, w: &mut Walk<C>, hit: Option<&Hit>) -> Tracked {
         let config = self.config;
         let m = &self.scene.media[w.medium as usize];
@@ -400,7 +400,7 @@ impl<C: Channels, O: PathObserver<C>> Tracer<'_, C, O> {
     /// Next-event estimation at the vertex at `p` (on the surface `hit`, else in the walk's
     /// medium), divided by `prob`, the chance it was taken; then the extra light samples
     /// ([`PathConfig::extra_direct`]) at the first vertex that samples lights.
-    #[inline(always)]
+    #[inline]
     fn next_event(&mut self, w: &mut Walk<C>, p: Vec3, hit: Option<&Hit>, sc: &Scatterer<'_, C>, prob: f32) {
         let (scene, config, medium) = (self.scene, self.config, w.medium);
         let u = (self.sampler.get_1d(), self.sampler.get_2d());
@@ -420,7 +420,7 @@ impl<C: Channels, O: PathObserver<C>> Tracer<'_, C, O> {
     /// Real scattering in a medium at `p`: next-event estimation, then the phase function (or
     /// the observer's guide) picks the continuation, split into several copies where the
     /// observer asks. False when no copy continues.
-    #[inline(always)]
+    #[inline]
     fn scatter_in_medium(&mut self, w: &mut Walk<C>, p: Vec3) -> bool {
         let (scene, config, medium) = (self.scene, self.config, w.medium);
         let m = &scene.media[medium as usize];
@@ -523,7 +523,7 @@ impl<C: Channels, O: PathObserver<C>> Tracer<'_, C, O> {
 
     /// The path escaped: the environment's emission, MIS-weighted against light sampling
     /// where the previous vertex sampled lights.
-    #[inline(always)]
+    #[inline]
     fn escape(&mut self, w: &Walk<C>) {
         let scene = self.scene;
         for &i in &scene.infinite_lights {
@@ -546,7 +546,7 @@ impl<C: Channels, O: PathObserver<C>> Tracer<'_, C, O> {
     }
 
     /// Emission from an area light the path hit, MIS-weighted as [`Self::escape`]'s.
-    #[inline(always)]
+    #[inline]
     fn surface_emission(&mut self, w: &Walk<C>, hit: &Hit) {
         if hit.prim.area_light == NONE {
             return;
@@ -572,7 +572,7 @@ impl<C: Channels, O: PathObserver<C>> Tracer<'_, C, O> {
     /// At a surface: an `interface` is crossed without counting a bounce; otherwise
     /// next-event estimation, then the BSDF samples the continuation and Russian roulette
     /// may end the path. False when the path ends.
-    #[inline(always)]
+    #[inline]
     fn scatter_at_surface(&mut self, w: &mut Walk<C>, mut hit: Hit) -> bool {
         let (scene, config) = (self.scene, self.config);
         let wo = -w.ray.d;

@@ -43,13 +43,16 @@ fn compare_writes_every_output_and_reuses_its_cached_reference() {
 
     let out = run(args(&out_dir, true));
     assert!(out.status.success(), "{}", stderr(&out));
-    // The reference is cached next to the scene with the renders' seed + 1.
-    let cached = dir.join("tiny.volpath-16spp-seed4.exr");
-    let reference = read_exr(&cached).unwrap();
-    assert_eq!((reference.width, reference.height), (24, 16));
-    assert_eq!(reference.metadata.get("nimbus:spp").map(String::as_str), Some("16"));
-    assert_eq!(reference.metadata.get("nimbus:seed").map(String::as_str), Some("4"));
-    assert!(stderr(&out).contains("reference: rendering volpath at 16 spp"), "{}", stderr(&out));
+    // The reference is cached next to the scene as two independent halves, at the renders'
+    // seed + 1000 and + 1001.
+    for seed in ["1003", "1004"] {
+        let cached = dir.join(format!("tiny.volpath-8spp-seed{seed}.exr"));
+        let reference = read_exr(&cached).unwrap();
+        assert_eq!((reference.width, reference.height), (24, 16));
+        assert_eq!(reference.metadata.get("nimbus:spp").map(String::as_str), Some("8"));
+        assert_eq!(reference.metadata.get("nimbus:seed").map(String::as_str), Some(seed));
+    }
+    assert!(stderr(&out).contains("reference: rendering volpath at 8 spp"), "{}", stderr(&out));
     for name in [
         "results.csv",
         "results.json",
@@ -79,7 +82,12 @@ fn compare_writes_every_output_and_reuses_its_cached_reference() {
 
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out_dir.join("results.json")).unwrap()).unwrap();
+    assert_eq!(json["schema"], "nimbus-compare/2");
     assert_eq!(json["reference"]["source"], "rendered");
+    assert_eq!(json["reference"]["halves"], true);
+    assert_eq!(json["reference"]["spp"], 16);
+    let noise = json["reference"]["reference_noise"]["relmse"].as_f64().unwrap();
+    assert!(noise > 0.0, "two 8-spp halves differ");
     let runs = json["runs"].as_array().unwrap();
     assert_eq!(runs.len(), 2);
     let equal_time = &runs[0];
@@ -95,8 +103,14 @@ fn compare_writes_every_output_and_reuses_its_cached_reference() {
     assert_eq!(spp[..n], grid[..n], "{spp:?}");
     assert!(*seconds.last().unwrap() >= 1.0, "{seconds:?}");
     assert_eq!(checkpoints.iter().filter(|c| c["final"] == true).count(), 1);
-    let relmse = |c: &serde_json::Value| c["relmse"].as_f64().unwrap();
+    let relmse = |c: &serde_json::Value| c["error"]["relmse"].as_f64().unwrap();
+    let removed = |c: &serde_json::Value| c["error_noise_removed"]["relmse"].as_f64().unwrap();
     assert!(relmse(checkpoints.last().unwrap()) < relmse(&checkpoints[0]));
+    // Without the reference's noise, every error is lower by exactly that noise's relMSE
+    // within the noisy weights' effect.
+    for c in checkpoints {
+        assert!(removed(c) < relmse(c), "{c}");
+    }
     let equal_spp = &runs[1];
     assert_eq!(equal_spp["mode"], "equal-spp");
     assert_eq!(equal_spp["final"]["spp"], 4);
@@ -104,7 +118,7 @@ fn compare_writes_every_output_and_reuses_its_cached_reference() {
         equal_spp["checkpoints"].as_array().unwrap().iter().map(|c| c["spp"].as_u64().unwrap()).collect();
     assert_eq!(spp_ladder, [1, 2, 3, 4]);
     let csv = std::fs::read_to_string(out_dir.join("results.csv")).unwrap();
-    assert!(csv.starts_with("integrator,mode,checkpoint,seconds,spp,mse,rmse,relmse,mae,mpe,mne,"));
+    assert!(csv.starts_with("integrator,mode,seed,checkpoint,seconds,spp,mse,rmse,relmse,mae,mpe,mne,"));
     assert_eq!(csv.lines().count(), 1 + checkpoints.len() + spp_ladder.len());
 
     // Same seed again, equal spp only: the cached reference is reused and the image is the same.
@@ -119,7 +133,84 @@ fn compare_writes_every_output_and_reuses_its_cached_reference() {
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(again.join("results.json")).unwrap()).unwrap();
     assert_eq!(json["reference"]["source"], "cached");
-    assert_eq!(json["runs"][0]["final"]["relmse"], equal_spp["final"]["relmse"]);
+    assert_eq!(json["runs"][0]["final"]["error"]["relmse"], equal_spp["final"]["error"]["relmse"]);
+}
+
+#[test]
+fn compare_over_seeds_reports_standard_errors_bias_and_equal_error_times() {
+    let dir = scratch_dir("compare-seeds");
+    let scene = dir.join("tiny.pbrt");
+    std::fs::write(&scene, TINY).unwrap();
+    let s = scene.to_str().unwrap();
+    // A reference given as two independent halves.
+    let halves = [dir.join("a.exr"), dir.join("b.exr")];
+    for (half, seed) in halves.iter().zip(["101", "102"]) {
+        let out = nimbus(&["render", s, "--spp", "16", "--seed", seed, "--outfile", half.to_str().unwrap(), "--quiet"]);
+        assert!(out.status.success(), "{}", stderr(&out));
+    }
+    let reference = format!("{},{}", halves[0].display(), halves[1].display());
+    let out_dir = dir.join("out");
+    let args = ["compare", s, "--integrators", "volpath,simplevolpath", "--seeds", "3", "--seed", "1", "--spp", "4"];
+    let out = nimbus(&[&args[..], &["--reference", &reference, "--out", out_dir.to_str().unwrap()]].concat());
+    assert!(out.status.success(), "{}", stderr(&out));
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out_dir.join("results.json")).unwrap()).unwrap();
+    assert_eq!(json["seeds"], serde_json::json!([1, 2, 3]));
+    assert_eq!(json["reference"]["halves"], true);
+    assert_eq!(json["reference"]["spp"], 32);
+    assert!(json["reference"]["mean_standard_error"].as_f64().unwrap() > 0.0);
+    assert_eq!(json["runs"].as_array().unwrap().len(), 6);
+    let summaries = json["summaries"].as_array().unwrap();
+    assert_eq!(summaries.len(), 2);
+    for sum in summaries {
+        for key in ["error", "error_noise_removed"] {
+            let relmse = &sum[key]["relmse"];
+            assert_eq!(relmse["n"], 3, "{sum}");
+            assert!(relmse["standard_error"].as_f64().unwrap() > 0.0, "{sum}");
+        }
+        assert!(sum["bias"]["bias_z"].as_f64().unwrap().is_finite(), "{sum}");
+    }
+    let (volpath, simple) = (&summaries[0], &summaries[1]);
+    assert_eq!(volpath["integrator"], "volpath");
+    assert!(volpath["time_to_equal_error"].is_null(), "the baseline is not measured against itself");
+    let equal = &simple["time_to_equal_error"]["relmse"];
+    assert_eq!(equal["speedup"]["n"], 3, "{simple}");
+    assert!(equal["speedup"]["mean"].as_f64().unwrap() > 0.0, "{simple}");
+    assert!(simple["relmse_ratio"]["mean"].as_f64().unwrap() > 0.0, "{simple}");
+    // Every seed's image is written, the first seed's under the plain name.
+    for name in ["volpath.exr", "volpath-seed2.exr", "simplevolpath-seed3.exr", "simplevolpath-seed3-diff.png"] {
+        assert!(out_dir.join(name).exists(), "{name}");
+    }
+    let md = std::fs::read_to_string(out_dir.join("results.md")).unwrap();
+    assert!(md.contains("seeds 1–3 (mean ± standard error)"), "{md}");
+    assert!(md.contains("| simplevolpath | equal-spp | 3 |"), "{md}");
+
+    // The same image twice is not two halves; three images are not a reference; a reference
+    // seed among the renders' is refused.
+    let same = format!("{},{}", halves[0].display(), halves[0].display());
+    let out = nimbus(&["compare", s, "--spp", "2", "--reference", &same, "--out", out_dir.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(stderr(&out).contains("are the same image"), "{}", stderr(&out));
+    let three = format!("{reference},{}", halves[0].display());
+    let out = nimbus(&["compare", s, "--spp", "2", "--reference", &three]);
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("one image or two independent halves, not 3"), "{}", stderr(&out));
+    let out = nimbus(&[
+        "compare",
+        s,
+        "--spp",
+        "2",
+        "--seeds",
+        "4",
+        "--seed",
+        "1",
+        "--reference-spp",
+        "8",
+        "--reference-seed",
+        "3",
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(stderr(&out).contains("would share seed 3 with the renders"), "{}", stderr(&out));
 }
 
 #[test]

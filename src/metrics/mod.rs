@@ -4,6 +4,9 @@
 use crate::error::{Error, Result};
 use crate::imageio::Image;
 
+mod reference_noise;
+pub use reference_noise::{average, error_metrics_noise_removed, mean_standard_error, reference_noise};
+
 /// How a pair of renders with different seeds compares to a reference.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Parity {

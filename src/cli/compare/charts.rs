@@ -9,7 +9,8 @@ use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use super::run::Mode;
-use super::{Comparison, Run};
+use super::stats::Summary;
+use super::{Comparison, Run, report};
 use crate::cli::plot::{FAMILY, plot_err, short, write_both};
 
 const SIZE: (u32, u32) = (800, 500);
@@ -54,8 +55,9 @@ fn log_range(values: impl Iterator<Item = f64>) -> (f64, f64) {
     if lo > hi { (1e-3, 1.0) } else { (lo / 1.5, hi * 1.5) }
 }
 
-/// relMSE against time since the scene was built, log-log, a line per integrator through its
-/// checkpoints: equal-time runs if there are any, else equal-spp runs.
+/// relMSE (the reference's noise removed when it has halves) against time since the scene
+/// was built, log-log, a line per integrator and seed through its checkpoints: equal-time runs
+/// if there are any, else equal-spp runs.
 pub fn error_vs_time(cmp: &Comparison, base: &Path) -> Result<()> {
     write_both(base, SIZE, |root| draw_error_vs_time(cmp, root), |root| draw_error_vs_time(cmp, root))
 }
@@ -69,12 +71,12 @@ where
     let points = |r: &Run| -> Vec<(f64, f64)> {
         r.checkpoints
             .iter()
-            .map(|c| (c.seconds, c.metrics.rel_mse))
+            .map(|c| (c.seconds, super::stats::best(c).rel_mse))
             .filter(|(t, e)| *t > 0.0 && *e > 0.0 && e.is_finite())
             .collect()
     };
     let x = log_range(runs.iter().flat_map(|r| r.checkpoints.iter().map(|c| c.seconds)));
-    let y = log_range(runs.iter().flat_map(|r| r.checkpoints.iter().map(|c| c.metrics.rel_mse)));
+    let y = log_range(runs.iter().flat_map(|r| r.checkpoints.iter().map(|c| super::stats::best(c).rel_mse)));
     let title = format!("relMSE vs time ({})", mode_title(cmp, mode));
     root.fill(&WHITE).map_err(plot_err)?;
     let mut chart = ChartBuilder::on(&root)
@@ -87,7 +89,7 @@ where
     chart
         .configure_mesh()
         .x_desc("time since scene build (s)")
-        .y_desc("relMSE")
+        .y_desc(if cmp.reference.halves.is_some() { "relMSE, reference noise removed" } else { "relMSE" })
         .x_label_formatter(&|v| short(*v))
         .y_label_formatter(&|v| format!("{v:.0e}"))
         .label_style((FAMILY, 14))
@@ -98,11 +100,13 @@ where
     for r in &runs {
         let color = color_of(cmp, &r.integrator);
         let pts = points(r);
-        chart
-            .draw_series(LineSeries::new(pts.clone(), color.stroke_width(2)))
-            .map_err(plot_err)?
-            .label(r.integrator.as_str())
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 24, y)], color.stroke_width(2)));
+        let series = chart.draw_series(LineSeries::new(pts.clone(), color.stroke_width(2))).map_err(plot_err)?;
+        // One legend entry per integrator, however many seeds.
+        if r.seed == cmp.first_seed() {
+            series
+                .label(r.integrator.as_str())
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 24, y)], color.stroke_width(2)));
+        }
         chart.draw_series(pts.iter().map(|p| Circle::new(*p, 3, color.filled()))).map_err(plot_err)?;
     }
     chart
@@ -117,8 +121,9 @@ where
     Ok(())
 }
 
-/// The final relMSE of each integrator as bars: equal time if it was asked for, else equal
-/// spp. Each bar is labelled with its value and spp.
+/// The final relMSE of each integrator as bars (the mean over the seeds, with a whisker of
+/// ± its standard error; the reference's noise removed when it has halves): equal time if it
+/// was asked for, else equal spp. Each bar is labelled with its value and spp.
 pub fn final_error_bars(cmp: &Comparison, base: &Path) -> Result<()> {
     write_both(base, SIZE, |root| draw_bars(cmp, root), |root| draw_bars(cmp, root))
 }
@@ -128,9 +133,14 @@ where
     DB::ErrorType: 'static,
 {
     let mode = cmp.headline_mode();
-    let runs: Vec<&Run> = cmp.runs_of(mode).collect();
-    let n = runs.len();
-    let top = runs.iter().map(|r| r.last().metrics.rel_mse).filter(|v| v.is_finite()).fold(0.0, f64::max);
+    let sums: Vec<&Summary> = cmp.summaries_of(mode).collect();
+    let relmse = |s: &Summary| s.error_noise_removed.as_ref().unwrap_or(&s.error).get("relmse");
+    let n = sums.len();
+    let top = sums
+        .iter()
+        .map(|s| relmse(s).mean + relmse(s).standard_error.unwrap_or(0.0))
+        .filter(|v| v.is_finite())
+        .fold(0.0, f64::max);
     let top = if top > 0.0 { top * 1.2 } else { 1.0 };
     root.fill(&WHITE).map_err(plot_err)?;
     let mut chart = ChartBuilder::on(&root)
@@ -144,7 +154,7 @@ where
         .configure_mesh()
         .disable_x_mesh()
         .x_labels(0)
-        .y_desc("relMSE")
+        .y_desc(if cmp.reference.halves.is_some() { "relMSE, reference noise removed" } else { "relMSE" })
         .y_label_formatter(&|v| if *v == 0.0 { "0".into() } else { format!("{v:.1e}") })
         .label_style((FAMILY, 14))
         .axis_desc_style((FAMILY, 16))
@@ -152,18 +162,31 @@ where
         .draw()
         .map_err(plot_err)?;
     let label_style = TextStyle::from((FAMILY, 14).into_font()).pos(Pos::new(HPos::Center, VPos::Bottom));
-    for (i, r) in runs.iter().enumerate() {
-        let c = r.last();
-        let v = c.metrics.rel_mse;
+    for (i, s) in sums.iter().enumerate() {
+        let e = relmse(s);
+        let v = e.mean.max(0.0);
         let x = i as f64;
-        let bar = Rectangle::new([(x + 0.2, 0.0), (x + 0.8, v)], color_of(cmp, &r.integrator).filled());
+        let bar = Rectangle::new([(x + 0.2, 0.0), (x + 0.8, v)], color_of(cmp, &s.integrator).filled());
         chart.draw_series(std::iter::once(bar)).map_err(plot_err)?;
-        let text = format!("{v:.3e} ({} spp, {} s)", c.spp, short(c.seconds));
-        chart.draw_series(std::iter::once(Text::new(text, (x + 0.5, v), label_style.clone()))).map_err(plot_err)?;
+        let mut label_at = v;
+        if let Some(se) = e.standard_error {
+            let whisker = vec![(x + 0.5, (v - se).max(0.0)), (x + 0.5, v + se)];
+            chart.draw_series(std::iter::once(PathElement::new(whisker, BLACK.stroke_width(2)))).map_err(plot_err)?;
+            label_at = v + se;
+        }
+        let text = format!(
+            "{} ({} spp, {} s)",
+            report::pm(&e, |v| format!("{v:.2e}")),
+            s.spp.mean.round(),
+            short(s.seconds.mean)
+        );
+        chart
+            .draw_series(std::iter::once(Text::new(text, (x + 0.5, label_at), label_style.clone())))
+            .map_err(plot_err)?;
         // The integrator's name under its bar (the x axis has no ticks of its own).
         let (px, py) = chart.backend_coord(&(x + 0.5, 0.0));
         let name_style = TextStyle::from((FAMILY, 15).into_font()).pos(Pos::new(HPos::Center, VPos::Top));
-        root.draw(&Text::new(r.integrator.clone(), (px, py + 8), name_style)).map_err(plot_err)?;
+        root.draw(&Text::new(s.integrator.clone(), (px, py + 8), name_style)).map_err(plot_err)?;
     }
     root.present().map_err(plot_err)?;
     Ok(())
@@ -192,10 +215,10 @@ mod tests {
                     mean_test: 0.5,
                     mean_reference: 0.5,
                 };
-                Checkpoint { seconds: 0.01 * spp as f64 * scale, spp, metrics, last: i == 11 }
+                Checkpoint { seconds: 0.01 * spp as f64 * scale, spp, metrics, noise_removed: None, last: i == 11 }
             })
             .collect();
-        Run { integrator: name.into(), mode, setup_seconds: 0.01, checkpoints, image: Image::new(2, 2) }
+        Run { integrator: name.into(), mode, seed: 0, setup_seconds: 0.01, checkpoints, image: Image::new(2, 2) }
     }
 
     /// Dark pixels in a box of the PNG: text and lines were drawn there.
@@ -208,20 +231,26 @@ mod tests {
     fn charts_draw_text_with_the_embedded_font() {
         let dir = std::env::temp_dir().join(format!("nimbus-charts-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
+        let runs = vec![run(REFERENCE, Mode::EqualTime, 1.0), run("othermethod", Mode::EqualTime, 0.3)];
         let cmp = Comparison {
             scene: "s.pbrt".into(),
-            seed: 0,
+            seeds: vec![0],
+            baseline: Some(REFERENCE.into()),
             checkpoints_per_doubling: 1,
             time_budget: Some(10.0),
             spp: None,
             reference: Reference {
                 image: Image::new(2, 2),
-                path: "r.exr".into(),
+                halves: None,
+                paths: vec!["r.exr".into()],
                 source: ReferenceSource::File,
                 spp: None,
-                seed: None,
+                seeds: Vec::new(),
             },
-            runs: vec![run(REFERENCE, Mode::EqualTime, 1.0), run("othermethod", Mode::EqualTime, 0.3)],
+            summaries: crate::cli::compare::stats::summarize(&runs, Some(REFERENCE), None),
+            runs,
+            reference_noise: None,
+            reference_mean_se: None,
             diff_scale: Vec::new(),
         };
         error_vs_time(&cmp, &dir.join("t")).unwrap();

@@ -2,13 +2,17 @@
 //! integrators at equal time and/or equal spp, measures each against a VolPath reference at
 //! checkpoints along the way, and writes tables, charts, final images and error images.
 //!
-//! - `run.rs`: the reference (given, cached or rendered) and one integrator's timed render.
-//! - `report.rs`: `results.csv`, `results.json`, `results.md`.
+//! - `run.rs`: the reference (given, cached or rendered; one image or two independent halves)
+//!   and one integrator's timed render.
+//! - `stats.rs`: means and standard errors over seeds, bias and its z, time to equal error.
+//! - `report.rs`: `results.csv`, `results.json` (its schema: `docs/compare-results.md`),
+//!   `results.md`.
 //! - `charts.rs`: relMSE against time (log-log) and a bar chart of the final relMSE.
 
 mod charts;
 mod report;
 pub(crate) mod run;
+mod stats;
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -29,17 +33,28 @@ pub struct CompareArgs {
     /// with the list).
     #[arg(long, value_delimiter = ',', default_value = REFERENCE)]
     integrators: Vec<String>,
-    /// Reference image (.exr) of the film's pixel bounds.
-    #[arg(long)]
-    reference: Option<PathBuf>,
-    /// Render a VolPath reference at this spp, cached next to the scene as
-    /// `<scene>.volpath-<N>spp-seed<S>.exr` and reused while it matches.
+    /// Reference image (.exr) of the film's pixel bounds, or two independent halves of one,
+    /// comma-separated (their mean is the reference; their difference measures its noise,
+    /// which is then removed from the errors).
+    #[arg(long, value_delimiter = ',', num_args = 1..)]
+    reference: Vec<PathBuf>,
+    /// Render a VolPath reference at this spp as two independent halves of N/2 spp, each
+    /// cached next to the scene as `<scene>.volpath-<N/2>spp-seed<S>.exr` and reused while it
+    /// matches.
     #[arg(long)]
     reference_spp: Option<u32>,
-    /// Seed of the rendered reference (default: the renders' seed + 1, so that the reference's
-    /// samples are independent of theirs).
+    /// Seed of the rendered reference's first half; the second has the next (default: the
+    /// renders' first seed + 1000, so that the reference's samples are independent of theirs).
     #[arg(long)]
     reference_seed: Option<i32>,
+    /// Independent renders per integrator and mode, at seeds S, S + 1, ... (S the first
+    /// seed): every metric is reported as its mean with its standard error.
+    #[arg(long, default_value_t = 1)]
+    seeds: u32,
+    /// The integrator that time to equal error and error ratios are measured against (one
+    /// of --integrators; none if it is not among them).
+    #[arg(long, default_value = REFERENCE)]
+    baseline: String,
     /// Equal time: render each integrator progressively for this many seconds, counted from
     /// before its scene is built.
     #[arg(long)]
@@ -47,7 +62,7 @@ pub struct CompareArgs {
     /// Equal spp: render each integrator to this many samples per pixel.
     #[arg(long)]
     spp: Option<u32>,
-    /// Sampler seed of the renders (default: the scene's).
+    /// Sampler seed of the renders, the first when there are several (default: the scene's).
     #[arg(long)]
     seed: Option<i32>,
     /// Checkpoints per doubling of the sample count (1, 2, 4, ... spp for 1).
@@ -75,8 +90,10 @@ pub(crate) fn scene_stem(path: &Path) -> String {
 pub struct Comparison {
     /// The scene file.
     pub scene: PathBuf,
-    /// Seed of the renders.
-    pub seed: i32,
+    /// Seeds of the renders (each integrator and mode renders once per seed).
+    pub seeds: Vec<i32>,
+    /// The integrator the others are measured against, if it was compared.
+    pub baseline: Option<String>,
     /// Checkpoints per doubling of spp.
     pub checkpoints_per_doubling: u32,
     /// `--time`
@@ -85,8 +102,15 @@ pub struct Comparison {
     pub spp: Option<u32>,
     /// The reference and where it came from.
     pub reference: run::Reference,
-    /// One run per integrator and mode, in the order given.
+    /// One run per seed, integrator and mode: seeds outermost, then integrators in the order
+    /// given.
     pub runs: Vec<Run>,
+    /// What the reference's own noise adds to each error (a reference in two halves).
+    pub reference_noise: Option<nimbus::metrics::ErrorMetrics>,
+    /// Standard error of the reference's mean (a reference in two halves).
+    pub reference_mean_se: Option<f64>,
+    /// Each integrator and mode over the seeds, in run order.
+    pub summaries: Vec<stats::Summary>,
     /// Difference shown at full intensity in the error images, per mode.
     pub diff_scale: Vec<(Mode, f64)>,
 }
@@ -102,6 +126,16 @@ impl Comparison {
     pub fn runs_of(&self, mode: Mode) -> impl Iterator<Item = &Run> {
         self.runs.iter().filter(move |r| r.mode == mode)
     }
+
+    /// Summaries of one mode.
+    pub fn summaries_of(&self, mode: Mode) -> impl Iterator<Item = &stats::Summary> {
+        self.summaries.iter().filter(move |s| s.mode == mode)
+    }
+
+    /// The first seed, whose runs' images are the outputs' headline images.
+    pub fn first_seed(&self) -> i32 {
+        self.seeds[0]
+    }
 }
 
 fn validate(args: &CompareArgs) -> Result<Vec<String>> {
@@ -110,6 +144,13 @@ fn validate(args: &CompareArgs) -> Result<Vec<String>> {
     }
     anyhow::ensure!(args.spp != Some(0), "--spp must be at least 1");
     anyhow::ensure!(args.reference_spp != Some(0), "--reference-spp must be at least 1");
+    anyhow::ensure!(args.reference_spp.is_none_or(|n| n >= 2), "--reference-spp must be at least 2 (two halves)");
+    anyhow::ensure!((1..=1000).contains(&args.seeds), "--seeds must be 1 to 1000");
+    anyhow::ensure!(
+        args.reference.len() <= 2,
+        "--reference takes one image or two independent halves, not {}",
+        args.reference.len()
+    );
     anyhow::ensure!((1..=64).contains(&args.checkpoints), "--checkpoints must be 1 to 64 per doubling of spp");
     anyhow::ensure!(args.scene.as_os_str() != "-", "compare needs a scene file, not standard input");
     let mut names: Vec<String> = Vec::new();
@@ -150,53 +191,84 @@ pub fn run(args: &CompareArgs) -> Result<ExitCode> {
                 .seed
         }
     };
+    let seeds: Vec<i32> = (0..args.seeds as i32).map(|i| seed.wrapping_add(i)).collect();
     let stem = scene_stem(&args.scene);
     let out_dir = args.out.clone().unwrap_or_else(|| PathBuf::from(format!("compare-{stem}")));
-    let reference = match (&args.reference, args.reference_spp) {
-        (Some(path), _) => run::Reference::from_file(path)?,
-        (None, Some(n)) => {
-            let ref_seed = args.reference_seed.unwrap_or(seed.wrapping_add(1));
-            run::Reference::cached_or_rendered(&args.scene, &stem, &desc, n, ref_seed, args.quiet, &say)?
+    let reference = match args.reference_spp {
+        None => run::Reference::from_files(&args.reference)?,
+        Some(n) => {
+            let ref_seed = args.reference_seed.unwrap_or(seed.wrapping_add(1000));
+            let clash = seeds.iter().find(|s| **s == ref_seed || **s == ref_seed.wrapping_add(1));
+            anyhow::ensure!(
+                clash.is_none(),
+                "the reference's halves (seeds {ref_seed} and {}) would share seed {} with the renders: pick another --reference-seed",
+                ref_seed.wrapping_add(1),
+                clash.copied().unwrap_or_default()
+            );
+            run::Reference::halves_cached_or_rendered(&args.scene, &stem, &desc, n, ref_seed, args.quiet, &say)?
         }
-        (None, None) => unreachable!("clap requires --reference or --reference-spp"),
     };
+    let (reference_noise, reference_mean_se) = match &reference.halves {
+        Some([a, b]) => {
+            (Some(nimbus::metrics::reference_noise(a, b)?), Some(nimbus::metrics::mean_standard_error(a, b)?))
+        }
+        None => (None, None),
+    };
+    if let Some(noise) = &reference_noise {
+        say(format!(
+            "reference: two halves; their noise adds {:.3e} to a relMSE against it (removed below)",
+            noise.rel_mse
+        ));
+    } else {
+        say("reference: one image; its own noise is not removed from the errors (give two halves to remove it)".into());
+    }
     std::fs::create_dir_all(&out_dir).with_context(|| format!("creating {}", out_dir.display()))?;
 
     let mut runs = Vec::new();
     let mut warned = false;
-    for name in &names {
-        let modes = [(Mode::EqualTime, args.time.is_some()), (Mode::EqualSpp, args.spp.is_some())];
-        for (mode, wanted) in modes {
-            if !wanted {
-                continue;
+    // Seeds outermost: a slow drift of the machine's speed falls on every method alike.
+    for &seed in &seeds {
+        for name in &names {
+            let modes = [(Mode::EqualTime, args.time.is_some()), (Mode::EqualSpp, args.spp.is_some())];
+            for (mode, wanted) in modes {
+                if !wanted {
+                    continue;
+                }
+                let setup = run::RunSetup {
+                    desc: &desc,
+                    scene_file: &args.scene,
+                    integrator: name,
+                    seed,
+                    mode,
+                    time: args.time,
+                    spp: args.spp,
+                    per_doubling: args.checkpoints,
+                    reference: &reference,
+                    print_warnings: !warned && !args.quiet,
+                };
+                let r = run::run_integrator(&setup)?;
+                warned = true;
+                let last = r.last();
+                let removed =
+                    last.noise_removed.map_or(String::new(), |m| format!(" ({:.4e} noise removed)", m.rel_mse));
+                say(format!(
+                    "{name} ({}, seed {seed}): {} spp in {:.2} s (setup {:.2} s), relMSE {:.4e}{removed}, MAE {:.4e}",
+                    mode.label(),
+                    last.spp,
+                    last.seconds,
+                    r.setup_seconds,
+                    last.metrics.rel_mse,
+                    last.metrics.mae
+                ));
+                runs.push(r);
             }
-            let setup = run::RunSetup {
-                desc: &desc,
-                scene_file: &args.scene,
-                integrator: name,
-                seed,
-                mode,
-                time: args.time,
-                spp: args.spp,
-                per_doubling: args.checkpoints,
-                reference: &reference,
-                print_warnings: !warned && !args.quiet,
-            };
-            let r = run::run_integrator(&setup)?;
-            warned = true;
-            let last = r.last();
-            say(format!(
-                "{name} ({}): {} spp in {:.2} s (setup {:.2} s), relMSE {:.4e}, MAE {:.4e}",
-                mode.label(),
-                last.spp,
-                last.seconds,
-                r.setup_seconds,
-                last.metrics.rel_mse,
-                last.metrics.mae
-            ));
-            runs.push(r);
         }
     }
+    let baseline = names.iter().find(|n| **n == args.baseline).cloned();
+    if baseline.is_none() && names.len() > 1 {
+        say(format!("the baseline {} is not among the integrators: no time to equal error", args.baseline));
+    }
+    let summaries = stats::summarize(&runs, baseline.as_deref(), reference_mean_se);
 
     let mut diff_scale = Vec::new();
     for mode in [Mode::EqualTime, Mode::EqualSpp] {
@@ -207,12 +279,16 @@ pub fn run(args: &CompareArgs) -> Result<ExitCode> {
     }
     let cmp = Comparison {
         scene: args.scene.clone(),
-        seed,
+        seeds,
+        baseline,
         checkpoints_per_doubling: args.checkpoints,
         time_budget: args.time,
         spp: args.spp,
         reference,
         runs,
+        reference_noise,
+        reference_mean_se,
+        summaries,
         diff_scale,
     };
     write_outputs(&cmp, &out_dir)?;
@@ -222,13 +298,17 @@ pub fn run(args: &CompareArgs) -> Result<ExitCode> {
 }
 
 /// File names of a run's final image and error image: `<integrator>.exr` for the headline
-/// mode, `<integrator>-<N>spp.exr` for equal spp when both modes ran.
+/// mode, `<integrator>-<N>spp.exr` for equal spp when both modes ran; `-seed<S>` added for
+/// every seed but the first.
 pub fn image_names(cmp: &Comparison, r: &Run) -> (String, String) {
-    let base = if r.mode == cmp.headline_mode() {
+    let mut base = if r.mode == cmp.headline_mode() {
         r.integrator.clone()
     } else {
         format!("{}-{}spp", r.integrator, cmp.spp.unwrap_or(0))
     };
+    if r.seed != cmp.first_seed() {
+        base = format!("{base}-seed{}", r.seed);
+    }
     (format!("{base}.exr"), format!("{base}-diff.png"))
 }
 
@@ -244,7 +324,7 @@ fn write_outputs(cmp: &Comparison, dir: &Path) -> Result<()> {
         image.metadata.insert("nimbus:spp".into(), last.spp.to_string());
         image.metadata.insert("nimbus:time".into(), format!("{:.3}", last.seconds));
         image.metadata.insert("nimbus:integrator".into(), r.integrator.clone());
-        image.metadata.insert("nimbus:seed".into(), cmp.seed.to_string());
+        image.metadata.insert("nimbus:seed".into(), r.seed.to_string());
         image.metadata.insert("nimbus:scene".into(), cmp.scene.display().to_string());
         image.metadata.insert("nimbus:compare-mode".into(), r.mode.label().into());
         nimbus::imageio::write_image(&dir.join(exr), &image).map_err(anyhow::Error::msg)?;

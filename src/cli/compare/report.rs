@@ -1,26 +1,38 @@
-//! The comparison as CSV (every checkpoint), JSON (everything) and a Markdown table (final
-//! errors).
+//! The comparison as CSV (every checkpoint of every seed), JSON (everything; its schema is
+//! `docs/compare-results.md`) and a Markdown table (each method's final errors over the
+//! seeds).
 
 use nimbus::integrators::REFERENCE;
+use nimbus::metrics::ErrorMetrics;
 use std::fmt::Write;
 
-use serde_json::{Value, json};
+use serde_json::{Map, Value, json};
 
 use super::Comparison;
-use super::run::{Checkpoint, ReferenceSource};
+use super::run::{Checkpoint, Mode};
+use super::stats::{METRICS, MetricStats, Stat, Summary};
+
+/// The `schema` field of results.json: bumped when a field changes meaning or goes.
+pub const SCHEMA: &str = "nimbus-compare/2";
 
 /// One line per checkpoint of every run.
 pub fn csv(cmp: &Comparison) -> String {
-    let mut s =
-        String::from("integrator,mode,checkpoint,seconds,spp,mse,rmse,relmse,mae,mpe,mne,mean,mean_reference,final\n");
+    let mut s = String::from(
+        "integrator,mode,seed,checkpoint,seconds,spp,mse,rmse,relmse,mae,mpe,mne,mean,mean_reference,\
+         relmse_noise_removed,mae_noise_removed,final\n",
+    );
     for r in &cmp.runs {
         for (i, c) in r.checkpoints.iter().enumerate() {
             let m = &c.metrics;
+            let removed = |f: fn(&ErrorMetrics) -> f64| {
+                c.noise_removed.as_ref().map_or(String::new(), |n| format!("{:.6e}", f(n)))
+            };
             let _ = writeln!(
                 s,
-                "{},{},{i},{:.6},{},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{}",
+                "{},{},{},{i},{:.6},{},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{},{},{}",
                 r.integrator,
                 r.mode.label(),
+                r.seed,
                 c.seconds,
                 c.spp,
                 m.mse,
@@ -31,6 +43,8 @@ pub fn csv(cmp: &Comparison) -> String {
                 m.mne,
                 m.mean_test,
                 m.mean_reference,
+                removed(|n| n.rel_mse),
+                removed(|n| n.mae),
                 c.last
             );
         }
@@ -38,23 +52,68 @@ pub fn csv(cmp: &Comparison) -> String {
     s
 }
 
+fn metrics_json(m: &ErrorMetrics) -> Value {
+    Value::Object(METRICS.iter().map(|(name, get)| (name.to_string(), json!(get(m)))).collect())
+}
+
 fn checkpoint_json(c: &Checkpoint) -> Value {
-    let m = &c.metrics;
     json!({
         "seconds": c.seconds,
         "spp": c.spp,
-        "mse": m.mse,
-        "rmse": m.rmse,
-        "relmse": m.rel_mse,
-        "mae": m.mae,
-        "mpe": m.mpe,
-        "mne": m.mne,
-        "mean": m.mean_test,
+        "error": metrics_json(&c.metrics),
+        "error_noise_removed": c.noise_removed.as_ref().map(metrics_json),
+        "mean": c.metrics.mean_test,
         "final": c.last,
     })
 }
 
-/// Everything: the settings, the reference and every run with its checkpoints.
+fn stat_json(s: &Stat) -> Value {
+    json!({ "mean": s.mean, "standard_error": s.standard_error, "n": s.n })
+}
+
+fn stats_json(m: &MetricStats) -> Value {
+    Value::Object(m.values.iter().map(|(name, s)| (name.to_string(), stat_json(s))).collect())
+}
+
+fn summary_json(s: &Summary) -> Value {
+    let equal_error: Map<String, Value> = s
+        .equal_error
+        .iter()
+        .map(|e| {
+            let v = json!({
+                "method_seconds": stat_json(&e.method_seconds),
+                "baseline_seconds": e.baseline_seconds.as_ref().map(stat_json),
+                "speedup": e.speedup.as_ref().map(stat_json),
+                "extrapolated": e.extrapolated,
+                "undefined": e.undefined,
+                "converse_seconds": e.converse_seconds.as_ref().map(stat_json),
+                "converse_reached": e.converse_reached,
+            });
+            (e.metric.to_string(), v)
+        })
+        .collect();
+    json!({
+        "integrator": s.integrator,
+        "mode": s.mode.label(),
+        "seeds": s.seeds,
+        "seconds": stat_json(&s.seconds),
+        "setup_seconds": stat_json(&s.setup_seconds),
+        "spp": stat_json(&s.spp),
+        "error": stats_json(&s.error),
+        "error_noise_removed": s.error_noise_removed.as_ref().map(stats_json),
+        "bias": {
+            "offset": stat_json(&s.bias.offset),
+            "relative": s.bias.relative,
+            "standard_error": s.bias.standard_error,
+            "bias_z": s.bias.z,
+        },
+        "relmse_ratio": s.relmse_ratio.as_ref().map(stat_json),
+        "time_to_equal_error": if equal_error.is_empty() { Value::Null } else { Value::Object(equal_error) },
+    })
+}
+
+/// Everything: the settings, the reference, each method over the seeds and every run with
+/// its checkpoints.
 pub fn json(cmp: &Comparison) -> String {
     let reference = &cmp.reference;
     let runs: Vec<Value> = cmp
@@ -65,6 +124,7 @@ pub fn json(cmp: &Comparison) -> String {
             json!({
                 "integrator": r.integrator,
                 "mode": r.mode.label(),
+                "seed": r.seed,
                 "setup_seconds": r.setup_seconds,
                 "image": exr,
                 "difference_image": diff,
@@ -74,27 +134,29 @@ pub fn json(cmp: &Comparison) -> String {
         })
         .collect();
     let value = json!({
+        "schema": SCHEMA,
         "scene": cmp.scene.display().to_string(),
-        "seed": cmp.seed,
+        "seeds": cmp.seeds,
+        "baseline": cmp.baseline,
         "time_budget": cmp.time_budget,
         "spp": cmp.spp,
         "checkpoints_per_doubling": cmp.checkpoints_per_doubling,
         "reference": {
-            "path": reference.path.display().to_string(),
-            "source": match reference.source {
-                ReferenceSource::File => "file",
-                ReferenceSource::Cached => "cached",
-                ReferenceSource::Rendered => "rendered",
-            },
+            "paths": reference.paths.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
+            "halves": reference.halves.is_some(),
+            "source": reference.source.label(),
             "integrator": REFERENCE,
             "spp": reference.spp,
-            "seed": reference.seed,
+            "seeds": reference.seeds,
             "width": reference.image.width,
             "height": reference.image.height,
             "mean": reference.image.pixels.iter().map(|p| (p.x + p.y + p.z) as f64).sum::<f64>()
                 / (3 * reference.image.pixels.len().max(1)) as f64,
+            "mean_standard_error": cmp.reference_mean_se,
+            "reference_noise": cmp.reference_noise.as_ref().map(metrics_json),
         },
-        "difference_scale": cmp.diff_scale.iter().map(|(m, s)| (m.label().to_string(), json!(s))).collect::<serde_json::Map<_, _>>(),
+        "difference_scale": cmp.diff_scale.iter().map(|(m, s)| (m.label().to_string(), json!(s))).collect::<Map<_, _>>(),
+        "summaries": cmp.summaries.iter().map(summary_json).collect::<Vec<_>>(),
         "runs": runs,
     });
     let mut s = serde_json::to_string_pretty(&value).unwrap_or_default();
@@ -102,64 +164,127 @@ pub fn json(cmp: &Comparison) -> String {
     s
 }
 
-/// The final errors of every run as a Markdown table, best relMSE first within each mode.
+/// `mean ± standard error` with three significant digits (the mean alone for one seed).
+pub fn pm(s: &Stat, f: fn(f64) -> String) -> String {
+    match s.standard_error {
+        Some(se) => format!("{} ± {}", f(s.mean), f(se)),
+        None => f(s.mean),
+    }
+}
+
+fn sci(v: f64) -> String {
+    format!("{v:.3e}")
+}
+
+fn ratio(v: f64) -> String {
+    format!("{v:.2}×")
+}
+
+fn seconds(v: f64) -> String {
+    crate::cli::plot::short(v)
+}
+
+/// The table's rows, best relMSE first within each mode, headline mode first: the cells of
+/// the Markdown table and of the HTML report.
+pub fn table(cmp: &Comparison) -> (Vec<String>, Vec<Vec<String>>) {
+    let baseline = cmp.baseline.clone().unwrap_or_else(|| "baseline".into());
+    let headers = [
+        "integrator",
+        "mode",
+        "seeds",
+        "time (s)",
+        "spp",
+        "relMSE",
+        "relMSE, reference noise removed",
+        "MAE, reference noise removed",
+        "mean vs reference (z)",
+        &format!("relMSE ratio: {baseline} / it"),
+        &format!("time to equal relMSE: {baseline} / it"),
+        &format!("time to equal MAE: {baseline} / it"),
+    ]
+    .map(String::from)
+    .to_vec();
+    let mut rows = Vec::new();
+    for mode in [cmp.headline_mode(), other(cmp.headline_mode())] {
+        let mut sums: Vec<&Summary> = cmp.summaries_of(mode).collect();
+        let key = |s: &Summary| s.error_noise_removed.as_ref().unwrap_or(&s.error).get("relmse").mean;
+        sums.sort_by(|a, b| key(a).total_cmp(&key(b)));
+        for s in sums {
+            let removed = |name| s.error_noise_removed.as_ref().map_or("—".to_string(), |m| pm(&m.get(name), sci));
+            let bias = match s.bias.z {
+                Some(z) => format!("{:+.2}% ({z:+.1})", 100.0 * s.bias.relative),
+                None => format!("{:+.2}%", 100.0 * s.bias.relative),
+            };
+            let equal = |metric: &str| {
+                let e = s.equal_error.iter().find(|e| e.metric == metric);
+                match e.and_then(|e| e.speedup.as_ref().map(|v| (e, v))) {
+                    Some((e, v)) if e.extrapolated > 0 => {
+                        format!("{} (extrapolated ×{})", pm(v, ratio), e.extrapolated)
+                    }
+                    Some((_, v)) => pm(v, ratio),
+                    None if e.is_some_and(|e| e.undefined > 0) => "within reference noise".into(),
+                    None => "—".into(),
+                }
+            };
+            rows.push(vec![
+                s.integrator.clone(),
+                s.mode.label().to_string(),
+                s.seeds.len().to_string(),
+                pm(&s.seconds, seconds),
+                pm(&s.spp, |v| format!("{v:.0}")),
+                pm(&s.error.get("relmse"), sci),
+                removed("relmse"),
+                removed("mae"),
+                bias,
+                s.relmse_ratio.as_ref().map_or("—".into(), |v| pm(v, ratio)),
+                equal("relmse"),
+                equal("mae"),
+            ]);
+        }
+    }
+    (headers, rows)
+}
+
+/// The table with a line on the scene and reference above it and the metrics' meaning below.
 pub fn markdown(cmp: &Comparison) -> String {
     let mut s = String::new();
     let reference = &cmp.reference;
-    let what = match (reference.spp, reference.seed) {
-        (Some(spp), Some(seed)) => format!("VolPath, {spp} spp, seed {seed}"),
-        _ => "given".to_string(),
+    let what = match (reference.spp, &reference.halves) {
+        (Some(spp), Some(_)) => format!("two independent halves, {spp} spp in all, seeds {:?}", reference.seeds),
+        (Some(spp), None) => format!("{spp} spp"),
+        (None, Some(_)) => "two independent halves".into(),
+        (None, None) => "given".to_string(),
     };
-    let _ = writeln!(
-        s,
-        "Scene `{}`, reference `{}` ({what}), seed {}.\n",
-        cmp.scene.display(),
-        reference.path.display(),
-        cmp.seed
-    );
-    let _ = writeln!(
-        s,
-        "| integrator | mode | time (s) | spp | relMSE | relMSE × time | MSE | MAE | MPE | MNE | mean vs ref |"
-    );
-    let _ = writeln!(s, "|---|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|");
-    for mode in [cmp.headline_mode(), other(cmp.headline_mode())] {
-        let mut runs: Vec<_> = cmp.runs_of(mode).collect();
-        runs.sort_by(|a, b| a.last().metrics.rel_mse.total_cmp(&b.last().metrics.rel_mse));
-        for r in runs {
-            let c = r.last();
-            let m = &c.metrics;
-            let bias = if m.mean_reference != 0.0 { 100.0 * (m.mean_test / m.mean_reference - 1.0) } else { 0.0 };
-            let _ = writeln!(
-                s,
-                "| {} | {} | {} | {} | {:.3e} | {:.3e} | {:.3e} | {:.3e} | {:.3e} | {:.3e} | {:+.2}% |",
-                r.integrator,
-                r.mode.label(),
-                crate::cli::plot::short(c.seconds),
-                c.spp,
-                m.rel_mse,
-                m.rel_mse * c.seconds,
-                m.mse,
-                m.mae,
-                m.mpe,
-                m.mne,
-                bias
-            );
-        }
+    let seeds = match &cmp.seeds[..] {
+        [one] => format!("seed {one}"),
+        many => format!("seeds {}–{} (mean ± standard error)", many[0], many[many.len() - 1]),
+    };
+    let _ =
+        writeln!(s, "Scene `{}`, reference `{}` ({what}), {seeds}.\n", cmp.scene.display(), reference.describe_paths());
+    let (headers, rows) = table(cmp);
+    let _ = writeln!(s, "| {} |", headers.join(" | "));
+    let align: Vec<&str> = headers.iter().enumerate().map(|(i, _)| if i < 2 { "---" } else { "--:" }).collect();
+    let _ = writeln!(s, "|{}|", align.join("|"));
+    for row in rows {
+        let _ = writeln!(s, "| {} |", row.join(" | "));
     }
     let _ = writeln!(
         s,
-        "\nrelMSE: mean of (x − ref)² / (ref² + 0.01) over pixels and channels; relMSE × time: lower is \
-         more efficient; MPE / MNE: mean positive / negative error (x brighter / darker than the \
-         reference; MPE − MNE is the mean error, which more samples drive to 0 unless the method \
-         is biased); mean vs ref: difference of the image means. Time \
-         counts building the scene and any preprocessing."
+        "\nrelMSE: mean of (x − ref)² / (ref² + 0.01) over pixels and channels. Reference noise removed: \
+         each error extrapolated to a noiseless reference from the errors against the reference and \
+         against each of its halves (for relMSE, relMSE − relMSE(halves)/4). Mean vs reference: the \
+         image mean's offset, and its z (offset over its standard error, from the seeds' spread and \
+         the reference's halves; beyond ±3, a bias). Time to equal error: the time the baseline needs \
+         to reach the method's final error (its error-vs-time curve, same seed, extrapolated at the \
+         unbiased rate when it ends above it) over the method's time. Time counts the method's \
+         preparation (training, a graph build), not building the scene."
     );
     s
 }
 
-fn other(mode: super::Mode) -> super::Mode {
+fn other(mode: Mode) -> Mode {
     match mode {
-        super::Mode::EqualTime => super::Mode::EqualSpp,
-        super::Mode::EqualSpp => super::Mode::EqualTime,
+        Mode::EqualTime => Mode::EqualSpp,
+        Mode::EqualSpp => Mode::EqualTime,
     }
 }

@@ -40,6 +40,8 @@ pub struct Checkpoint {
     pub spp: u32,
     /// Error against the reference.
     pub metrics: ErrorMetrics,
+    /// Error with the reference's own noise removed, when the reference has two halves.
+    pub noise_removed: Option<ErrorMetrics>,
     /// Whether this is the render's end.
     pub last: bool,
 }
@@ -50,6 +52,8 @@ pub struct Run {
     pub integrator: String,
     /// Equal time or equal spp.
     pub mode: Mode,
+    /// Sampler seed.
+    pub seed: i32,
     /// Seconds to build the scene and create the integrator.
     pub setup_seconds: f64,
     /// Checkpoints in order; the last one is the final image.
@@ -76,18 +80,32 @@ pub enum ReferenceSource {
     Rendered,
 }
 
-/// The reference image.
+impl ReferenceSource {
+    /// Name in the outputs.
+    pub fn label(&self) -> &'static str {
+        match self {
+            ReferenceSource::File => "file",
+            ReferenceSource::Cached => "cached",
+            ReferenceSource::Rendered => "rendered",
+        }
+    }
+}
+
+/// The reference image: one image, or the mean of two independent halves (whose difference
+/// measures its own noise).
 pub struct Reference {
-    /// Pixels.
+    /// Pixels (the halves' mean when there are two).
     pub image: Image,
-    /// Its file.
-    pub path: PathBuf,
-    /// How it was obtained.
+    /// The two independent halves, when the reference came as two.
+    pub halves: Option<[Image; 2]>,
+    /// Its file or the halves' files.
+    pub paths: Vec<PathBuf>,
+    /// How it was obtained (the first half's way when there are two).
     pub source: ReferenceSource,
-    /// Its spp and seed, when known (from the metadata nimbus writes).
+    /// Its spp (both halves together), when known (from the metadata nimbus writes).
     pub spp: Option<u32>,
-    /// Its seed, when known.
-    pub seed: Option<i32>,
+    /// The seeds of its renders, when known.
+    pub seeds: Vec<i32>,
 }
 
 fn scene_error(e: nimbus::parser::Error) -> anyhow::Error {
@@ -95,14 +113,92 @@ fn scene_error(e: nimbus::parser::Error) -> anyhow::Error {
 }
 
 impl Reference {
-    /// `--reference path`: any EXR (or PNG); its size is checked against the film later.
-    pub fn from_file(path: &Path) -> Result<Reference> {
-        let image = nimbus::imageio::read_image(path)
-            .map_err(anyhow::Error::msg)
-            .with_context(|| format!("reading the reference {}", path.display()))?;
-        let spp = image.metadata.get("nimbus:spp").and_then(|s| s.parse().ok());
-        let seed = image.metadata.get("nimbus:seed").and_then(|s| s.parse().ok());
-        Ok(Reference { image, path: path.to_path_buf(), source: ReferenceSource::File, spp, seed })
+    /// `--reference path[,path]`: any EXR (or PNG), or two independent halves of one; its
+    /// size is checked against the film later.
+    pub fn from_files(paths: &[PathBuf]) -> Result<Reference> {
+        anyhow::ensure!(
+            (1..=2).contains(&paths.len()),
+            "--reference takes one image or two independent halves, not {}",
+            paths.len()
+        );
+        let mut images = Vec::new();
+        for path in paths {
+            let image = nimbus::imageio::read_image(path)
+                .map_err(anyhow::Error::msg)
+                .with_context(|| format!("reading the reference {}", path.display()))?;
+            images.push(image);
+        }
+        let meta = |i: &Image, k: &str| i.metadata.get(k).and_then(|s| s.parse::<i64>().ok());
+        let spp = images.iter().map(|i| meta(i, "nimbus:spp").map(|s| s as u32)).sum::<Option<u32>>();
+        let seeds = images.iter().filter_map(|i| meta(i, "nimbus:seed").map(|s| s as i32)).collect();
+        let source = ReferenceSource::File;
+        if let [a, b] = &images[..] {
+            anyhow::ensure!(
+                (a.width, a.height) == (b.width, b.height),
+                "the reference halves differ in size: {} is {}x{}, {} {}x{}",
+                paths[0].display(),
+                a.width,
+                a.height,
+                paths[1].display(),
+                b.width,
+                b.height
+            );
+            anyhow::ensure!(
+                a.pixels != b.pixels,
+                "the reference halves {} and {} are the same image: they must be independent renders",
+                paths[0].display(),
+                paths[1].display()
+            );
+        }
+        Ok(Reference::of(images, paths.to_vec(), source, spp, seeds))
+    }
+
+    fn of(
+        mut images: Vec<Image>,
+        paths: Vec<PathBuf>,
+        source: ReferenceSource,
+        spp: Option<u32>,
+        seeds: Vec<i32>,
+    ) -> Reference {
+        if images.len() == 2 {
+            let b = images.pop().expect("two images");
+            let a = images.pop().expect("two images");
+            let image = nimbus::metrics::average(&a, &b);
+            Reference { image, halves: Some([a, b]), paths, source, spp, seeds }
+        } else {
+            let image = images.pop().expect("one image");
+            Reference { image, halves: None, paths, source, spp, seeds }
+        }
+    }
+
+    /// The file(s), for messages.
+    pub fn describe_paths(&self) -> String {
+        self.paths.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(" + ")
+    }
+
+    /// `--reference-spp n`: two independent VolPath halves of ⌈n/2⌉ spp each, at seeds
+    /// `seed` and `seed + 1`, each cached or rendered as [`Reference::cached_or_rendered`].
+    #[allow(clippy::too_many_arguments)]
+    pub fn halves_cached_or_rendered(
+        scene_path: &Path,
+        stem: &str,
+        desc: &SceneDescription,
+        spp: u32,
+        seed: i32,
+        quiet: bool,
+        say: &dyn Fn(String),
+    ) -> Result<Reference> {
+        let half = spp.div_ceil(2);
+        let a = Reference::cached_or_rendered(scene_path, stem, desc, half, seed, quiet, say)?;
+        let b = Reference::cached_or_rendered(scene_path, stem, desc, half, seed.wrapping_add(1), quiet, say)?;
+        let source = if a.source == ReferenceSource::Rendered || b.source == ReferenceSource::Rendered {
+            ReferenceSource::Rendered
+        } else {
+            ReferenceSource::Cached
+        };
+        let paths = [a.paths, b.paths].concat();
+        let seeds = [a.seeds, b.seeds].concat();
+        Ok(Reference::of(vec![a.image, b.image], paths, source, Some(2 * half), seeds))
     }
 
     /// `--reference-spp n`: `<scene dir>/<stem>.volpath-<n>spp-seed<seed>.exr` if it is there
@@ -145,7 +241,7 @@ impl Reference {
                         None => {
                             say(format!("reference: {} (cached)", path.display()));
                             let source = ReferenceSource::Cached;
-                            return Ok(Reference { image, path, source, spp: Some(spp), seed: Some(seed) });
+                            return Ok(Reference::of(vec![image], vec![path], source, Some(spp), vec![seed]));
                         }
                     }
                 }
@@ -166,7 +262,7 @@ impl Reference {
             .map_err(anyhow::Error::msg)
             .context("caching the reference next to the scene")?;
         say(format!("reference: {} spp in {:.2} s", result.spp, result.seconds));
-        Ok(Reference { image, path, source: ReferenceSource::Rendered, spp: Some(spp), seed: Some(seed) })
+        Ok(Reference::of(vec![image], vec![path], ReferenceSource::Rendered, Some(spp), vec![seed]))
     }
 }
 
@@ -245,7 +341,7 @@ pub fn run_integrator(s: &RunSetup<'_>) -> Result<Run> {
     anyhow::ensure!(
         (reference.width, reference.height) == (w, h),
         "the reference {} is {}x{} but the scene's film renders {w}x{h} pixels",
-        s.reference.path.display(),
+        s.reference.describe_paths(),
         reference.width,
         reference.height
     );
@@ -277,14 +373,26 @@ pub fn run_integrator(s: &RunSetup<'_>) -> Result<Run> {
             if pass.last || ends.binary_search(&pass.spp).is_ok() {
                 let image = pass.image();
                 if let Ok(metrics) = error_metrics(&image, reference) {
+                    let noise_removed = s
+                        .reference
+                        .halves
+                        .as_ref()
+                        .and_then(|[a, b]| nimbus::metrics::error_metrics_noise_removed(&image, a, b).ok());
                     let seconds = setup_seconds + pass.seconds;
-                    checkpoints.push(Checkpoint { seconds, spp: pass.spp, metrics, last: pass.last });
+                    checkpoints.push(Checkpoint { seconds, spp: pass.spp, metrics, noise_removed, last: pass.last });
                 }
             }
         },
     );
     anyhow::ensure!(!checkpoints.is_empty(), "{}: the render ended before its first pass", s.integrator);
-    Ok(Run { integrator: s.integrator.to_string(), mode: s.mode, setup_seconds, checkpoints, image: result.image })
+    Ok(Run {
+        integrator: s.integrator.to_string(),
+        mode: s.mode,
+        seed: s.seed,
+        setup_seconds,
+        checkpoints,
+        image: result.image,
+    })
 }
 
 #[cfg(test)]

@@ -5,8 +5,10 @@
 //! - `run.rs`: the reference (given, cached or rendered) and one integrator's timed render.
 //! - `report.rs`: `results.csv`, `results.json`, `results.md`.
 //! - `charts.rs`: relMSE against time (log-log) and a bar chart of the final relMSE.
+//! - `html.rs`: `--html`, one self-contained interactive page (`report.js`, `report.css`).
 
 mod charts;
+mod html;
 mod report;
 pub(crate) mod run;
 
@@ -62,6 +64,11 @@ pub struct CompareArgs {
     /// Print only the results table.
     #[arg(long)]
     quiet: bool,
+    /// Also write one self-contained HTML page here: the reference, every image and its error
+    /// side by side, a flip view (keys 0-9, e), synchronized zoom and pan, pixel values on
+    /// hover, the error-vs-time chart and the table. It loads nothing from a network.
+    #[arg(long)]
+    html: Option<PathBuf>,
 }
 
 /// The scene's name without `.pbrt` / `.pbrt.gz`.
@@ -216,9 +223,78 @@ pub fn run(args: &CompareArgs) -> Result<ExitCode> {
         diff_scale,
     };
     write_outputs(&cmp, &out_dir)?;
+    if let Some(path) = &args.html {
+        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        }
+        html::write(&html_report(&cmp), path)?;
+        say(format!("wrote {}", path.display()));
+    }
     print!("{}", report::markdown(&cmp));
     say(format!("wrote {}", out_dir.display()));
     Ok(ExitCode::SUCCESS)
+}
+
+/// The HTML page's content: the headline mode's final images, relMSE against time for each
+/// mode that ran, the Markdown table's rows and its notes.
+fn html_report(cmp: &Comparison) -> html::HtmlReport {
+    let image = |i: &nimbus::imageio::Image| html::HtmlImage {
+        width: i.width,
+        height: i.height,
+        rgb: i.pixels.iter().flat_map(|p| [p.x, p.y, p.z]).collect(),
+    };
+    let methods = cmp
+        .runs_of(cmp.headline_mode())
+        .map(|r| {
+            let c = r.last();
+            html::HtmlMethod {
+                name: r.integrator.clone(),
+                caption: format!(
+                    "relMSE {:.3e}, {} spp, {} s",
+                    c.metrics.rel_mse,
+                    c.spp,
+                    crate::cli::plot::short(c.seconds)
+                ),
+                image: image(&r.image),
+            }
+        })
+        .collect();
+    // Equal time, when it ran, is the headline mode: it comes first.
+    let charts = [Mode::EqualTime, Mode::EqualSpp]
+        .into_iter()
+        .filter(|&mode| cmp.runs_of(mode).next().is_some())
+        .map(|mode| html::HtmlChart {
+            title: format!("relMSE vs time ({})", mode.label()),
+            x_label: "time since scene build (s)".into(),
+            y_label: "relMSE".into(),
+            series: cmp
+                .runs_of(mode)
+                .map(|r| html::HtmlSeries {
+                    name: r.integrator.clone(),
+                    color: charts::css_color(cmp, &r.integrator),
+                    points: r.checkpoints.iter().map(|c| (c.seconds, c.metrics.rel_mse)).collect(),
+                })
+                .collect(),
+        })
+        .collect();
+    let (headers, rows) = report::table(cmp);
+    html::HtmlReport {
+        title: format!("nimbus compare: {}", scene_stem(&cmp.scene)),
+        notes: vec![
+            format!(
+                "Scene {}, reference {} ({}), seed {}.",
+                cmp.scene.display(),
+                cmp.reference.path.display(),
+                report::reference_what(cmp),
+                cmp.seed
+            ),
+            report::LEGEND.to_string(),
+        ],
+        reference: image(&cmp.reference.image),
+        methods,
+        charts,
+        table: html::HtmlTable { headers, rows },
+    }
 }
 
 /// File names of a run's final image and error image: `<integrator>.exr` for the headline

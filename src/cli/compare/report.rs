@@ -106,10 +106,7 @@ pub fn json(cmp: &Comparison) -> String {
 pub fn markdown(cmp: &Comparison) -> String {
     let mut s = String::new();
     let reference = &cmp.reference;
-    let what = match (reference.spp, reference.seed) {
-        (Some(spp), Some(seed)) => format!("VolPath, {spp} spp, seed {seed}"),
-        _ => "given".to_string(),
-    };
+    let what = reference_what(cmp);
     let _ = writeln!(
         s,
         "Scene `{}`, reference `{}` ({what}), seed {}.\n",
@@ -117,11 +114,37 @@ pub fn markdown(cmp: &Comparison) -> String {
         reference.path.display(),
         cmp.seed
     );
-    let _ = writeln!(
-        s,
-        "| integrator | mode | time (s) | spp | relMSE | relMSE × time | MSE | MAE | MPE | MNE | mean vs ref |"
-    );
+    let (headers, rows) = table(cmp);
+    let _ = writeln!(s, "| {} |", headers.join(" | "));
     let _ = writeln!(s, "|---|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|");
+    for row in rows {
+        let _ = writeln!(s, "| {} |", row.join(" | "));
+    }
+    let _ = writeln!(s, "\n{LEGEND}");
+    s
+}
+
+/// How the reference was made: "VolPath, 1024 spp, seed 2" or "given".
+pub fn reference_what(cmp: &Comparison) -> String {
+    match (cmp.reference.spp, cmp.reference.seed) {
+        (Some(spp), Some(seed)) => format!("VolPath, {spp} spp, seed {seed}"),
+        _ => "given".to_string(),
+    }
+}
+
+/// What the table's columns mean.
+pub const LEGEND: &str = "relMSE: mean of (x − ref)² / (ref² + 0.01) over pixels and channels; relMSE × time: lower \
+     is more efficient; MPE / MNE: mean positive / negative error (x brighter / darker than the \
+     reference; MPE − MNE is the mean error, which more samples drive to 0 unless the method \
+     is biased); mean vs ref: difference of the image means. Time \
+     counts building the scene and any preprocessing.";
+
+/// The final errors of every run: column heads and one row of cells per run, the headline
+/// mode first and best relMSE first within each mode (the Markdown table's rows).
+pub fn table(cmp: &Comparison) -> (Vec<String>, Vec<Vec<String>>) {
+    let headers =
+        ["integrator", "mode", "time (s)", "spp", "relMSE", "relMSE × time", "MSE", "MAE", "MPE", "MNE", "mean vs ref"];
+    let mut rows = Vec::new();
     for mode in [cmp.headline_mode(), other(cmp.headline_mode())] {
         let mut runs: Vec<_> = cmp.runs_of(mode).collect();
         runs.sort_by(|a, b| a.last().metrics.rel_mse.total_cmp(&b.last().metrics.rel_mse));
@@ -129,32 +152,22 @@ pub fn markdown(cmp: &Comparison) -> String {
             let c = r.last();
             let m = &c.metrics;
             let bias = if m.mean_reference != 0.0 { 100.0 * (m.mean_test / m.mean_reference - 1.0) } else { 0.0 };
-            let _ = writeln!(
-                s,
-                "| {} | {} | {} | {} | {:.3e} | {:.3e} | {:.3e} | {:.3e} | {:.3e} | {:.3e} | {:+.2}% |",
-                r.integrator,
-                r.mode.label(),
+            rows.push(vec![
+                r.integrator.clone(),
+                r.mode.label().to_string(),
                 crate::cli::plot::short(c.seconds),
-                c.spp,
-                m.rel_mse,
-                m.rel_mse * c.seconds,
-                m.mse,
-                m.mae,
-                m.mpe,
-                m.mne,
-                bias
-            );
+                c.spp.to_string(),
+                format!("{:.3e}", m.rel_mse),
+                format!("{:.3e}", m.rel_mse * c.seconds),
+                format!("{:.3e}", m.mse),
+                format!("{:.3e}", m.mae),
+                format!("{:.3e}", m.mpe),
+                format!("{:.3e}", m.mne),
+                format!("{bias:+.2}%"),
+            ]);
         }
     }
-    let _ = writeln!(
-        s,
-        "\nrelMSE: mean of (x − ref)² / (ref² + 0.01) over pixels and channels; relMSE × time: lower is \
-         more efficient; MPE / MNE: mean positive / negative error (x brighter / darker than the \
-         reference; MPE − MNE is the mean error, which more samples drive to 0 unless the method \
-         is biased); mean vs ref: difference of the image means. Time \
-         counts building the scene and any preprocessing."
-    );
-    s
+    (headers.iter().map(|h| h.to_string()).collect(), rows)
 }
 
 fn other(mode: super::Mode) -> super::Mode {

@@ -122,9 +122,17 @@ fn compare_writes_every_output_and_reuses_its_cached_reference() {
     assert_eq!(csv.lines().count(), 1 + checkpoints.len() + spp_ladder.len());
 
     // Same seed again, equal spp only: the cached reference is reused and the image is the same.
+    // With --html, the page embeds the reference and the one method (the browser test,
+    // tests/browser/report.sh, loads such a page in Chromium).
     let again = dir.join("again");
-    let out = run(args(&again, false));
+    let page = again.join("report.html");
+    let mut a = args(&again, false);
+    a.extend(["--html".to_string(), page.to_str().unwrap().to_string()]);
+    let out = run(a);
     assert!(out.status.success(), "{}", stderr(&out));
+    let html = std::fs::read_to_string(&page).unwrap();
+    assert!(html.starts_with("<!DOCTYPE html>") && html.contains("<td>volpath</td>"), "{html}");
+    assert_eq!(html.matches("\"rgb\":\"").count(), 2, "the reference and one method");
     assert!(stderr(&out).contains("(cached)"), "{}", stderr(&out));
     let a = read_exr(&out_dir.join("volpath-4spp.exr")).unwrap();
     let b = read_exr(&again.join("volpath.exr")).unwrap();

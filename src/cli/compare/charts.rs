@@ -40,6 +40,12 @@ fn color_of(cmp: &Comparison, integrator: &str) -> RGBColor {
     COLORS[i % COLORS.len()]
 }
 
+/// An integrator's colour as CSS (`#rrggbb`), the same as in the charts.
+pub fn css_color(cmp: &Comparison, integrator: &str) -> String {
+    let c = color_of(cmp, integrator);
+    format!("#{:02x}{:02x}{:02x}", c.0, c.1, c.2)
+}
+
 fn mode_title(cmp: &Comparison, mode: Mode) -> String {
     match mode {
         Mode::EqualTime => format!("equal time, {} s", short(cmp.time_budget.unwrap_or(0.0))),

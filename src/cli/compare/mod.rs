@@ -8,8 +8,10 @@
 //! - `report.rs`: `results.csv`, `results.json` (its schema: `docs/compare-results.md`),
 //!   `results.md`.
 //! - `charts.rs`: relMSE against time (log-log) and a bar chart of the final relMSE.
+//! - `html.rs`: `--html`, one self-contained interactive page (`report.js`, `report.css`).
 
 mod charts;
+mod html;
 mod report;
 pub(crate) mod run;
 mod stats;
@@ -77,6 +79,11 @@ pub struct CompareArgs {
     /// Print only the results table.
     #[arg(long)]
     quiet: bool,
+    /// Also write one self-contained HTML page here: the reference, every image and its error
+    /// side by side, a flip view (keys 0-9, e), synchronized zoom and pan, pixel values on
+    /// hover, the error-vs-time chart and the table. It loads nothing from a network.
+    #[arg(long)]
+    html: Option<PathBuf>,
 }
 
 /// The scene's name without `.pbrt` / `.pbrt.gz`.
@@ -292,9 +299,92 @@ pub fn run(args: &CompareArgs) -> Result<ExitCode> {
         diff_scale,
     };
     write_outputs(&cmp, &out_dir)?;
+    if let Some(path) = &args.html {
+        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        }
+        html::write(&html_report(&cmp), path)?;
+        say(format!("wrote {}", path.display()));
+    }
     print!("{}", report::markdown(&cmp));
     say(format!("wrote {}", out_dir.display()));
     Ok(ExitCode::SUCCESS)
+}
+
+/// The HTML page's content: the headline mode's final images of the first seed, error against
+/// time for every run of each mode that ran, the Markdown table's rows and its notes.
+fn html_report(cmp: &Comparison) -> html::HtmlReport {
+    let image = |i: &nimbus::imageio::Image| html::HtmlImage {
+        width: i.width,
+        height: i.height,
+        rgb: i.pixels.iter().flat_map(|p| [p.x, p.y, p.z]).collect(),
+    };
+    let relmse = |s: &stats::Summary| s.error_noise_removed.as_ref().unwrap_or(&s.error).get("relmse");
+    let methods = cmp
+        .runs_of(cmp.headline_mode())
+        .filter(|r| r.seed == cmp.first_seed())
+        .map(|r| {
+            let sum = cmp.summaries.iter().find(|s| s.integrator == r.integrator && s.mode == r.mode);
+            let caption = match sum {
+                Some(s) => format!(
+                    "relMSE {} over {} seed(s), {} spp, {} s",
+                    report::pm(&relmse(s), |v| format!("{v:.3e}")),
+                    s.seeds.len(),
+                    s.spp.mean.round(),
+                    crate::cli::plot::short(s.seconds.mean)
+                ),
+                None => String::new(),
+            };
+            html::HtmlMethod { name: r.integrator.clone(), caption, image: image(&r.image) }
+        })
+        .collect();
+    let noise_removed = cmp.reference.halves.is_some();
+    // Equal time, when it ran, is the headline mode: it comes first.
+    let charts = [Mode::EqualTime, Mode::EqualSpp]
+        .into_iter()
+        .filter(|&mode| cmp.runs_of(mode).next().is_some())
+        .map(|mode| html::HtmlChart {
+            title: format!("relMSE vs time ({})", mode.label()),
+            x_label: "time since scene build (s)".into(),
+            y_label: if noise_removed { "relMSE, reference noise removed" } else { "relMSE" }.into(),
+            series: cmp
+                .runs_of(mode)
+                .map(|r| html::HtmlSeries {
+                    name: if r.seed == cmp.first_seed() {
+                        r.integrator.clone()
+                    } else {
+                        format!("{} (seed {})", r.integrator, r.seed)
+                    },
+                    color: charts::css_color(cmp, &r.integrator),
+                    // A log axis: a noise-removed error at or below zero has no place on it.
+                    points: r
+                        .checkpoints
+                        .iter()
+                        .map(|c| (c.seconds, stats::best(c).rel_mse))
+                        .filter(|(_, e)| *e > 0.0)
+                        .collect(),
+                })
+                .collect(),
+        })
+        .collect();
+    let (headers, rows) = report::table(cmp);
+    html::HtmlReport {
+        title: format!("nimbus compare: {}", scene_stem(&cmp.scene)),
+        notes: vec![
+            format!(
+                "Scene {}, reference {} ({}), {}.",
+                cmp.scene.display(),
+                cmp.reference.describe_paths(),
+                report::reference_what(cmp),
+                report::seeds_what(cmp)
+            ),
+            report::LEGEND.to_string(),
+        ],
+        reference: image(&cmp.reference.image),
+        methods,
+        charts,
+        table: html::HtmlTable { headers, rows },
+    }
 }
 
 /// File names of a run's final image and error image: `<integrator>.exr` for the headline

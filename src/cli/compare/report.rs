@@ -249,18 +249,14 @@ pub fn table(cmp: &Comparison) -> (Vec<String>, Vec<Vec<String>>) {
 pub fn markdown(cmp: &Comparison) -> String {
     let mut s = String::new();
     let reference = &cmp.reference;
-    let what = match (reference.spp, &reference.halves) {
-        (Some(spp), Some(_)) => format!("two independent halves, {spp} spp in all, seeds {:?}", reference.seeds),
-        (Some(spp), None) => format!("{spp} spp"),
-        (None, Some(_)) => "two independent halves".into(),
-        (None, None) => "given".to_string(),
-    };
-    let seeds = match &cmp.seeds[..] {
-        [one] => format!("seed {one}"),
-        many => format!("seeds {}–{} (mean ± standard error)", many[0], many[many.len() - 1]),
-    };
-    let _ =
-        writeln!(s, "Scene `{}`, reference `{}` ({what}), {seeds}.\n", cmp.scene.display(), reference.describe_paths());
+    let _ = writeln!(
+        s,
+        "Scene `{}`, reference `{}` ({}), {}.\n",
+        cmp.scene.display(),
+        reference.describe_paths(),
+        reference_what(cmp),
+        seeds_what(cmp)
+    );
     let (headers, rows) = table(cmp);
     let _ = writeln!(s, "| {} |", headers.join(" | "));
     let align: Vec<&str> = headers.iter().enumerate().map(|(i, _)| if i < 2 { "---" } else { "--:" }).collect();
@@ -268,19 +264,38 @@ pub fn markdown(cmp: &Comparison) -> String {
     for row in rows {
         let _ = writeln!(s, "| {} |", row.join(" | "));
     }
-    let _ = writeln!(
-        s,
-        "\nrelMSE: mean of (x − ref)² / (ref² + 0.01) over pixels and channels. Reference noise removed: \
-         each error extrapolated to a noiseless reference from the errors against the reference and \
-         against each of its halves (for relMSE, relMSE − relMSE(halves)/4). Mean vs reference: the \
-         image mean's offset, and its z (offset over its standard error, from the seeds' spread and \
-         the reference's halves; beyond ±3, a bias). Time to equal error: the time the baseline needs \
-         to reach the method's final error (its error-vs-time curve, same seed, extrapolated at the \
-         unbiased rate when it ends above it) over the method's time. Time counts the method's \
-         preparation (training, a graph build), not building the scene."
-    );
+    let _ = writeln!(s, "\n{LEGEND}");
     s
 }
+
+/// How the reference was made: "two independent halves, 4096 spp in all, seeds [1000, 1001]",
+/// "1024 spp" or "given".
+pub fn reference_what(cmp: &Comparison) -> String {
+    let reference = &cmp.reference;
+    match (reference.spp, &reference.halves) {
+        (Some(spp), Some(_)) => format!("two independent halves, {spp} spp in all, seeds {:?}", reference.seeds),
+        (Some(spp), None) => format!("{spp} spp"),
+        (None, Some(_)) => "two independent halves".into(),
+        (None, None) => "given".to_string(),
+    }
+}
+
+/// "seed 1" or "seeds 1–3 (mean ± standard error)".
+pub fn seeds_what(cmp: &Comparison) -> String {
+    match &cmp.seeds[..] {
+        [one] => format!("seed {one}"),
+        many => format!("seeds {}–{} (mean ± standard error)", many[0], many[many.len() - 1]),
+    }
+}
+
+/// What the table's columns mean.
+pub const LEGEND: &str = "relMSE: mean of (x − ref)² / (ref² + 0.01) over pixels and channels. Reference noise \
+     removed: each error extrapolated to a noiseless reference from the errors against the reference and against \
+     each of its halves (for relMSE, relMSE − relMSE(halves)/4). Mean vs reference: the image mean's offset, and \
+     its z (offset over its standard error, from the seeds' spread and the reference's halves; beyond ±3, a \
+     bias). Time to equal error: the time the baseline needs to reach the method's final error (its \
+     error-vs-time curve, same seed, extrapolated at the unbiased rate when it ends above it) over the \
+     method's time. Time counts the method's preparation (training, a graph build), not building the scene.";
 
 fn other(mode: Mode) -> Mode {
     match mode {

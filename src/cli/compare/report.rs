@@ -106,6 +106,7 @@ fn summary_json(s: &Summary) -> Value {
             "relative": s.bias.relative,
             "standard_error": s.bias.standard_error,
             "bias_z": s.bias.z,
+            "degrees_of_freedom": s.bias.degrees_of_freedom,
         },
         "relmse_ratio": s.relmse_ratio.as_ref().map(stat_json),
         "time_to_equal_error": if equal_error.is_empty() { Value::Null } else { Value::Object(equal_error) },
@@ -211,9 +212,9 @@ pub fn table(cmp: &Comparison) -> (Vec<String>, Vec<Vec<String>>) {
         sums.sort_by(|a, b| key(a).total_cmp(&key(b)));
         for s in sums {
             let removed = |name| s.error_noise_removed.as_ref().map_or("—".to_string(), |m| pm(&m.get(name), sci));
-            let bias = match s.bias.z {
-                Some(z) => format!("{:+.2}% ({z:+.1})", 100.0 * s.bias.relative),
-                None => format!("{:+.2}%", 100.0 * s.bias.relative),
+            let bias = match (s.bias.z, s.bias.degrees_of_freedom) {
+                (Some(z), Some(dof)) => format!("{:+.2}% ({z:+.1}, {dof} dof)", 100.0 * s.bias.relative),
+                _ => format!("{:+.2}%", 100.0 * s.bias.relative),
             };
             let equal = |metric: &str| {
                 let e = s.equal_error.iter().find(|e| e.metric == metric);
@@ -292,8 +293,8 @@ pub fn seeds_what(cmp: &Comparison) -> String {
 pub const LEGEND: &str = "relMSE: mean of (x − ref)² / (ref² + 0.01) over pixels and channels. Reference noise \
      removed: each error extrapolated to a noiseless reference from the errors against the reference and against \
      each of its halves (for relMSE, relMSE − relMSE(halves)/4). Mean vs reference: the image mean's offset, and \
-     its z (offset over its standard error, from the seeds' spread and the reference's halves; beyond ±3, a \
-     bias). Time to equal error: the time the baseline needs to reach the method's final error (its \
+     its z (offset over its standard error, from the seeds' spread and the reference's halves), a Student t \
+     with seeds − 1 degrees of freedom: a bias at the 5 % level beyond ±4.3 with 3 seeds, ±2.3 with 10. Time to equal error: the time the baseline needs to reach the method's final error (its \
      error-vs-time curve, same seed, extrapolated at the unbiased rate when it ends above it) over the \
      method's time. Time counts the method's preparation (training, a graph build), not building the scene.";
 

@@ -82,8 +82,12 @@ pub struct Bias {
     /// Standard error of the offset: the seeds' spread and the reference's own (from its
     /// halves, when it has them) combined.
     pub standard_error: Option<f64>,
-    /// offset / standard_error: beyond about ±3 the method is biased at this sample count.
+    /// offset / standard_error. Its standard error comes from n seeds, so z follows Student's
+    /// t with n − 1 degrees of freedom, not a normal law: beyond ±4.3 is the 5 % level with 3
+    /// seeds, beyond ±2.3 with 10.
     pub z: Option<f64>,
+    /// n − 1, the degrees of freedom of z (none for one seed).
+    pub degrees_of_freedom: Option<usize>,
 }
 
 /// The errors whose equal-error times are reported, and how error falls with time for an
@@ -209,6 +213,7 @@ fn summarize_one(name: &str, mode: Mode, runs: &[&Run], base: &[&Run], reference
         relative: if mean_reference != 0.0 { offset.mean / mean_reference } else { 0.0 },
         standard_error,
         z: standard_error.filter(|se| *se > 0.0).map(|se| offset.mean / se),
+        degrees_of_freedom: (offset.n >= 2).then(|| offset.n - 1),
     };
     // Seed-by-seed pairs with the baseline's runs.
     let pairs: Vec<(&Run, &Run)> =
@@ -378,5 +383,6 @@ mod tests {
         let se = (0.02f64.powi(2) / 3.0 + 0.01f64.powi(2)).sqrt();
         assert!((s.bias.standard_error.unwrap() - se).abs() < 1e-12);
         assert!((s.bias.z.unwrap() - 0.1 / se).abs() < 1e-9);
+        assert_eq!(s.bias.degrees_of_freedom, Some(2));
     }
 }

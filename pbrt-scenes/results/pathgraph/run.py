@@ -6,28 +6,32 @@ idle machine (timings are 2 threads):
 
     python3 pbrt-scenes/results/pathgraph/run.py
 
-1. Equal spp (1 spp) and equal time (EQUAL_TIME s) against volpath with `nimbus compare`, on the
-   heterogeneous cloud (cloud-sun-sky), the dielectric-bounded medium (wax-small-light) and the
-   fog scene (fog-emitter), against the shipped 2048-spp references: folders <scene>/. The
-   budget puts volpath at about 100 spp on the cloud, the regime of the paper's 300-s
-   comparison (Table 1: 100 path-tracing spp on its Disney cloud at 1440×960).
-2. The paper's Fig. 6: relMSE against spp and time on the cloud over 60 s, and where the
-   graph's bias makes path tracing the better choice (the crossing): fig6-*.png.
+Every comparison is one `nimbus compare` (pbrt-scenes/results/nimbus_compare.py): three
+seeds per method, against a volpath reference rendered as two independent halves (cached
+beside the scene) whose own noise is removed from the errors; numbers are mean ± standard
+error over the seeds.
+
+1. Equal spp (1 spp) and equal time (EQUAL_TIME s) against volpath, on the heterogeneous cloud
+   (cloud-sun-sky), the dielectric-bounded medium (wax-small-light) and the fog scene
+   (fog-emitter): folders <scene>/ (the README's headline commands, ../headlines/, are the
+   same). The budget puts volpath at about 50 spp on the cloud, the regime of the paper's
+   300-s comparison (Table 1: 100 path-tracing spp on its Disney cloud at 1440×960).
+2. The paper's Fig. 6: relMSE against spp and time on the cloud over 60 s, and the time
+   volpath needs to reach the graph's error (where its bias makes path tracing the better
+   choice): fig6-*.png.
 3. The paper's Fig. 7: error and mean against iterations at 1 and 16 spp: fig7-iterations.png.
 4. A K study (cluster size): error, mean and time per sample, and MSE at equal time over three
    seeds (what the default K is chosen by): k-study.png.
 5. Where it fails: a direct-light-dominated haze, a surfaces-only scene, a very anisotropic
    cloud (g = 0.95), each at equal time (EQUAL_TIME s): failure-<case>/.
-6. Every pbrt-scenes scene at equal time (EQUAL_TIME s), mean of three seeds: the table only.
+6. Every pbrt-scenes scene at equal time (EQUAL_TIME s), three seeds: the table only.
 Writes results.md and results.json beside this script.
 """
 
-import csv
 import json
 import os
 import re
 import shutil
-import subprocess
 import sys
 import tempfile
 
@@ -37,20 +41,20 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-ROOT = os.path.abspath(os.path.join(HERE, "..", "..", ".."))
-NIMBUS = os.path.join(ROOT, "target", "release", "nimbus")
-SCENES = os.path.join(ROOT, "pbrt-scenes")
-REFS = os.path.join(SCENES, "references")
-THREADS = "2"
+sys.path.insert(0, os.path.join(HERE, ".."))
+from nimbus_compare import NIMBUS, REFS, SCENES, THREADS, compare, pm, run, variant  # noqa: E402
+
 SEED = "1"
+SEEDS = 3
 EQUAL_TIME = 1.5
+# Spp of the volpath references (two halves of half as many); light reaches the wax only
+# through refraction, so it gets more.
+REF_SPP = 4096
+REF_SPP_WAX = 32768
 
 
-def run(args):
-    r = subprocess.run([NIMBUS] + args, capture_output=True, text=True)
-    if r.returncode != 0:
-        sys.exit(f"nimbus {' '.join(args)} failed:\n{r.stderr}")
-    return r.stdout
+def ref_spp(scene):
+    return REF_SPP_WAX if "wax" in os.path.basename(scene) else REF_SPP
 
 
 def diff(test, ref):
@@ -73,42 +77,26 @@ def render(scene, out, spp, extra=()):
     return float(m.group(1)), stdout
 
 
-def variant(src, dst, subs):
-    text = open(src).read()
-    for a, b in subs:
-        text, n = re.subn(a, b, text, flags=re.M)
-        if n == 0:
-            sys.exit(f"{src}: no match for {a}")
-    open(dst, "w").write(text)
-    return dst
-
-
 def with_integrator(src, dst, params):
     return variant(src, dst, [(r'^Integrator "volpath"', f'Integrator "pathgraph" {params}')])
 
 
-def compare(scene, ref, out, time_s, spp=None, seed=SEED):
-    args = ["compare", scene, "--integrators", "volpath,pathgraph", "--reference", ref,
-            "--time", str(time_s), "--seed", seed, "--nthreads", THREADS, "--out", out, "--quiet"]
-    if spp:
-        args += ["--spp", str(spp)]
-    run(args)
-    rows = list(csv.DictReader(open(os.path.join(out, "results.csv"))))
-    # The renders as PNG (8-bit sRGB) to look at; the float images are not kept.
-    for f in os.listdir(out):
-        if f.endswith(".exr"):
-            exr = os.path.join(out, f)
-            run(["convert", exr, exr[:-4] + ".png"])
-            os.remove(exr)
-    return rows
+def halves(stem):
+    """The cached reference halves of pbrt-scenes/<stem>.pbrt that section 1 rendered (seed 1)."""
+    n = ref_spp(stem) // 2
+    return [os.path.join(SCENES, f"{stem}.volpath-{n}spp-seed{seed}.exr") for seed in (1001, 1002)]
 
 
-def finals(rows):
-    f = {}
-    for r in rows:
-        if r["final"] == "true":
-            f[(r["integrator"], r["mode"])] = r
-    return f
+def pg_compare(scene, out, time_s=EQUAL_TIME, spp=None, integrators=("volpath", "pathgraph"), seeds=SEEDS,
+               reference_spp=None, keep_images=True):
+    return compare(scene, list(integrators), out, time=time_s, spp=spp, seeds=seeds,
+                   reference_spp=reference_spp or ref_spp(scene), keep_images=keep_images)
+
+
+def bias_text(c, integ, mode):
+    b = c.bias(integ, mode)
+    z = f" (z {b['bias_z']:+.1f})" if b["bias_z"] is not None else ""
+    return f"{100 * b['relative']:+.2f}%{z}"
 
 
 def main():
@@ -117,78 +105,74 @@ def main():
     work = tempfile.mkdtemp(prefix="nimbus-pathgraph-")
     results = {}
     md = ["# pathgraph against volpath", "",
-          "Generated by `run.py` (see its docstring); 2 threads, seed 1, 128×96 images, references: "
-          "volpath at 2048 spp (pbrt-scenes/references, or rendered here for the variants).", ""]
+          f"Generated by `run.py` (see its docstring); 2 threads, 128×96 images; {SEEDS} seeds per comparison "
+          f"(mean ± standard error) unless stated; references: volpath at {REF_SPP} spp ({REF_SPP_WAX} for the wax) "
+          "in two independent halves, whose noise is removed from the errors.", ""]
     try:
         # 1. Equal spp (1) and equal time.
         md += [f"## Equal spp (1 spp) and equal time ({EQUAL_TIME} s)", "",
                f"| scene | integrator | relMSE at 1 spp | time at 1 spp | spp in {EQUAL_TIME} s | relMSE | "
-               "MPE | MNE | mean vs ref |",
+               "MPE | MNE | mean vs ref (z) |",
                "|---|---|--:|--:|--:|--:|--:|--:|--:|"]
+        commands = []
         for s in ["cloud-sun-sky", "wax-small-light", "fog-emitter"]:
             out = os.path.join(HERE, s)
             shutil.rmtree(out, ignore_errors=True)
-            rows = compare(os.path.join(SCENES, s + ".pbrt"), os.path.join(REFS, s + ".exr"), out, EQUAL_TIME, spp=1)
-            f = finals(rows)
+            c = pg_compare(os.path.join(SCENES, s + ".pbrt"), out, spp=1)
+            commands.append(c.command)
+            entry = results.setdefault("compare", {}).setdefault(s, {"command": c.command})
             for integ in ["volpath", "pathgraph"]:
-                a, t = f[(integ, "equal-spp")], f[(integ, "equal-time")]
-                mean = 100 * (float(t["mean"]) / float(t["mean_reference"]) - 1)
-                md.append(f"| {s} | {integ} | {float(a['relmse']):.3g} | {float(a['seconds']):.3f} s | "
-                          f"{t['spp']} | {float(t['relmse']):.3g} | {float(t['mpe']):.2e} | "
-                          f"{float(t['mne']):.2e} | {mean:+.2f}% |")
-                results.setdefault("compare", {}).setdefault(s, {})[integ] = {"equal_spp": a, "equal_time": t}
-            vp = float(f[("volpath", "equal-time")]["relmse"])
-            pg = float(f[("pathgraph", "equal-time")]["relmse"])
-            results["compare"][s]["equal_time_relmse_ratio"] = vp / pg
+                a_s, t_s = c.summary(integ, "equal-spp"), c.summary(integ, "equal-time")
+                md.append(f"| {s} | {integ} | {pm(c.error(integ, 'equal-spp'))} | {pm(a_s['seconds'], '{:.3f}')} s | "
+                          f"{pm(t_s['spp'], '{:.0f}')} | {pm(c.error(integ, 'equal-time'))} | "
+                          f"{pm(c.error(integ, 'equal-time', 'mpe'), '{:.2e}')} | "
+                          f"{pm(c.error(integ, 'equal-time', 'mne'), '{:.2e}')} | {bias_text(c, integ, 'equal-time')} |")
+                entry[integ] = {"equal_spp": a_s, "equal_time": t_s}
+            entry["equal_spp_relmse_ratio"] = c.ratio("pathgraph", "equal-spp")
+            entry["equal_time_relmse_ratio"] = c.ratio("pathgraph", "equal-time")
+            entry["time_to_equal_relmse"] = c.speedup("pathgraph", "equal-time")
         md.append("")
-        md.append("Equal-time relMSE ratio volpath : pathgraph — " + ", ".join(
-            f"{s} {results['compare'][s]['equal_time_relmse_ratio']:.1f}×" for s in results["compare"]) + ".")
-        md.append("")
+        md.append("relMSE ratio volpath : pathgraph at 1 spp — " + ", ".join(
+            f"{s} {pm(results['compare'][s]['equal_spp_relmse_ratio'], '{:.1f}', '×')}" for s in results["compare"])
+            + f"; at {EQUAL_TIME} s — " + ", ".join(
+            f"{s} {pm(results['compare'][s]['equal_time_relmse_ratio'], '{:.1f}', '×')}" for s in results["compare"])
+            + f"; time volpath needs to reach pathgraph's error at {EQUAL_TIME} s, over {EQUAL_TIME} s — " + ", ".join(
+            f"{s} {pm(results['compare'][s]['time_to_equal_relmse'], '{:.1f}', '×')}" for s in results["compare"])
+            + ". The commands:")
+        md += ["", "```sh"] + commands + ["```", ""]
 
         # 2. Fig. 6: the crossing point on the cloud.
-        out = os.path.join(work, "fig6")
-        rows = compare(os.path.join(SCENES, "cloud-sun-sky.pbrt"), os.path.join(REFS, "cloud-sun-sky.exr"),
-                       out, 60)
+        c = pg_compare(os.path.join(SCENES, "cloud-sun-sky.pbrt"), os.path.join(work, "fig6"), time_s=60, seeds=1,
+                       keep_images=False)
         series = {}
-        for r in rows:
-            if r["mode"] == "equal-time":
-                series.setdefault(r["integrator"], []).append(
-                    (int(r["spp"]), float(r["seconds"]), float(r["relmse"])))
+        for integ in ["volpath", "pathgraph"]:
+            for r in c.runs(integ, "equal-time"):
+                series[integ] = [(p["spp"], p["seconds"], (p["error_noise_removed"] or p["error"])["relmse"])
+                                 for p in r["checkpoints"]]
         fig, axes = plt.subplots(1, 2, figsize=(10, 4))
         for integ, pts in series.items():
+            pts = [p for p in pts if p[2] > 0]
             axes[0].loglog([p[0] for p in pts], [p[2] for p in pts], "o-", ms=3, label=integ)
             axes[1].loglog([p[1] for p in pts], [p[2] for p in pts], "o-", ms=3, label=integ)
         axes[0].set_xlabel("samples per pixel")
         axes[1].set_xlabel("seconds (2 threads)")
         for ax in axes:
-            ax.set_ylabel("relMSE against the 2048-spp reference")
+            ax.set_ylabel(f"relMSE, reference ({ref_spp('cloud')} spp) noise removed")
             ax.grid(True, which="both", alpha=0.3)
             ax.legend()
         fig.suptitle("cloud-sun-sky: path tracing against path graphs (paper Fig. 6)")
         fig.tight_layout()
         fig.savefig(os.path.join(HERE, "fig6-error-vs-spp-and-time.png"), dpi=110)
         plt.close(fig)
-
-        def crossing(key):
-            # First point of volpath at or below pathgraph's error at the same spp or time,
-            # by log-linear interpolation of pathgraph's curve.
-            pg = series["pathgraph"]
-            for p in series["volpath"]:
-                x = p[key]
-                below = [q for q in pg if q[key] <= x]
-                if not below:
-                    continue
-                if p[2] <= below[-1][2]:
-                    return x
-            return None
-
-        cross_spp, cross_time = crossing(0), crossing(1)
-        results["fig6"] = {"series": series, "crossing_spp": cross_spp, "crossing_seconds": cross_time}
+        equal = c.summary("pathgraph", "equal-time")["time_to_equal_error"]["relmse"]
+        cross_time = equal["baseline_seconds"]["mean"] if equal["baseline_seconds"] else None
+        results["fig6"] = {"command": c.command, "series": series, "time_to_equal_error": equal}
+        last = series["pathgraph"][-1]
         md += ["## Where path tracing catches up (paper Fig. 6)", "",
-               f"Cloud, 60 s each. pathgraph's relMSE stops falling at its bias "
-               f"(last: {series['pathgraph'][-1][2]:.2e} at {series['pathgraph'][-1][0]} spp); volpath's error "
-               f"falls below it at {cross_spp} spp (equal spp) and after {cross_time} s (equal time)"
-               if cross_spp else "Cloud, 60 s each: volpath does not catch up within 60 s.", ""]
+               f"Cloud, 60 s each, one seed (`{c.command}`). pathgraph's relMSE stops falling at its bias "
+               f"(last: {last[2]:.2e} at {last[0]} spp); volpath reaches that error after {cross_time:.0f} s"
+               + (" (extrapolated from its 60-s curve at the unbiased 1/t rate)" if equal["extrapolated"] else "")
+               if cross_time else "Cloud, 60 s each: no time to equal error.", ""]
         md.append("![relMSE against spp and time](fig6-error-vs-spp-and-time.png)")
         md.append("")
 
@@ -240,16 +224,15 @@ def main():
                 img = os.path.join(work, "k.exr")
                 t, stats = render(sc, img, 16)
                 d = diff(img, ref)
-                mses = []
-                for seed in ["3", "4", "5"]:
-                    out = os.path.join(work, "k-cmp")
-                    run(["compare", sc, "--integrators", "pathgraph", "--reference", ref, "--time", str(EQUAL_TIME),
-                         "--seed", seed, "--nthreads", THREADS, "--out", out, "--quiet"])
-                    f = finals(list(csv.DictReader(open(os.path.join(out, "results.csv")))))
-                    mses.append(float(f[("pathgraph", "equal-time")]["mse"]))
-                    shutil.rmtree(out)
+                out = os.path.join(work, "k-cmp")
+                # Seeds 3-5 (seed 1 renders the 16-spp image), against the scene's reference halves
+                # (section 1 rendered them; the variant differs only in its integrator).
+                kc = compare(sc, ["pathgraph"], out, time=EQUAL_TIME, seeds=3, seed=3,
+                             reference=halves(s), keep_images=False)
+                shutil.rmtree(out)
                 os.remove(sc)
-                kstudy.setdefault(s, []).append((k, d["relMSE"], d["mean_pct"], t / 16, sum(mses) / len(mses)))
+                kstudy.setdefault(s, []).append((k, d["relMSE"], d["mean_pct"], t / 16,
+                                                 kc.error("pathgraph", "equal-time", "mse")["mean"]))
         results["k_study"] = kstudy
         fig, axes = plt.subplots(1, 4, figsize=(17, 4))
         for s, pts in kstudy.items():
@@ -291,59 +274,53 @@ def main():
                             [(r'"float g" \[ 0.7 \]', '"float g" [ 0.95 ]')]),
             "surfaces": ("surfaces only (small-light-room)", os.path.join(SCENES, "small-light-room.pbrt"), []),
         }
-        md += ["## Where it fails", "", f"| case | integrator | spp in {EQUAL_TIME} s | relMSE | MPE | MNE | mean vs ref |",
-               "|---|---|--:|--:|--:|--:|--:|"]
+        md += ["## Where it fails", "", f"| case | integrator | spp in {EQUAL_TIME} s | relMSE | MPE | MNE | "
+               "mean vs ref (z) |", "|---|---|--:|--:|--:|--:|--:|"]
         for name, (what, src, subs) in cases.items():
+            # The variant lives beside the scenes (its references are cached beside it, and
+            # removed with it at the end) so that relative paths in it resolve.
             sc = os.path.join(SCENES, f"_pg_{name}.pbrt")
             if subs:
                 variant(src, sc, subs)
-                ref = os.path.join(work, f"{name}-ref.exr")
-                run(["render", sc, "--spp", "2048", "--seed", "7", "--outfile", ref, "--quiet",
-                     "--nthreads", THREADS])
             else:
                 shutil.copy(src, sc)
-                ref = os.path.join(REFS, os.path.basename(src).replace(".pbrt", ".exr"))
             out = os.path.join(HERE, f"failure-{name}")
             shutil.rmtree(out, ignore_errors=True)
-            rows = compare(sc, ref, out, EQUAL_TIME)
+            c = pg_compare(sc, out, reference_spp=REF_SPP // 2)
             os.remove(sc)
-            f = finals(rows)
             for integ in ["volpath", "pathgraph"]:
-                t = f[(integ, "equal-time")]
-                mean = 100 * (float(t["mean"]) / float(t["mean_reference"]) - 1)
-                md.append(f"| {what} | {integ} | {t['spp']} | {float(t['relmse']):.3g} | {float(t['mpe']):.2e} | "
-                          f"{float(t['mne']):.2e} | {mean:+.2f}% |")
+                t = c.summary(integ, "equal-time")
+                md.append(f"| {what} | {integ} | {pm(t['spp'], '{:.0f}')} | {pm(c.error(integ, 'equal-time'))} | "
+                          f"{pm(c.error(integ, 'equal-time', 'mpe'), '{:.2e}')} | "
+                          f"{pm(c.error(integ, 'equal-time', 'mne'), '{:.2e}')} | {bias_text(c, integ, 'equal-time')} |")
                 results.setdefault("failures", {}).setdefault(name, {})[integ] = t
         md.append("")
 
         # 6. Every pbrt-scenes scene at equal time, three seeds (one seed's MSE ratio varies by
         # about 10 %).
-        seeds = ["1", "2", "3"]
         md += [f"## Every pbrt-scenes scene at equal time ({EQUAL_TIME} s)", "",
-               f"Means over seeds {', '.join(seeds)}.", "",
+               f"{SEEDS} seeds each, mean ± standard error; MSE with the reference's noise removed.", "",
                "| scene | volpath spp | volpath MSE | pathgraph spp | pathgraph MSE | MSE ratio volpath : pathgraph | "
-               "pathgraph mean vs ref |", "|---|--:|--:|--:|--:|--:|--:|"]
+               "pathgraph mean vs ref (z) |", "|---|--:|--:|--:|--:|--:|--:|"]
         for f in sorted(os.listdir(SCENES)):
             if not f.endswith(".pbrt") or f.startswith("_") or f == "default.pbrt":
                 continue
             s = f[:-5]
-            acc = {"volpath": [], "pathgraph": []}
-            for seed in seeds:
-                out = os.path.join(work, "all-" + s)
-                fin = finals(compare(os.path.join(SCENES, f), os.path.join(REFS, s + ".exr"), out, EQUAL_TIME,
-                                     seed=seed))
-                shutil.rmtree(out)
-                for integ in acc:
-                    acc[integ].append(fin[(integ, "equal-time")])
-            avg = {integ: {key: sum(float(r[key]) for r in rows) / len(rows) for key in ["spp", "mse", "mean",
-                                                                                          "mean_reference"]}
-                   for integ, rows in acc.items()}
-            v, g = avg["volpath"], avg["pathgraph"]
-            mean = 100 * (g["mean"] / g["mean_reference"] - 1)
-            ratio = v["mse"] / g["mse"]
-            results.setdefault("all_scenes", {})[s] = {"volpath": v, "pathgraph": g, "mse_ratio": ratio}
-            md.append(f"| {s} | {v['spp']:.0f} | {v['mse']:.3g} | {g['spp']:.0f} | {g['mse']:.3g} | "
-                      f"{ratio:.2f}× | {mean:+.2f}% |")
+            out = os.path.join(work, "all-" + s)
+            c = pg_compare(os.path.join(SCENES, f), out, keep_images=False)
+            shutil.rmtree(out)
+            v, g = c.summary("volpath", "equal-time"), c.summary("pathgraph", "equal-time")
+            mse = {i: c.error(i, "equal-time", "mse") for i in ["volpath", "pathgraph"]}
+            ratios = [rv["final"]["error_noise_removed"]["mse"] / rg["final"]["error_noise_removed"]["mse"]
+                      for rv, rg in zip(c.runs("volpath", "equal-time"), c.runs("pathgraph", "equal-time"))]
+            n = len(ratios)
+            mean_ratio = sum(ratios) / n
+            se = (sum((r - mean_ratio) ** 2 for r in ratios) / (n - 1) / n) ** 0.5 if n > 1 else None
+            ratio = {"mean": mean_ratio, "standard_error": se, "n": n}
+            results.setdefault("all_scenes", {})[s] = {"volpath": v, "pathgraph": g, "mse_ratio": ratio,
+                                                       "command": c.command}
+            md.append(f"| {s} | {pm(v['spp'], '{:.0f}')} | {pm(mse['volpath'])} | {pm(g['spp'], '{:.0f}')} | "
+                      f"{pm(mse['pathgraph'])} | {pm(ratio, '{:.2f}', '×')} | {bias_text(c, 'pathgraph', 'equal-time')} |")
         md.append("")
     finally:
         shutil.rmtree(work, ignore_errors=True)

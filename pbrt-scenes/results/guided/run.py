@@ -6,31 +6,33 @@ machine (timings are 2 threads):
 
     python3 pbrt-scenes/results/guided/run.py
 
-1. Equal time (EQUAL_TIME s, training included) and equal spp (64) with `nimbus compare` on the
-   paper's Candle case (wax-small-light: forward-scattering milk in a glass sphere, small light),
-   an isotropic medium in the same glass (g = 0: MIS mode), and a cloud (cloud-sun-sky: not
-   guided by default, and guided everywhere with `refractedshare 0`), and the dense cloud of
-   pbrt-scenes/pbrt-v4-references (grid-cloud) guided everywhere: folders <case>/.
-   The candle again at the issue's 60-s budget (LONG_TIME), against a volpath reference of two
-   LONG_REF_SPP halves rendered here (cached in the temporary folder), with the reference's own
-   noise taken out as well: folder candle-60s/.
+Every comparison is one `nimbus compare` (pbrt-scenes/results/nimbus_compare.py) against a
+volpath reference rendered as two independent halves (cached beside the scene) whose own noise
+is removed from the errors; the ratios (sections 1 and 6) over SEEDS seeds, mean ± standard
+error, the sweeps (2-5) over one.
+
+1. Equal time (EQUAL_TIME s, training included) and equal spp (64) on the paper's Candle case
+   (wax-small-light: forward-scattering milk in a glass sphere, small light), an isotropic
+   medium in the same glass (g = 0: MIS mode), and a cloud (cloud-sun-sky: not guided by
+   default, and guided everywhere with `refractedshare 0`), and the dense cloud of
+   pbrt-scenes/pbrt-v4-references (grid-cloud, against pbrt-v4's own image) guided
+   everywhere: folders <case>/. The candle at the issue's 60-s budget (LONG_TIME) is the
+   README's headline command (pbrt-scenes/results/headlines/guided-candle/); here a 7-round
+   guide at that budget is set beside it.
 2. The paper's Fig. 16: MIS vs RIS vs selective, equal time, as a sweep of g in the glass.
 3. The paper's Fig. 18: error against the number of candidates M at equal spp and equal time.
 4. The paper's Fig. 19: error against training iterations at equal spp (render time), with the
    training time.
 5. The paper's Fig. 20: the glass made rough (roughness 0.01, 0.1, 0.5), equal time.
 6. Every pbrt-scenes scene at equal time: the "never more than 10 % worse" table.
-Writes results.md and results.json beside this script. References: the shipped ones
-(pbrt-scenes/references) or volpath at REF_SPP rendered here for the variants (seed 7).
+Writes results.md and results.json beside this script. References: volpath at CASE_REF_SPP
+(32768 for the candle) for the scenes and REF_SPP for the sweeps' variants, each in two halves.
 """
 
-import csv
-import hashlib
 import json
 import os
 import re
 import shutil
-import subprocess
 import sys
 import tempfile
 
@@ -40,36 +42,20 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-ROOT = os.path.abspath(os.path.join(HERE, "..", "..", ".."))
-NIMBUS = os.path.join(ROOT, "target", "release", "nimbus")
-SCENES = os.path.join(ROOT, "pbrt-scenes")
-REFS = os.path.join(SCENES, "references")
-THREADS = "2"
+sys.path.insert(0, os.path.join(HERE, ".."))
+import nimbus_compare  # noqa: E402
+from nimbus_compare import NIMBUS, SCENES, THREADS, pm, run, variant  # noqa: E402
+
 SEED = "1"
+SEEDS = 3
 EQUAL_TIME = 8.0
+# References, each in two halves: the pbrt-scenes scenes' (cached beside them and shared with
+# the pathgraph results) and the sweeps' variants'.
+CASE_REF_SPP = 4096
+WAX_REF_SPP = 32768
 REF_SPP = 1024
-# The issue's budget, on the candle, against a reference of LONG_REF_SPP (at 60 s the shipped
-# 4096-spp reference's own noise is about 40 % of volpath's measured error).
+# The issue's budget, on the candle.
 LONG_TIME = 60.0
-LONG_REF_SPP = 16384
-LONG_REF_SEEDS = (11, 12)
-
-
-def run(args):
-    r = subprocess.run([NIMBUS] + args, capture_output=True, text=True)
-    if r.returncode != 0:
-        sys.exit(f"nimbus {' '.join(args)} failed:\n{r.stderr}")
-    return r.stdout
-
-
-def variant(src, dst, subs):
-    text = open(src).read()
-    for a, b in subs:
-        text, n = re.subn(a, b, text, flags=re.M)
-        if n == 0:
-            sys.exit(f"{src}: no match for {a}")
-    open(dst, "w").write(text)
-    return dst
 
 
 def guided(params=""):
@@ -78,51 +64,30 @@ def guided(params=""):
     return (r'^Integrator "volpath"', f'Integrator "guided" {params}')
 
 
-def reference(scene, out):
-    run(["render", scene, "--integrator", "volpath", "--spp", str(REF_SPP), "--seed", "7", "--outfile", out,
-         "--quiet", "--nthreads", THREADS])
-    return out
+def ref_spp(scene):
+    return WAX_REF_SPP if os.path.basename(scene).startswith("wax-small-light") else CASE_REF_SPP
 
 
-def long_reference(scene, seed):
-    """A volpath render of `scene` at LONG_REF_SPP with `seed`, kept in the system's temporary
-    folder (keyed by the scene's text) and reused by later runs: a 16384-spp half takes about
-    seven minutes, and volpath's images change only with a fix the parity tests would show."""
-    cache = os.path.join(tempfile.gettempdir(), "nimbus-guided-results-cache")
-    os.makedirs(cache, exist_ok=True)
-    key = hashlib.sha256(open(scene, "rb").read()).hexdigest()[:16]
-    out = os.path.join(cache, f"{key}-{LONG_REF_SPP}spp-seed{seed}.exr")
-    if not os.path.exists(out):
-        run(["render", scene, "--integrator", "volpath", "--spp", str(LONG_REF_SPP), "--seed", str(seed),
-             "--outfile", out + ".part.exr", "--quiet", "--nthreads", THREADS])
-        os.replace(out + ".part.exr", out)
-    return out
+def halves(scene):
+    """The cached reference halves of a pbrt-scenes scene (seed 1: 1001 and 1002)."""
+    stem = os.path.basename(scene)[:-5]
+    n = ref_spp(scene) // 2
+    return [os.path.join(SCENES, f"{stem}.volpath-{n}spp-seed{s}.exr") for s in (1001, 1002)]
 
 
-def diff_relmse(a, b):
-    return float(re.search(r"relMSE\s+([0-9.e+-]+)", run(["diff", a, b])).group(1))
+def compare(scene, out, integrators, time_s=None, spp=None, seeds=1, reference=None, reference_spp=None,
+            keep_images=True):
+    """`nimbus compare` against `reference` (a file or two halves) or a volpath reference of
+    `reference_spp` (default: REF_SPP) rendered in two halves beside `scene`."""
+    if reference is None and reference_spp is None:
+        reference_spp = REF_SPP
+    return nimbus_compare.compare(scene, integrators, out, time=time_s, spp=spp, seeds=seeds, seed=int(SEED),
+                                  reference=reference, reference_spp=reference_spp, keep_images=keep_images)
 
 
-def compare(scene, ref, out, integrators, time_s=None, spp=None, keep_images=True):
-    args = ["compare", scene, "--integrators", ",".join(integrators), "--reference", ref, "--seed", SEED,
-            "--nthreads", THREADS, "--out", out, "--quiet"]
-    if time_s:
-        args += ["--time", str(time_s)]
-    if spp:
-        args += ["--spp", str(spp)]
-    run(args)
-    rows = list(csv.DictReader(open(os.path.join(out, "results.csv"))))
-    for f in os.listdir(out):
-        if f.endswith(".exr"):
-            exr = os.path.join(out, f)
-            if keep_images:
-                run(["convert", exr, exr[:-4] + ".png"])
-            os.remove(exr)
-    return rows
-
-
-def finals(rows):
-    return {(r["integrator"], r["mode"]): r for r in rows if r["final"] == "true"}
+def err(c, integrator, mode, metric="relmse"):
+    """The final error's mean over the seeds (the reference's noise removed when it has halves)."""
+    return c.error(integrator, mode, metric)["mean"]
 
 
 def training(scene, work):
@@ -142,11 +107,12 @@ def main():
     work = tempfile.mkdtemp(prefix="nimbus-guided-")
     results = {}
     wax = os.path.join(SCENES, "wax-small-light.pbrt")
-    wax_ref = os.path.join(REFS, "wax-small-light.exr")
     md = ["# guided against volpath", "",
-          f"Generated by `run.py` (see its docstring); 2 threads, seed {SEED}; equal time is {EQUAL_TIME} s per "
+          f"Generated by `run.py` (see its docstring); 2 threads; equal time is {EQUAL_TIME} s per "
           "method counted from before the scene is built, so guided's training is inside it. relMSE as "
-          "`nimbus compare` defines it. Error ratios are volpath : guided (above 1: guided better).", ""]
+          "`nimbus compare` defines it, the reference's noise removed; sections 1 and 6 over "
+          f"{SEEDS} seeds (mean ± standard error), the sweeps over one (seed {SEED}). Error ratios are "
+          "volpath : guided (above 1: guided better).", ""]
     try:
         # 1. The three cases.
         iso = variant(wax, os.path.join(work, "iso.pbrt"),
@@ -158,85 +124,74 @@ def main():
         dense = variant(os.path.join(pbrt_refs, "scenes", "grid-cloud.pbrt"), os.path.join(work, "grid-cloud-all.pbrt"),
                         [guided('"float refractedshare" 0')])
         cases = [
-            ("candle", "milk (g 0.85) in glass, small light: the paper's Candle", wax, wax_ref),
+            ("candle", "milk (g 0.85) in glass, small light: the paper's Candle", wax, dict(reference_spp=WAX_REF_SPP)),
             ("isotropic", "isotropic milk (g 0) in glass, small light: MIS mode", iso,
-             reference(iso, os.path.join(work, "iso-ref.exr"))),
+             dict(reference_spp=2 * REF_SPP)),
             ("cloud", "cloud under sun and sky (not guided: 0 % refracted)", cloud,
-             os.path.join(REFS, "cloud-sun-sky.exr")),
+             dict(reference_spp=CASE_REF_SPP)),
+            # The variant differs only in its integrator: the cloud's reference halves are its.
             ("cloud-guided", "the same cloud guided everywhere (refractedshare 0)", cloud_all,
-             os.path.join(REFS, "cloud-sun-sky.exr")),
+             dict(reference=halves(cloud))),
             ("dense-cloud-guided", "pbrt-v4-references' grid-cloud (dense, g 0.6-0.7, sun) guided everywhere",
-             dense, os.path.join(pbrt_refs, "images", "grid-cloud.exr")),
+             dense, dict(reference=os.path.join(pbrt_refs, "images", "grid-cloud.exr"))),
         ]
         md += [f"## Equal time ({EQUAL_TIME} s) and equal spp (64)", "",
-               "| case | integrator | training | spp in time | relMSE (equal time) | MAE | mean vs ref | "
+               "dense-cloud-guided is measured against pbrt-v4's own image (one image: its noise stays in the "
+               "errors).", "",
+               "| case | integrator | training | spp in time | relMSE (equal time) | MAE | mean vs ref (z) | "
                "relMSE at 64 spp | time at 64 spp |",
                "|---|---|--:|--:|--:|--:|--:|--:|--:|"]
         results["cases"] = {}
         for name, what, scene, ref in cases:
             out = os.path.join(HERE, name)
             shutil.rmtree(out, ignore_errors=True)
-            rows = compare(scene, ref, out, ["volpath", "guided"], time_s=EQUAL_TIME, spp=64)
-            f = finals(rows)
+            c = compare(scene, out, ["volpath", "guided"], time_s=EQUAL_TIME, spp=64, seeds=SEEDS, **ref)
             t_train, photons, media = training(scene, work)
-            case = {"what": what, "training_seconds": t_train, "photons": photons, "media": media}
+            case = {"what": what, "command": c.command, "training_seconds": t_train, "photons": photons,
+                    "media": media}
             for integ in ["volpath", "guided"]:
-                t, s = f[(integ, "equal-time")], f[(integ, "equal-spp")]
-                mean = 100 * (float(t["mean"]) / float(t["mean_reference"]) - 1)
+                t, s_ = c.summary(integ, "equal-time"), c.summary(integ, "equal-spp")
+                b = c.bias(integ, "equal-time")
+                z = f" ({b['bias_z']:+.1f})" if b["bias_z"] is not None else ""
                 train = f"{t_train:.2f} s" if integ == "guided" else ""
-                md.append(f"| {name} | {integ} | {train} | {t['spp']} | {float(t['relmse']):.3g} | "
-                          f"{float(t['mae']):.3g} | {mean:+.2f}% | {float(s['relmse']):.3g} | "
-                          f"{float(s['seconds']):.2f} s |")
-                case[integ] = {"equal_time": t, "equal_spp": s}
-            et = float(f[("volpath", "equal-time")]["relmse"]) / float(f[("guided", "equal-time")]["relmse"])
-            es = float(f[("volpath", "equal-spp")]["relmse"]) / float(f[("guided", "equal-spp")]["relmse"])
-            case["ratio_equal_time"], case["ratio_equal_spp"] = et, es
+                md.append(f"| {name} | {integ} | {train} | {pm(t['spp'], '{:.0f}')} | "
+                          f"{pm(c.error(integ, 'equal-time'))} | {pm(c.error(integ, 'equal-time', 'mae'))} | "
+                          f"{100 * b['relative']:+.2f}%{z} | {pm(c.error(integ, 'equal-spp'))} | "
+                          f"{pm(s_['seconds'], '{:.2f}')} s |")
+                case[integ] = {"equal_time": t, "equal_spp": s_}
+            case["ratio_equal_time"] = c.ratio("guided", "equal-time")
+            case["ratio_equal_spp"] = c.ratio("guided", "equal-spp")
+            case["time_to_equal_relmse"] = c.speedup("guided", "equal-time")
             results["cases"][name] = case
         md.append("")
         for name, what, _, _ in cases:
             c = results["cases"][name]
-            md.append(f"- **{name}** ({what}; {c['media']}): relMSE ratio {c['ratio_equal_time']:.2f}× at equal "
-                      f"time, {c['ratio_equal_spp']:.2f}× at 64 spp; training {c['training_seconds']:.2f} s "
-                      f"({100 * c['training_seconds'] / EQUAL_TIME:.0f} % of the budget). Images and error "
-                      f"curves: [{name}/]({name}/results.md).")
+            md.append(f"- **{name}** ({what}; {c['media']}): relMSE ratio {pm(c['ratio_equal_time'], '{:.2f}', '×')} "
+                      f"at equal time (volpath needs {pm(c['time_to_equal_relmse'], '{:.2f}', '×')} the time to "
+                      f"reach guided's error), {pm(c['ratio_equal_spp'], '{:.2f}', '×')} at 64 spp; training "
+                      f"{c['training_seconds']:.2f} s ({100 * c['training_seconds'] / EQUAL_TIME:.0f} % of the "
+                      f"budget). `{c['command']}`; images and error curves: [{name}/]({name}/results.md).")
         md.append("")
 
-        # 1b. The candle at the issue's 60-s budget: guided's default 4 rounds and 7 (a better
-        # guide for 5 s more training), against a volpath reference of two
-        # independent halves; the reference's own remaining noise, a quarter of the halves'
-        # relMSE against each other, is taken out of each measured relMSE as well.
-        halves = [long_reference(wax, seed) for seed in LONG_REF_SEEDS]
-        parts = os.path.join(work, "long-ref-parts")
-        os.makedirs(parts)
-        for i, h in enumerate(halves):
-            shutil.copy(h, os.path.join(parts, f"half{i}.exr"))
-        long_ref = os.path.join(work, "wax-long-ref.exr")
-        run(["merge", parts, "--output", long_ref])
-        ref_noise = diff_relmse(halves[0], halves[1]) / 4.0
-        out = os.path.join(HERE, "candle-60s")
-        shutil.rmtree(out, ignore_errors=True)
-        f = finals(compare(wax, long_ref, out, ["volpath", "guided"], time_s=LONG_TIME))
-        seven = variant(wax, os.path.join(work, "wax-7-rounds.pbrt"), [guided('"integer trainingiterations" 7')])
-        f7 = finals(compare(seven, long_ref, os.path.join(work, "candle-60s-7"), ["guided"], time_s=LONG_TIME,
-                            keep_images=False))
-        vp = float(f[("volpath", "equal-time")]["relmse"])
-        long = {"volpath": f[("volpath", "equal-time")], "guided": f[("guided", "equal-time")],
-                "guided_7_rounds": f7[("guided", "equal-time")], "reference_noise_relmse": ref_noise}
-        results["candle_60s"] = long
+        # 1b. The candle at the issue's 60-s budget: the README's headline command measures
+        # guided with its default 4 rounds (pbrt-scenes/results/headlines/guided-candle/); a
+        # 7-round guide (a better guide for 5 s more training) is measured here against the same
+        # reference halves.
+        seven = variant(wax, os.path.join(SCENES, "_gd_wax-7-rounds.pbrt"),
+                        [guided('"integer trainingiterations" 7')])
+        c7 = compare(seven, os.path.join(work, "candle-60s-7"), ["guided"], time_s=LONG_TIME, seeds=SEEDS,
+                     reference=halves(wax), keep_images=False)
+        os.remove(seven)
+        headline = json.load(open(os.path.join(HERE, "..", "headlines", "headlines.json")))["guided-candle"]
+        results["candle_60s"] = {"guided_7_rounds": c7.summary("guided", "equal-time"), "command_7_rounds": c7.command,
+                                 "headline": headline}
         md += [f"## The candle at {LONG_TIME:.0f} s", "",
-               f"Against a volpath reference of 2 × {LONG_REF_SPP} spp (seeds {LONG_REF_SEEDS[0]} and "
-               f"{LONG_REF_SEEDS[1]}). Its own remaining noise, relMSE {ref_noise:.3g} (a quarter of the two "
-               "halves' relMSE against each other), is in every measured relMSE; the last two columns take it "
-               "out.", "",
-               "| integrator | training | spp in time | relMSE | volpath : it | relMSE − reference noise | "
-               "volpath : it |", "|---|---|--:|--:|--:|--:|--:|"]
-        for key, label, train in [("volpath", "volpath", ""), ("guided", "guided", "4 rounds (default)"),
-                                  ("guided_7_rounds", "guided", "7 rounds")]:
-            r = long[key]
-            e = float(r["relmse"])
-            md.append(f"| {label} | {train} | {r['spp']} | {e:.3g} | {vp / e:.2f}× | {e - ref_noise:.3g} | "
-                      f"{(vp - ref_noise) / (e - ref_noise):.2f}× |")
-        md.append("")
+               f"guided's default (4 rounds) against volpath, from the README's headline command "
+               "([../headlines/](../headlines/headlines.md)): " + "; ".join(
+                   f"{r['label']} {r['text']}" for r in headline["rows"]) + ".", "",
+               f"A 7-round guide over {SEEDS} seeds against the same reference halves (`{c7.command}`): "
+               f"relMSE {pm(c7.error('guided', 'equal-time'))}, {pm(c7.summary('guided', 'equal-time')['spp'], '{:.0f}')} "
+               "spp.", ""]
 
         # 2. Fig. 16: g sweep, MIS vs RIS vs selective.
         gs = [0.0, 0.3, 0.5, 0.7, 0.85, 0.95]
@@ -245,15 +200,14 @@ def main():
         sweep = {}
         for g in gs:
             base = variant(wax, os.path.join(work, f"g{g}.pbrt"), [(r'"float g" \[ 0.85 \]', f'"float g" [ {g} ]')])
-            ref = reference(base, os.path.join(work, f"g{g}-ref.exr"))
-            rows = compare(base, ref, os.path.join(work, f"g{g}-vp"), ["volpath"], time_s=EQUAL_TIME,
-                           keep_images=False)
-            sweep.setdefault("volpath", []).append((g, float(finals(rows)[("volpath", "equal-time")]["relmse"])))
+            c = compare(base, os.path.join(work, f"g{g}-vp"), ["volpath"], time_s=EQUAL_TIME, keep_images=False)
+            ref = c.results["reference"]["paths"]
+            sweep.setdefault("volpath", []).append((g, err(c, "volpath", "equal-time")))
             for label, params in modes:
                 sc = variant(base, os.path.join(work, f"g{g}-{label}.pbrt"), [guided(params)])
-                rows = compare(sc, ref, os.path.join(work, f"g{g}-{label}"), ["guided"], time_s=EQUAL_TIME,
-                               keep_images=False)
-                sweep.setdefault(label, []).append((g, float(finals(rows)[("guided", "equal-time")]["relmse"])))
+                c = compare(sc, os.path.join(work, f"g{g}-{label}"), ["guided"], time_s=EQUAL_TIME,
+                            reference=[os.path.join(nimbus_compare.ROOT, p) for p in ref], keep_images=False)
+                sweep.setdefault(label, []).append((g, err(c, "guided", "equal-time")))
         results["fig16_g_sweep"] = sweep
         fig, ax = plt.subplots(figsize=(6, 4))
         for label, pts in sweep.items():
@@ -279,13 +233,12 @@ def main():
         cand = {"equal spp (64)": [], f"equal time ({EQUAL_TIME} s)": []}
         for m in ms:
             sc = variant(wax, os.path.join(work, f"m{m}.pbrt"), [guided(f'"integer candidates" {m}')])
-            rows = compare(sc, wax_ref, os.path.join(work, f"m{m}"), ["guided"], time_s=EQUAL_TIME, spp=64,
-                           keep_images=False)
-            f = finals(rows)
-            cand["equal spp (64)"].append((m, float(f[("guided", "equal-spp")]["relmse"]),
-                                           float(f[("guided", "equal-spp")]["seconds"])))
-            cand[f"equal time ({EQUAL_TIME} s)"].append((m, float(f[("guided", "equal-time")]["relmse"]),
-                                                         float(f[("guided", "equal-time")]["spp"])))
+            c = compare(sc, os.path.join(work, f"m{m}"), ["guided"], time_s=EQUAL_TIME, spp=64,
+                        reference=halves(wax), keep_images=False)
+            cand["equal spp (64)"].append((m, err(c, "guided", "equal-spp"),
+                                           c.summary("guided", "equal-spp")["seconds"]["mean"]))
+            cand[f"equal time ({EQUAL_TIME} s)"].append((m, err(c, "guided", "equal-time"),
+                                                         c.summary("guided", "equal-time")["spp"]["mean"]))
         results["fig18_candidates"] = cand
         fig, axes = plt.subplots(1, 2, figsize=(10, 4))
         for ax, (label, pts) in zip(axes, cand.items()):
@@ -313,11 +266,13 @@ def main():
         fig19 = []
         for k in its:
             sc = variant(wax, os.path.join(work, f"it{k}.pbrt"), [guided(f'"integer trainingiterations" {k}')])
-            rows = compare(sc, wax_ref, os.path.join(work, f"it{k}"), ["guided"], spp=64, keep_images=False)
+            c = compare(sc, os.path.join(work, f"it{k}"), ["guided"], spp=64, reference=halves(wax),
+                        keep_images=False)
             t_train, photons, _ = training(sc, work)
-            fig19.append((k, float(finals(rows)[("guided", "equal-spp")]["relmse"]), t_train, photons))
+            fig19.append((k, err(c, "guided", "equal-spp"), t_train, photons))
         results["fig19_iterations"] = fig19
-        vp64 = float(results["cases"]["candle"]["volpath"]["equal_spp"]["relmse"])
+        candle = results["cases"]["candle"]["volpath"]["equal_spp"]
+        vp64 = (candle["error_noise_removed"] or candle["error"])["relmse"]["mean"]
         fig, ax = plt.subplots(figsize=(6, 4))
         ax.semilogy([p[0] for p in fig19], [p[1] for p in fig19], "o-", label="guided, 64 spp")
         ax.axhline(vp64, color="k", ls="--", lw=1, label="volpath, 64 spp")
@@ -345,11 +300,10 @@ def main():
         for r in [0.0, 0.01, 0.1, 0.5]:
             sc = variant(wax, os.path.join(work, f"r{r}.pbrt"),
                          [(r'"dielectric" "float eta" \[ 1.4 \]', f'"dielectric" "float eta" [ 1.4 ] "float roughness" [ {r} ]')])
-            ref = wax_ref if r == 0.0 else reference(sc, os.path.join(work, f"r{r}-ref.exr"))
-            rows = compare(sc, ref, os.path.join(work, f"r{r}"), ["volpath", "guided"], time_s=EQUAL_TIME,
-                           keep_images=False)
-            f = finals(rows)
-            v, g = float(f[("volpath", "equal-time")]["relmse"]), float(f[("guided", "equal-time")]["relmse"])
+            ref = dict(reference=halves(wax)) if r == 0.0 else dict(reference_spp=2 * REF_SPP)
+            c = compare(sc, os.path.join(work, f"r{r}"), ["volpath", "guided"], time_s=EQUAL_TIME, keep_images=False,
+                        **ref)
+            v, g = err(c, "volpath", "equal-time"), err(c, "guided", "equal-time")
             rough.append((r, v, g))
         results["fig20_roughness"] = rough
         fig, ax = plt.subplots(figsize=(6, 4))
@@ -372,21 +326,25 @@ def main():
 
         # 6. Every pbrt-scenes scene at equal time.
         md += [f"## Every pbrt-scenes scene at equal time ({EQUAL_TIME} s)", "",
+               f"{SEEDS} seeds, mean ± standard error.", "",
                "| scene | guided media | volpath relMSE | guided relMSE | ratio |", "|---|---|--:|--:|--:|"]
         allscenes = {}
         for s in sorted(f[:-5] for f in os.listdir(SCENES) if f.endswith(".pbrt") and f != "default.pbrt"):
             scene = os.path.join(SCENES, s + ".pbrt")
-            rows = compare(scene, os.path.join(REFS, s + ".exr"), os.path.join(work, "all-" + s),
-                           ["volpath", "guided"], time_s=EQUAL_TIME, keep_images=False)
-            f = finals(rows)
-            v, g = float(f[("volpath", "equal-time")]["relmse"]), float(f[("guided", "equal-time")]["relmse"])
+            c = compare(scene, os.path.join(work, "all-" + s), ["volpath", "guided"], time_s=EQUAL_TIME,
+                        seeds=SEEDS, reference_spp=ref_spp(scene), keep_images=False)
+            v, g = c.error("volpath", "equal-time"), c.error("guided", "equal-time")
+            ratio = c.ratio("guided", "equal-time")
             media = training(scene, work)[2]
-            allscenes[s] = {"volpath": v, "guided": g, "ratio": v / g, "media": media}
-            md.append(f"| {s} | {media} | {v:.3g} | {g:.3g} | {v / g:.2f}× |")
+            allscenes[s] = {"volpath": v, "guided": g, "ratio": ratio, "media": media, "command": c.command}
+            md.append(f"| {s} | {media} | {pm(v)} | {pm(g)} | {pm(ratio, '{:.2f}', '×')} |")
         results["all_scenes"] = allscenes
         md.append("")
     finally:
         shutil.rmtree(work, ignore_errors=True)
+        for f in os.listdir(SCENES):
+            if f.startswith("_gd_"):
+                os.remove(os.path.join(SCENES, f))
     open(os.path.join(HERE, "results.md"), "w").write("\n".join(md) + "\n")
     json.dump(results, open(os.path.join(HERE, "results.json"), "w"), indent=1)
 

@@ -178,7 +178,6 @@ impl Reference {
 
     /// `--reference-spp n`: two independent VolPath halves of ⌈n/2⌉ spp each, at seeds
     /// `seed` and `seed + 1`, each cached or rendered as [`Reference::cached_or_rendered`].
-    #[allow(clippy::too_many_arguments)]
     pub fn halves_cached_or_rendered(
         scene_path: &Path,
         stem: &str,

@@ -215,6 +215,72 @@ fn config_errors_name_the_json_path() {
     );
 }
 
+/// `nimbus compare --precomputed`: the graph is built once before the timed runs and every
+/// seed loads it (a second comparison loads the same file and renders the same images); a
+/// file no listed method reads, or one that two would each write, is refused before
+/// anything renders; `render --precomputed` with a method that prepares nothing says so.
+#[test]
+fn compare_reuses_one_graph_across_seeds() {
+    let dir = scratch_dir("radiancegraph-compare");
+    let scene = dir.join("cube.pbrt");
+    std::fs::write(&scene, cube_text(2.0, "radiancegraph", "")).unwrap();
+    std::fs::write(dir.join("cube.json"), SMALL_CONFIG).unwrap();
+    let (s, graph) = (scene.to_str().unwrap(), dir.join("cube.graph"));
+    let g = graph.to_str().unwrap();
+    let compare = |out: &str, integrators: &str| {
+        let out_dir = dir.join(out);
+        let o = out_dir.to_str().unwrap().to_string();
+        let args = ["compare", s, "--integrators", integrators, "--spp", "2", "--seeds", "2", "--seed", "1"];
+        let out = nimbus(&[&args[..], &["--reference-spp", "8", "--precomputed", g, "--out", &o, "--quiet"]].concat());
+        (out, out_dir)
+    };
+    let results = |dir: &std::path::Path| -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(dir.join("results.json")).unwrap()).unwrap()
+    };
+    let (out, first) = compare("first", "volpath,radiancegraph");
+    assert!(out.status.success() && graph.exists(), "{}", String::from_utf8_lossy(&out.stderr));
+    let json = results(&first);
+    assert_eq!(json["precomputed"]["integrator"], "radiancegraph");
+    assert!(json["precomputed"]["prepared_seconds"].as_f64().unwrap() > 0.0, "{json}");
+    let md = std::fs::read_to_string(first.join("results.md")).unwrap();
+    assert!(md.contains("radiancegraph read its preparation from") && md.contains("prepared once"), "{md}");
+    let (out, second) = compare("second", "volpath,radiancegraph");
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(results(&second)["precomputed"]["prepared_seconds"].is_null());
+    for image in ["radiancegraph.exr", "radiancegraph-seed2.exr"] {
+        let read = |d: &std::path::Path| nimbus::imageio::read_exr(&d.join(image)).unwrap().pixels;
+        assert_eq!(read(&first), read(&second), "{image}: the same graph, the same seed");
+    }
+    for (integrators, why) in [
+        ("volpath", "none of volpath prepares anything before rendering"),
+        ("guided,radiancegraph", "guided and radiancegraph each prepare their own"),
+    ] {
+        let (out, _) = compare("refused", integrators);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{err}");
+        assert!(err.contains(why), "{err}");
+    }
+    let img = dir.join("v.exr");
+    let out = nimbus(&[
+        "render",
+        s,
+        "--integrator",
+        "volpath",
+        "--spp",
+        "1",
+        "--precomputed",
+        g,
+        "--outfile",
+        img.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(
+        err.contains("volpath prepares nothing before rendering, so the file is neither read nor written"),
+        "{err}"
+    );
+}
+
 /// A scene outside the method's constraints is refused with every violated one named.
 #[test]
 fn constraints_are_checked_by_name() {

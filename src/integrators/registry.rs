@@ -117,6 +117,12 @@ pub trait MethodSettings: SettingsBox + std::fmt::Debug + Send + Sync + Any {
     /// Takes the files from outside the scene it reads (none by default).
     fn set_inputs(&mut self, _inputs: &MethodInputs<'_>) {}
 
+    /// Whether the method prepares something before rendering (a graph, a guide) that
+    /// `--precomputed` keeps in a file; methods that do not never read one.
+    fn prepares(&self) -> bool {
+        false
+    }
+
     /// Light selection for next-event estimation (pbrt-v4's default: the light BVH).
     fn light_sampler(&self) -> LightSamplerKind {
         LightSamplerKind::Bvh

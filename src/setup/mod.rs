@@ -63,6 +63,16 @@ fn integrator(
     warnings.extend(IntegratorSettings::substitution_note(&desc.integrator, opts.integrator.as_deref()));
     integrator
         .set_inputs(&MethodInputs { scene_file: opts.scene_file.as_deref(), precomputed: opts.precomputed.as_deref() });
+    if let Some(file) = opts.precomputed.as_deref().filter(|_| !integrator.prepares()) {
+        warnings.push(Warning {
+            loc: None,
+            message: format!(
+                "--precomputed {}: {} prepares nothing before rendering, so the file is neither read nor written",
+                file.display(),
+                integrator.method().name
+            ),
+        });
+    }
     if let Some(depth) = opts.max_depth {
         integrator.set_max_depth(depth).map_err(|m| Error::new(&desc.integrator.loc, m))?;
     }

@@ -258,6 +258,7 @@ mod tests {
             reference_noise: None,
             reference_mean_se: None,
             diff_scale: Vec::new(),
+            precomputed: None,
         };
         error_vs_time(&cmp, &dir.join("t")).unwrap();
         final_error_bars(&cmp, &dir.join("b")).unwrap();

@@ -79,6 +79,14 @@ pub struct CompareArgs {
     /// Print only the results table.
     #[arg(long)]
     quiet: bool,
+    /// What the one listed integrator that prepares before rendering (radiancegraph's graph,
+    /// guided's guide cache) prepared, as `nimbus render --precomputed` reads it: loaded when
+    /// the file exists (it must be this scene's), else prepared once before the timed runs
+    /// and saved there. Every run then loads it, so its time counts loading, not preparing,
+    /// and the seeds vary the render, not the preparation (e.g. frames of an orbit from one
+    /// graph).
+    #[arg(long, value_name = "FILE", visible_aliases = ["graph-data", "guide-cache"])]
+    precomputed: Option<PathBuf>,
     /// Also write one self-contained HTML page here: the reference, every image and its error
     /// side by side, a flip view (keys 0-9, e), synchronized zoom and pan, pixel values on
     /// hover, the error-vs-time chart and the table. It loads nothing from a network.
@@ -120,6 +128,19 @@ pub struct Comparison {
     pub summaries: Vec<stats::Summary>,
     /// Difference shown at full intensity in the error images, per mode.
     pub diff_scale: Vec<(Mode, f64)>,
+    /// `--precomputed`: which integrator read it, and how it was had.
+    pub precomputed: Option<Precomputed>,
+}
+
+/// `--precomputed`: the file one integrator's runs all loaded their preparation from.
+pub struct Precomputed {
+    /// The integrator that prepares.
+    pub integrator: String,
+    /// The file.
+    pub file: PathBuf,
+    /// Seconds preparing it took before the runs, when it was prepared now (`None`: it
+    /// existed and was loaded).
+    pub prepared_seconds: Option<f64>,
 }
 
 impl Comparison {
@@ -142,6 +163,30 @@ impl Comparison {
     /// The first seed, whose runs' images are the outputs' headline images.
     pub fn first_seed(&self) -> i32 {
         self.seeds[0]
+    }
+}
+
+/// The one integrator of `names` that prepares before rendering, for `--precomputed`.
+fn preparing_integrator(desc: &nimbus::parser::SceneDescription, names: &[String]) -> Result<String> {
+    let mut preparing = Vec::new();
+    for name in names {
+        let settings = nimbus::integrators::IntegratorSettings::from_entity(&desc.integrator, Some(name))
+            .map_err(|e| anyhow::anyhow!("{e}"))?;
+        if settings.prepares() {
+            preparing.push(name.as_str());
+        }
+    }
+    match preparing[..] {
+        [one] => Ok(one.to_string()),
+        [] => anyhow::bail!(
+            "--precomputed: none of {} prepares anything before rendering (radiancegraph's graph and \
+             guided's guide cache are what such a file holds)",
+            names.join(", ")
+        ),
+        _ => anyhow::bail!(
+            "--precomputed names one file, but {} each prepare their own: compare them in separate runs",
+            preparing.join(" and ")
+        ),
     }
 }
 
@@ -198,6 +243,8 @@ pub fn run(args: &CompareArgs) -> Result<ExitCode> {
                 .seed
         }
     };
+    // Before any rendering: a --precomputed that no listed method (or more than one) reads.
+    let preparing = args.precomputed.as_ref().map(|_| preparing_integrator(&desc, &names)).transpose()?;
     let seeds: Vec<i32> = (0..args.seeds as i32).map(|i| seed.wrapping_add(i)).collect();
     let stem = scene_stem(&args.scene);
     let out_dir = args.out.clone().unwrap_or_else(|| PathBuf::from(format!("compare-{stem}")));
@@ -230,6 +277,19 @@ pub fn run(args: &CompareArgs) -> Result<ExitCode> {
         say("reference: one image; its own noise is not removed from the errors (give two halves to remove it)".into());
     }
     std::fs::create_dir_all(&out_dir).with_context(|| format!("creating {}", out_dir.display()))?;
+    let precomputed = match (&args.precomputed, preparing) {
+        (Some(file), Some(integrator)) => {
+            let prepared_seconds = if file.exists() {
+                say(format!("{integrator}: every run loads {}", file.display()));
+                None
+            } else {
+                say(format!("{integrator}: preparing {} once, before the timed runs", file.display()));
+                Some(run::prepare_file(&desc, &args.scene, &integrator, file, seed)?)
+            };
+            Some(Precomputed { integrator, file: file.clone(), prepared_seconds })
+        }
+        _ => None,
+    };
 
     let mut runs = Vec::new();
     let mut warned = false;
@@ -252,6 +312,7 @@ pub fn run(args: &CompareArgs) -> Result<ExitCode> {
                     per_doubling: args.checkpoints,
                     reference: &reference,
                     print_warnings: !warned && !args.quiet,
+                    precomputed: precomputed.as_ref().filter(|p| p.integrator == *name).map(|p| p.file.as_path()),
                 };
                 let r = run::run_integrator(&setup)?;
                 warned = true;
@@ -297,6 +358,7 @@ pub fn run(args: &CompareArgs) -> Result<ExitCode> {
         reference_mean_se,
         summaries,
         diff_scale,
+        precomputed,
     };
     write_outputs(&cmp, &out_dir)?;
     if let Some(path) = &args.html {
@@ -379,7 +441,10 @@ fn html_report(cmp: &Comparison) -> html::HtmlReport {
                 report::seeds_what(cmp)
             ),
             report::LEGEND.to_string(),
-        ],
+        ]
+        .into_iter()
+        .chain(report::precomputed_what(cmp))
+        .collect(),
         reference: image(&cmp.reference.image),
         methods,
         charts,

@@ -156,6 +156,11 @@ pub fn json(cmp: &Comparison) -> String {
             "mean_standard_error": cmp.reference_mean_se,
             "reference_noise": cmp.reference_noise.as_ref().map(metrics_json),
         },
+        "precomputed": cmp.precomputed.as_ref().map(|p| json!({
+            "integrator": p.integrator,
+            "file": p.file.display().to_string(),
+            "prepared_seconds": p.prepared_seconds,
+        })),
         "difference_scale": cmp.diff_scale.iter().map(|(m, s)| (m.label().to_string(), json!(s))).collect::<Map<_, _>>(),
         "summaries": cmp.summaries.iter().map(summary_json).collect::<Vec<_>>(),
         "runs": runs,
@@ -266,7 +271,26 @@ pub fn markdown(cmp: &Comparison) -> String {
         let _ = writeln!(s, "| {} |", row.join(" | "));
     }
     let _ = writeln!(s, "\n{LEGEND}");
+    if let Some(note) = precomputed_what(cmp) {
+        let _ = writeln!(s, "\n{note}");
+    }
     s
+}
+
+/// `--precomputed`: what every run of the method that prepares loaded, and what that means
+/// for its times and its seeds.
+pub fn precomputed_what(cmp: &Comparison) -> Option<String> {
+    let p = cmp.precomputed.as_ref()?;
+    let how = match p.prepared_seconds {
+        Some(t) => format!("prepared once before the runs in {} s and saved there", crate::cli::plot::short(t)),
+        None => "loaded as it was".into(),
+    };
+    Some(format!(
+        "{} read its preparation from {} ({how}): its times count loading it, not preparing it, and its seeds \
+         vary the render, not the preparation.",
+        p.integrator,
+        p.file.display()
+    ))
 }
 
 /// How the reference was made: "two independent halves, 4096 spp in all, seeds [1000, 1001]",

@@ -312,6 +312,34 @@ pub struct RunSetup<'a> {
     pub reference: &'a Reference,
     /// Print the scene's warnings.
     pub print_warnings: bool,
+    /// `--precomputed`, for the integrator that reads it: its preparation is loaded from there.
+    pub precomputed: Option<&'a Path>,
+}
+
+/// `--precomputed FILE` for `integrator` when the file does not exist yet: the method
+/// prepares (trains, builds its graph) once at `seed` and saves it there, before any timed
+/// run, so that every run then loads the same file in the same time. The seconds it took.
+pub fn prepare_file(
+    desc: &SceneDescription,
+    scene_file: &Path,
+    integrator: &str,
+    file: &Path,
+    seed: i32,
+) -> Result<f64> {
+    if let Some(dir) = file.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    }
+    let opts = BuildOptions {
+        integrator: Some(integrator.into()),
+        scene_file: Some(scene_file.to_path_buf()),
+        seed: Some(seed),
+        precomputed: Some(file.to_path_buf()),
+        ..Default::default()
+    };
+    let setup = nimbus::setup::build(desc, &opts).map_err(scene_error)?;
+    let prepared = setup.prepare().map_err(anyhow::Error::msg)?;
+    anyhow::ensure!(file.exists(), "{integrator} prepared, but wrote no {}", file.display());
+    Ok(prepared.seconds)
 }
 
 /// Builds the scene for the integrator and renders it, measuring the error against the
@@ -329,6 +357,7 @@ pub fn run_integrator(s: &RunSetup<'_>) -> Result<Run> {
         scene_file: Some(s.scene_file.to_path_buf()),
         spp,
         seed: Some(s.seed),
+        precomputed: s.precomputed.map(Path::to_path_buf),
         ..Default::default()
     };
     let setup = nimbus::setup::build(s.desc, &opts).map_err(scene_error)?;

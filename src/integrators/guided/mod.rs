@@ -50,6 +50,10 @@ impl MethodSettings for GuidedSettings {
         Ok(())
     }
 
+    fn prepares(&self) -> bool {
+        true
+    }
+
     /// The precomputed file is the guide cache: loaded when it matches, trained and saved
     /// when it is missing.
     fn set_inputs(&mut self, inputs: &MethodInputs<'_>) {

@@ -50,6 +50,10 @@ impl MethodSettings for RadianceGraphSettings {
         ))
     }
 
+    fn prepares(&self) -> bool {
+        true
+    }
+
     /// The precomputed file is a graph (`nimbus graph build` writes them): loaded when it
     /// exists, else built and saved there. The graph is built with the scene's config,
     /// graph_maker's default: the scene's name with `.json`.

@@ -222,6 +222,30 @@ Shape "trianglemesh" "integer indices" [0 1 2 0 2 3] "point3 P" [-0.8 1.8 2  0.8
     assert!(spread(&a) < spread(&b), "portal {} vs sky {}", spread(&a), spread(&b));
 }
 
+/// A portal light's `L` may be any spectrum: pbrt-v4 turns it into the sRGB of its XYZ for
+/// the 1×1 image a portal light needs, and says so; nimbus does both, `check` as `render`.
+#[test]
+fn portal_lights_take_any_spectrum_with_pbrt_v4s_warning() {
+    let text = r#"LookAt 0 3 6  0 0 0  0 1 0
+Camera "perspective"
+Film "rgb" "integer xresolution" 8 "integer yresolution" 8
+Sampler "independent" "integer pixelsamples" 4
+WorldBegin
+LightSource "infinite" "blackbody L" [5000] "point3 portal" [-1 0 2  -1 1 2  1 1 2  1 0 2]
+Shape "sphere"
+"#;
+    let desc = nimbus::parser::load_str(text, "s.pbrt").unwrap();
+    let setup = nimbus::setup::build(&desc, &BuildOptions::default()).expect("a blackbody portal light renders");
+    let warned = |w: &[nimbus::parser::Warning]| {
+        w.iter().any(|w| {
+            w.message.contains("Converting non-RGB \"L\" parameter to RGB") && w.to_string().starts_with("s.pbrt:6:")
+        })
+    };
+    assert!(warned(&setup.scene.warnings), "{:?}", setup.scene.warnings);
+    assert!(render_scene(&setup).mean().x > 0.0);
+    nimbus::setup::check_scene(&desc).expect("check passes it too");
+}
+
 /// A portal is four corners of a rectangle: another count, or corners that are not at right
 /// angles, is refused at the `portal` parameter, by `check` as by rendering.
 #[test]
@@ -281,6 +305,50 @@ AttributeEnd
     );
     let ((a, va), (b, vb)) = (mean_and_variance(&seed_renders(&cut)), mean_and_variance(&seed_renders(&squares)));
     assert!(a > 0.0 && (a - b).abs() <= 4.0 * (va + vb).sqrt() + 1e-3 * b, "cut {a} ± {va}, squares {b} ± {vb}");
+}
+
+/// pbrt-v4's invisible area light: a shape of constant alpha 0 (a value or a `constant`
+/// texture) is never hit by any ray, yet its light emits unmasked and is sampled without MIS.
+/// The room it lights (the light out of view) renders as with the same light visible; looking
+/// at it, the camera sees through it to the black world behind.
+#[test]
+fn alpha_zero_area_lights_are_invisible_but_emit() {
+    let scene = |camera: &str, alpha: &str| {
+        format!(
+            r#"{camera}
+Camera "perspective" "float fov" 40
+Sampler "zsobol" "integer pixelsamples" 16
+Integrator "volpath" "integer maxdepth" 3
+Film "rgb" "integer xresolution" 32 "integer yresolution" 24
+WorldBegin
+Texture "zero" "float" "constant" "float value" 0
+Material "diffuse" "rgb reflectance" [0.5 0.5 0.5]
+Shape "trianglemesh" "integer indices" [0 1 2 0 2 3] "point3 P" [-3 0 -3  3 0 -3  3 0 3  -3 0 3]
+Shape "sphere" "float radius" 0.3
+AttributeBegin
+  AreaLightSource "diffuse" "rgb L" [4 4 4] "bool twosided" true
+  Material "diffuse" "rgb reflectance" [0 0 0]
+  Shape "trianglemesh" "integer indices" [0 1 2 0 2 3] "point3 P" [-1 1.5 -1  1 1.5 -1  1 1.5 1  -1 1.5 1] {alpha}
+AttributeEnd
+"#
+        )
+    };
+    // From below the light, looking down at the floor: the light is out of view.
+    let room = "LookAt 0 1.2 -2.5  0 0 0  0 1 0";
+    let visible = mean_and_variance(&seed_renders(&scene(room, "")));
+    for alpha in [r#""float alpha" 0"#, r#""texture alpha" "zero""#] {
+        let invisible = mean_and_variance(&seed_renders(&scene(room, alpha)));
+        let ((a, va), (b, vb)) = (invisible, visible);
+        assert!(
+            a > 0.0 && (a - b).abs() <= 4.0 * (va + vb).sqrt() + 1e-3 * b,
+            "{alpha}: {a} ± {va}, visible {b} ± {vb}"
+        );
+    }
+    // From the floor, looking up at the light's emitting side with nothing else in view.
+    let up = "LookAt 0 0.5 0  0 1.5 0  0 0 1";
+    let seen = |alpha: &str| render_scene(&load_scene(&scene(up, alpha), &BuildOptions::default())).mean();
+    assert!(seen("")[0] > 1.0, "the visible light fills the view");
+    assert_eq!(seen(r#""float alpha" 0"#).to_array(), [0.0; 3], "the invisible light is seen through");
 }
 
 /// `text` rendered at seeds 1–4: each image's pixels as R + G + B.

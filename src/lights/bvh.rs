@@ -541,6 +541,7 @@ mod tests {
                         area,
                         interface: NONE,
                         alpha: NONE,
+                        invisible: false,
                     }
                 }
             };
@@ -607,6 +608,7 @@ mod tests {
                 area: 0.5,
                 interface: NONE,
                 alpha: NONE,
+                invisible: false,
             },
             medium: NONE,
         };

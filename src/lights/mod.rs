@@ -105,6 +105,10 @@ pub enum LightKind {
         /// The shape's alpha texture (index into [`Surfaces::alphas`]), or
         /// [`crate::accel::NONE`]: pbrt-v4 masks the emission where the alpha test fails.
         alpha: u32,
+        /// The shape has a constant alpha of 0: pbrt-v4's invisible area light. No ray ever
+        /// hits its shape, yet it emits unmasked, and light sampling is its only strategy, so
+        /// its samples take no MIS weight (pbrt-v4 makes it a `DeltaPosition` light for this).
+        invisible: bool,
     },
 }
 
@@ -137,7 +141,8 @@ pub struct LightSample<C = Rgb> {
     pub p: Vec3,
     /// Normal at `p` for area lights (zero otherwise).
     pub n: Vec3,
-    /// True for lights that cannot be hit by rays (point, spot, distant).
+    /// True for lights that cannot be hit by rays (point, spot, distant, an invisible area
+    /// light): no other strategy finds them, so the sample takes no MIS weight.
     pub delta: bool,
     /// True when `p` is at infinity (the shadow ray is unbounded).
     pub infinite: bool,
@@ -244,7 +249,7 @@ impl Light {
                 let (wi, pdf, l) = map.sample::<C>(ctx.p, u, lambda)?;
                 Some(infinite_sample(ctx, scene, wi, pdf, l))
             }
-            LightKind::Area { geometry, l, image, two_sided, alpha, .. } => {
+            LightKind::Area { geometry, l, image, two_sided, alpha, invisible, .. } => {
                 let s = match *geometry {
                     Geometry::Triangle { mesh, tri } => triangle_sample(&shapes.meshes[mesh as usize], tri, u),
                     Geometry::Sphere(i) => shapes.spheres[i as usize].sample(ctx.p, u)?,
@@ -282,7 +287,7 @@ impl Light {
                     return None;
                 }
                 let le = area_radiance(l, image.as_deref(), uv, lambda);
-                Some(LightSample { l: le, wi, pdf, p: s.p, n: s.n, delta: false, infinite: false })
+                Some(LightSample { l: le, wi, pdf, p: s.p, n: s.n, delta: *invisible, infinite: false })
             }
         }
     }

@@ -58,6 +58,17 @@ pub fn spectrum_illuminant_rgb(s: &Spectrum, film: ColorSpace) -> Rgb {
     rgb_color_space(film).rgb_from_xyz(s.film_xyz() / y).as_vec3()
 }
 
+/// pbrt-v4's `SpectrumToXYZ` of a spectrum given for a portal light's `L`, as sRGB: the
+/// RGB of the 1×1 image pbrt-v4 makes of it (Σ s(λ)·x̄ȳz̄(λ) / ∫ȳ, not normalised to luminance
+/// 1 as a light's spectrum otherwise is). Only for non-RGB spectra.
+pub fn srgb_of_spectrum(spec: &SpectrumSpec) -> Result<Rgb, SpectrumError> {
+    let xyz = match resolve(spec)? {
+        ResolvedSpectrum::Rgb(rgb) => rgb_color_space(ColorSpace::Srgb).xyz_from_rgb(rgb.as_dvec3()),
+        ResolvedSpectrum::Spectral(s) => s.film_xyz() / CIE_Y_INTEGRAL,
+    };
+    Ok(rgb_color_space(ColorSpace::Srgb).rgb_from_xyz(xyz).as_vec3())
+}
+
 /// pbrt-v4's `SpectrumToPhotometric` of a spectrum: Σ s(λ)ȳ(λ) over 360..=830 nm, the
 /// factor pbrt-v4 divides a light's `scale` by. For an `rgb` light it is that of the color
 /// space's illuminant alone, [`CIE_Y_INTEGRAL`].

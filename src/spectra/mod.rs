@@ -32,7 +32,7 @@ pub use conductor::{
 };
 pub use convert::{
     DIELECTRIC_ETA_WAVELENGTH, dielectric_eta, emission_rgb, illuminant_rgb, reflectance_rgb, spectrum_emission_rgb,
-    spectrum_illuminant_rgb, spectrum_reflectance_rgb, spectrum_to_photometric,
+    spectrum_illuminant_rgb, spectrum_reflectance_rgb, spectrum_to_photometric, srgb_of_spectrum,
 };
 pub use error::SpectrumError;
 pub use named::{is_named_spectrum, named_spectrum, named_spectrum_names};

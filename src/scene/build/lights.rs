@@ -63,15 +63,21 @@ pub(super) fn emission_image(
     Ok(Some(Arc::new(image)))
 }
 
+/// The light `l`, or `None` for one that emits nothing (pbrt-v4 warns of it, and so do we, in
+/// `warnings`, with every other conversion pbrt-v4 warns of).
 pub(super) fn light(
     l: &nimbus_parser::LightEntity,
     spectra: &SpectrumResolver<'_>,
     transport: Transport,
     medium: u32,
+    warnings: &mut Vec<Warning>,
 ) -> Result<Option<Light>, Error> {
     let e = &l.entity;
     let settings = LightSettings::from_entity(l)?;
-    let world = affine(&l.world_from_light.start, &e.loc)?;
+    let world = match settings.kind {
+        LightSpec::Infinite { .. } => direction_frame(&l.world_from_light.start, &e.loc)?,
+        _ => affine(&l.world_from_light.start, &e.loc)?,
+    };
     let rgb = |s: &SpectrumSpec| spectra.illuminant(s, e.color_space).map_err(|m| err(&e.loc, m.to_string()));
     let kind = match &settings.kind {
         LightSpec::Point { intensity, from, power } => {
@@ -84,6 +90,10 @@ pub(super) fn light(
         LightSpec::Goniometric { intensity, filename, power } => {
             let Some(path) = filename else {
                 // pbrt-v4 warns and the light emits nothing; nimbus says so and leaves it out.
+                warnings.push(Warning::new(
+                    &e.loc,
+                    "No \"filename\" parameter provided for goniometric light (it emits nothing).",
+                ));
                 return Ok(None);
             };
             let image = crate::lights::goniometric::GoniometricImage::read(path, &world)
@@ -144,7 +154,7 @@ pub(super) fn light(
         }
         LightSpec::Infinite { radiance, filename, illuminance, portal: Some(corners) } => {
             // pbrt-v4 renders `L` with a portal as a 1×1 image of its RGB.
-            let cs = e.color_space;
+            let mut cs = e.color_space;
             let image = match (radiance, filename) {
                 (_, Some(path)) => crate::imageio::read_image(path).map_err(|m| err(&e.loc, m))?,
                 (Some(SpectrumSpec::Rgb(c)), None) => {
@@ -152,12 +162,19 @@ pub(super) fn light(
                     image.pixels[0] = Rgb::from(*c);
                     image
                 }
-                (Some(_), None) => {
-                    return Err(err(
-                        &e.loc,
-                        "infinite light with a portal: give \"rgb L\" or an image (nimbus does not turn other spectra \
-                         into the RGB image pbrt-v4 makes of them)",
+                (Some(spec), None) => {
+                    // Any other spectrum becomes sRGB through its XYZ, as pbrt-v4 makes it (with
+                    // its warning): not normalised to 1 nit, as the same `L` without a portal is.
+                    let loc = e.params.loc("L").unwrap_or(&e.loc);
+                    let rgb = crate::spectra::srgb_of_spectrum(spec).map_err(|m| err(loc, m.to_string()))?;
+                    warnings.push(Warning::new(
+                        loc,
+                        "Converting non-RGB \"L\" parameter to RGB so that a portal light can be used.",
                     ));
+                    cs = nimbus_parser::ColorSpace::Srgb;
+                    let mut image = crate::imageio::Image::new(1, 1);
+                    image.pixels[0] = rgb;
+                    image
                 }
                 (None, None) => return Err(err(&e.loc, "infinite light without radiance or image")),
             };

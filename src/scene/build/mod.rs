@@ -137,6 +137,7 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions, needs: &SceneNe
     let mut tb = TextureBuilder {
         textures: Textures::default(),
         float_names: HashMap::new(),
+        float_constants: HashMap::new(),
         spectrum_names: HashMap::new(),
         spectra,
     };
@@ -168,6 +169,7 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions, needs: &SceneNe
 
     let Media { media, ids: media_ids, subsurface: subsurface_media } =
         build_media(desc, &used, &spectra, transport.transport, &subsurface)?;
+    old_spellings(desc, &mut warnings);
     let interfaces = std::cell::RefCell::new(Vec::<[u32; 2]>::new());
     let medium_id = |name: &Option<String>| name.as_deref().map_or(NONE, |n| media_ids.get(n).copied().unwrap_or(NONE));
     // A shape's boundary: its MediumInterface, with the inside replaced by the material's
@@ -231,12 +233,8 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions, needs: &SceneNe
     };
     for l in &desc.lights {
         let medium = l.medium.as_deref().map_or(NONE, |n| media_ids.get(n).copied().unwrap_or(NONE));
-        match light(l, &spectra, transport.transport, medium)? {
-            Some(light) => lights.push(light),
-            None => warnings.push(Warning::new(
-                &l.entity.loc,
-                "No \"filename\" parameter provided for goniometric light (it emits nothing).",
-            )),
+        if let Some(light) = light(l, &spectra, transport.transport, medium, &mut warnings)? {
+            lights.push(light);
         }
     }
     let infinite_lights = lights.iter().enumerate().filter(|(_, l)| l.is_infinite()).map(|(i, _)| i as u32).collect();
@@ -278,4 +276,20 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions, needs: &SceneNe
         },
         warnings,
     })
+}
+
+/// Parameters published scenes spell as an older pbrt-v4 did, which nimbus reads under their
+/// new names: one note per spelling, at its first use.
+fn old_spellings(desc: &SceneDescription, warnings: &mut Vec<Warning>) {
+    let old = desc
+        .media
+        .iter()
+        .find(|m| m.entity.params.peek("LeScale").is_some() && m.entity.params.peek("Lescale").is_none());
+    if let Some(m) = old {
+        let loc = m.entity.params.loc("LeScale").unwrap_or(&m.entity.loc);
+        warnings.push(Warning::new(
+            loc,
+            "\"LeScale\" is read as \"Lescale\", as pbrt-v4 spells it now (noted once for the scene)",
+        ));
+    }
 }

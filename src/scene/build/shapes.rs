@@ -32,6 +32,7 @@ impl ShapeBuilder<'_> {
     ) -> Result<(), Error> {
         let e = &shape.entity;
         let settings = ShapeSettings::from_entity(shape)?;
+        let shape_settings = &settings;
         let rev = shape.reverse_orientation;
         let material = (self.material_ids)(&shape.material);
         let interface = (self.interface_ids)(shape.medium_interface.as_ref(), material)?;
@@ -135,6 +136,9 @@ impl ShapeBuilder<'_> {
             let al_entity = &area_lights[al];
             let settings = AreaLightSettings::from_entity(al_entity)?;
             let image = emission_image(&settings, al_entity, &self.spectra, self.rgb_transport)?;
+            // pbrt-v4's invisible area light: a shape of constant alpha 0 is never hit, but its
+            // light drops the alpha and emits everywhere (DiffuseAreaLight's constructor).
+            let invisible = self.alpha_is_zero(&shape_settings.alpha);
             for prim in &mut prims[first..] {
                 let area = match prim.geometry {
                     Geometry::Triangle { mesh, tri } => self.store.meshes[mesh as usize].triangle_area(tri),
@@ -163,13 +167,23 @@ impl ShapeBuilder<'_> {
                         two_sided: settings.two_sided,
                         area,
                         interface: prim.interface,
-                        alpha: prim.alpha,
+                        alpha: if invisible { NONE } else { prim.alpha },
+                        invisible,
                     },
                     medium: NONE,
                 });
             }
         }
         Ok(())
+    }
+
+    /// Whether a shape's alpha is the constant 0 (a value, or a `constant` texture of 0), the
+    /// case pbrt-v4 turns into an invisible light.
+    fn alpha_is_zero(&self, alpha: &FloatInput) -> bool {
+        match alpha {
+            FloatInput::Value(a) => *a == 0.0,
+            FloatInput::Texture(name) => self.textures.constant_float(name) == Some(0.0),
+        }
     }
 
     pub(super) fn add_bilinear(

@@ -120,6 +120,34 @@ fn infinite_emissive_medium_radiance_equals_le() {
     assert_channels(&render_scene(&scene(&text)), [le.x as f64, le.y as f64, le.z as f64], "blackbody grid");
 }
 
+/// Published scenes (pbrt-v4-scenes' explosion) spell `Lescale` as an older pbrt-v4 did,
+/// `LeScale`: it is read as the same parameter (half the emission at 0.5), with one note for
+/// the scene however many media spell it so.
+#[test]
+fn the_old_lescale_spelling_is_read_with_one_note() {
+    let grid = |name: &str| {
+        format!(
+            r#"MakeNamedMedium "{name}" "string type" "uniformgrid" "integer nx" 2 "integer ny" 2 "integer nz" 2
+    "float density" [{}] "float temperature" [{}] "float temperaturescale" 100 "float LeScale" 0.5
+    "point3 p0" [-1000 -1000 -1000] "point3 p1" [1000 1000 1000] "rgb sigma_a" [1 1 1] "rgb sigma_s" [2 2 2]"#,
+            grid_values(2, "1"),
+            grid_values(2, "20")
+        )
+    };
+    let text = format!(
+        "MediumInterface \"m\" \"m\"\n{}\n{}\n{}WorldBegin\n",
+        grid("m"),
+        grid("m2"),
+        media_header("volpath", 16, 400)
+    );
+    let setup = scene(&text);
+    let notes =
+        setup.scene.warnings.iter().filter(|w| w.message.contains("\"LeScale\" is read as \"Lescale\"")).count();
+    assert_eq!(notes, 1, "{:?}", setup.scene.warnings);
+    let le = nimbus::spectra::blackbody_emission_rgb(2000.0, nimbus::parser::ColorSpace::Srgb) * 0.5;
+    assert_channels(&render_scene(&setup), [le.x as f64, le.y as f64, le.z as f64], "LeScale 0.5");
+}
+
 /// A uniformgrid of constant density d renders like the homogeneous medium with σ·d.
 #[test]
 fn constant_grid_matches_homogeneous_medium() {

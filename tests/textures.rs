@@ -102,3 +102,33 @@ fn ptex_face_indices_pick_the_face() {
     }
     assert!(differs, "face 0 {face0:?}, face 4 {face4:?}");
 }
+
+/// A texture declared under a singular transform: pbrt-v4 goes on when the texture maps by
+/// (u, v) and never inverts the transform (published scenes have such chains), so nimbus
+/// renders it; one that maps points through the transform (spherical) is refused at its place.
+#[test]
+fn textures_under_singular_transforms_need_it_only_to_map_points() {
+    let text = |mapping: &str| {
+        format!(
+            r#"LookAt 0 0 5  0 0 0  0 1 0
+Camera "perspective"
+Film "rgb" "integer xresolution" 8 "integer yresolution" 8
+Sampler "independent" "integer pixelsamples" 1
+WorldBegin
+LightSource "infinite" "rgb L" [1 1 1]
+AttributeBegin
+  Scale 0 1 1
+  Texture "t" "spectrum" "checkerboard" "string mapping" "{mapping}"
+AttributeEnd
+Material "diffuse" "texture reflectance" "t"
+Shape "sphere"
+"#
+        )
+    };
+    let uv = nimbus::parser::load_str(&text("uv"), "s.pbrt").unwrap();
+    let setup = nimbus::setup::build(&uv, &BuildOptions::default()).expect("a (u, v) texture needs no inverse");
+    assert!(crate::common::render_scene(&setup).mean().x > 0.0);
+    let spherical = nimbus::parser::load_str(&text("spherical"), "s.pbrt").unwrap();
+    let e = nimbus::setup::build(&spherical, &BuildOptions::default()).err().expect("refused");
+    assert!(e.to_string().starts_with("s.pbrt:9:") && e.to_string().contains("singular"), "{e}");
+}

@@ -29,7 +29,11 @@ pub(super) fn build_medium(
         Some(s) => spectra.illuminant(s, cs).map_err(|x| err(&e.loc, x.to_string()))?.scaled(settings.le_scale),
         None => SpectrumValue::ZERO,
     };
-    let world = affine(&m.world_from_medium.start, &e.loc)?;
+    // A homogeneous medium has no use for its transform: pbrt-v4 goes on past a singular one.
+    let world = match settings.kind {
+        MediumSpec::Homogeneous => Affine3A::IDENTITY,
+        _ => affine(&m.world_from_medium.start, &e.loc)?,
+    };
     let g = settings.g;
     let dense = |n: [u32; 3], v: &[f32]| {
         DenseGrid::new(glam::UVec3::from(n), v.to_vec()).ok_or_else(|| err(&e.loc, "grid size mismatch"))

@@ -6,6 +6,9 @@ use super::*;
 pub(super) struct TextureBuilder<'a> {
     pub(super) textures: Textures,
     pub(super) float_names: HashMap<String, u32>,
+    /// Float textures of the `constant` type with a plain value (the one kind of texture
+    /// pbrt-v4 tells apart, for its invisible area lights).
+    pub(super) float_constants: HashMap<String, f32>,
     pub(super) spectrum_names: HashMap<String, u32>,
     pub(super) spectra: SpectrumResolver<'a>,
 }
@@ -60,17 +63,21 @@ impl TextureBuilder<'_> {
     pub(super) fn add(&mut self, t: &nimbus_parser::TextureEntity) -> Result<(), Error> {
         let e = &t.entity;
         let settings = TextureSettings::from_entity(t)?;
-        let texture_from_world = affine(&t.world_from_texture.start, &e.loc)?.inverse();
-        let mapping = |m: &Mapping| match m {
-            Mapping::Uv { su, sv, du, dv } => TexMapping::Uv { s: Vec2::new(*su, *sv), d: Vec2::new(*du, *dv) },
-            Mapping::Spherical => TexMapping::Spherical { texture_from_world },
-            Mapping::Cylindrical => TexMapping::Cylindrical { texture_from_world },
-            Mapping::Planar { v1, v2, du, dv } => TexMapping::Planar {
-                texture_from_world,
-                vs: Vec3::from(*v1),
-                vt: Vec3::from(*v2),
-                d: Vec2::new(*du, *dv),
-            },
+        // Only textures that map points through it need the transform inverted: pbrt-v4 goes
+        // on past a texture declared under a singular transform that maps by (u, v).
+        let texture_from_world = || affine(&t.world_from_texture.start, &e.loc).map(|a| a.inverse());
+        let mapping = |m: &Mapping| -> Result<TexMapping, Error> {
+            Ok(match m {
+                Mapping::Uv { su, sv, du, dv } => TexMapping::Uv { s: Vec2::new(*su, *sv), d: Vec2::new(*du, *dv) },
+                Mapping::Spherical => TexMapping::Spherical { texture_from_world: texture_from_world()? },
+                Mapping::Cylindrical => TexMapping::Cylindrical { texture_from_world: texture_from_world()? },
+                Mapping::Planar { v1, v2, du, dv } => TexMapping::Planar {
+                    texture_from_world: texture_from_world()?,
+                    vs: Vec3::from(*v1),
+                    vt: Vec3::from(*v2),
+                    d: Vec2::new(*du, *dv),
+                },
+            })
         };
         let cs = e.color_space;
         let node = match &settings.kind {
@@ -88,12 +95,12 @@ impl TextureBuilder<'_> {
             TextureKind::Checkerboard { tex1, tex2, mapping: m } => TexNode::Checkerboard {
                 a: self.input(tex1, cs, &e.loc)?,
                 b: self.input(tex2, cs, &e.loc)?,
-                mapping: mapping(m),
+                mapping: mapping(m)?,
             },
             TextureKind::Checkerboard3D { tex1, tex2 } => TexNode::Checkerboard3D {
                 a: self.input(tex1, cs, &e.loc)?,
                 b: self.input(tex2, cs, &e.loc)?,
-                texture_from_world,
+                texture_from_world: texture_from_world()?,
             },
             TextureKind::Bilerp { v, mapping: m } => TexNode::Bilerp {
                 v: [
@@ -102,17 +109,17 @@ impl TextureBuilder<'_> {
                     self.input(&v[2], cs, &e.loc)?,
                     self.input(&v[3], cs, &e.loc)?,
                 ],
-                mapping: mapping(m),
+                mapping: mapping(m)?,
             },
             TextureKind::Fbm { octaves, roughness } => {
-                TexNode::Fbm { texture_from_world, octaves: *octaves, omega: *roughness }
+                TexNode::Fbm { texture_from_world: texture_from_world()?, octaves: *octaves, omega: *roughness }
             }
             TextureKind::Wrinkled { octaves, roughness } => {
-                TexNode::Wrinkled { texture_from_world, octaves: *octaves, omega: *roughness }
+                TexNode::Wrinkled { texture_from_world: texture_from_world()?, octaves: *octaves, omega: *roughness }
             }
-            TextureKind::Windy => TexNode::Windy { texture_from_world },
+            TextureKind::Windy => TexNode::Windy { texture_from_world: texture_from_world()? },
             TextureKind::Marble { octaves, roughness, scale, variation } => TexNode::Marble {
-                texture_from_world,
+                texture_from_world: texture_from_world()?,
                 octaves: *octaves,
                 omega: *roughness,
                 scale: *scale,
@@ -121,13 +128,13 @@ impl TextureBuilder<'_> {
             TextureKind::Dots { inside, outside, mapping: m } => TexNode::Dots {
                 inside: self.input(inside, cs, &e.loc)?,
                 outside: self.input(outside, cs, &e.loc)?,
-                mapping: mapping(m),
+                mapping: mapping(m)?,
             },
             TextureKind::DirectionMix { tex1, tex2, dir } => TexNode::DirectionMix {
                 a: self.input(tex1, cs, &e.loc)?,
                 b: self.input(tex2, cs, &e.loc)?,
                 // A texture-space direction, taken to world space (pbrt-v4's renderFromTexture).
-                dir: texture_from_world.inverse().transform_vector3(Vec3::from(*dir)).normalize_or_zero(),
+                dir: texture_from_world()?.inverse().transform_vector3(Vec3::from(*dir)).normalize_or_zero(),
             },
             TextureKind::ImageMap { filename, filter, max_anisotropy, scale, invert, wrap, encoding, mapping: m } => {
                 let image = load_texture_image(filename, encoding).map_err(|m| err(&e.loc, m))?;
@@ -157,7 +164,7 @@ impl TextureBuilder<'_> {
                 };
                 TexNode::Image {
                     image: Arc::new(MipMap::new(image, wrap, filter).with_max_anisotropy(*max_anisotropy)),
-                    mapping: mapping(m),
+                    mapping: mapping(m)?,
                     scale: *scale,
                     invert: *invert,
                     space: cs,
@@ -179,7 +186,18 @@ impl TextureBuilder<'_> {
             TextureValue::Float => self.float_names.insert(t.name.clone(), id),
             TextureValue::Spectrum => self.spectrum_names.insert(t.name.clone(), id),
         };
+        match (&t.value, &settings.kind) {
+            (TextureValue::Float, TextureKind::Constant(TexInput::Float(FloatInput::Value(v)))) => {
+                self.float_constants.insert(t.name.clone(), *v)
+            }
+            _ => self.float_constants.remove(&t.name),
+        };
         Ok(())
+    }
+
+    /// The value of the float texture `name` when it is a `constant` texture.
+    pub(super) fn constant_float(&self, name: &str) -> Option<f32> {
+        self.float_constants.get(name).copied()
     }
 }
 

@@ -1,19 +1,33 @@
 #!/usr/bin/env python3
 """Regenerates pbrt-scenes/results/radiancegraph/: the radiance-graph method against volpath.
 
-Run from the repository root after `cargo build --release` (needs matplotlib):
+Run from the repository root after `cargo build --release` (needs matplotlib), on an otherwise
+idle machine (timings are 2 threads):
 
     python3 pbrt-scenes/results/radiancegraph/run.py
 
+Every error is one `nimbus compare` (pbrt-scenes/results/nimbus_compare.py): SEEDS seeds per
+method, each seed building its own graph (so the spread counts the graph's noise), against a
+volpath reference rendered as two independent halves whose own noise is removed from the
+errors; numbers are mean ± standard error over the seeds.
+
 Scenes: the thesis's cube (scenes/cube.pbrt, its config scenes/cube.json) and nimbus's
 graph-constraints cloud (pbrt-scenes/graph-constraints-cloud.pbrt with maxdepth 10, config
-scenes/cloud.json). For each: graph build, graph and volpath renders at 128 spp, MAE/MPE/MNE
-against a volpath reference (maxdepth 10, 8192 spp) and error images (green: graph brighter,
-red: darker). Then the thesis's Sec. 5.4 sweeps as charts (node radius on the cloud, volume size
-on the cube) and an orbit of 16 cameras around the cloud rendered from one saved graph, with
-the frame count at which building the graph has paid for itself (at ORBIT_RES² pixels per frame). Writes results.md,
-results.json and the charts; intermediate renders go to a temporary directory that is removed.
-Timings are this machine's (2 threads).
+scenes/cloud.json).
+
+1. Accuracy and speed at SPP spp against volpath (maxdepth 10, REF_SPP-spp reference), with the
+   thesis's delta tracking along camera rays and with nimbus's collision estimator: folders
+   <scene>/ and <scene>-collision/ (images, error images, charts, results.*). Graph sizes and
+   bytes per node and edge come from one `nimbus graph build` of each.
+2. The same with denser graphs (scenes/*-dense.json): how much of the error is the graph's own
+   noise.
+3. The thesis's Sec. 5.4 sweeps: node radius on the cloud (radiusModifier scaled), volume size
+   on the cube (node radius fixed): node-radius.png, volume-size.png.
+4. An orbit of 16 cameras around the cloud rendered from one saved graph (ORBIT_RES² pixels per
+   frame; `nimbus render --precomputed`), timed against volpath, with the frame at which building
+   the graph has paid for itself: orbit.png.
+Writes results.md and results.json. Scene variants and their cached references live in
+.work/ beside this script (ignored by git; delete it to render the references anew).
 """
 import json
 import math
@@ -22,284 +36,344 @@ import re
 import shutil
 import subprocess
 import sys
-import tempfile
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-ROOT = os.path.abspath(os.path.join(HERE, "..", "..", ".."))
-NIMBUS = os.path.join(ROOT, "target", "release", "nimbus")
+sys.path.insert(0, os.path.join(HERE, ".."))
+from nimbus_compare import NIMBUS, SCENES, THREADS, compare, pm, run, variant  # noqa: E402
+
+WORK = os.path.join(HERE, ".work")
+SEEDS = 3
 SPP = 128
-# The accuracy references: at 8192 spp their own noise (volpath's MAE falls as 1/sqrt(spp)) is
-# a quarter of a 128-spp render's, so the MAE measured is mostly the method's.
+# The accuracy references, two halves of REF_SPP / 2: their noise is removed from the errors,
+# but the less there is, the less the removal has to do.
 REF_SPP = 8192
-# The volume-size sweep's references (four of them, the largest volumes are slow).
-SWEEP_REF_SPP = 1024
-THREADS = "2"
+# The volume-size sweep's references (the largest volumes are slow).
+SWEEP_REF_SPP = 2048
 # The orbit's frame size: a frame a user renders, not the 96-pixel accuracy renders (the
 # per-frame saving grows with the pixels; the graph's build does not).
 ORBIT_RES = 256
+RADII = [0.5, 1, 2, 4, 8]
+VOLUME_SCALES = [0.5, 1, 2, 4]
 
 
-def run(args):
-    r = subprocess.run([NIMBUS] + args, capture_output=True, text=True)
-    if r.returncode != 0:
-        sys.exit(f"nimbus {' '.join(args)} failed:\n{r.stderr}")
-    return r
-
-
-def render(scene, out, spp, extra=()):
-    r = run(["render", scene, "--spp", str(spp), "--seed", "1", "--nthreads", THREADS, "--outfile", out] + list(extra))
-    m = re.search(r"in ([0-9.]+) s", r.stderr)
-    return float(m.group(1))
-
-
-def diff(test, ref, out_png=None):
-    args = ["diff", test, ref] + (["--out", out_png] if out_png else [])
-    text = run(args).stdout
-    val = lambda k: float(re.search(rf"^{k}\s+([-0-9.e+]+)", text, re.M).group(1))
-    mean = re.search(r"^mean\s+test ([-0-9.e+]+) reference ([-0-9.e+]+)", text, re.M)
-    return {"mae": val("MAE"), "mpe": val("MPE"), "mne": val("MNE"), "mean": float(mean.group(1)), "ref_mean": float(mean.group(2))}
-
-
-def build(scene, config, out_dir, extra=()):
+def graph_stats(scene, config, out_dir, extra=()):
+    """One `nimbus graph build` of `scene` with `config`: the graph file and its statistics
+    (nodes, edges, build time, bytes per node and edge at the peak)."""
     run(["graph", "build", scene, "--config", config, "--out", out_dir, "--quiet"] + list(extra))
     stem = os.path.splitext(os.path.basename(config))[0]
-    with open(os.path.join(out_dir, f"{stem}_stats.json")) as f:
-        stats = json.load(f)
+    stats = json.load(open(os.path.join(out_dir, f"{stem}_stats.json")))
     graph = [p for p in os.listdir(out_dir) if p.startswith(stem + "_d") and p.endswith(".txt")][0]
-    return os.path.join(out_dir, graph), stats
+    return os.path.join(out_dir, graph), {
+        "nodes": stats["amounts"]["vertices"],
+        "edges": stats["amounts"]["edges"],
+        "build_s": stats["nimbus"]["seconds"],
+        "bytes_per_node": stats["nimbus"]["build_peak_bytes_per_node"],
+        "bytes_per_edge": stats["nimbus"]["build_peak_bytes_per_edge"],
+        "node_radius": stats["sizes"]["node_radius"],
+        "scene_radius": stats["sizes"]["scene_radius"],
+    }
 
 
-def scene_variant(src, dst, replacements):
-    with open(src) as f:
-        text = f.read()
-    for a, b in replacements:
-        assert re.search(a, text), f"{a} not in {src}"
-        text = re.sub(a, b, text)
-    with open(dst, "w") as f:
-        f.write(text)
-    return dst
+def scene_dir(name, pbrt_src, config_src, subs=(), config_edit=None):
+    """WORK/<name>/<stem>.pbrt with its graph config beside it as <stem>.json (radiancegraph
+    reads the config beside the scene), the scene's `subs` and the config's `config_edit`
+    applied. The scene's path."""
+    d = os.path.join(WORK, name)
+    os.makedirs(d, exist_ok=True)
+    stem = os.path.splitext(os.path.basename(pbrt_src))[0]
+    scene = variant(pbrt_src, os.path.join(d, f"{stem}.pbrt"), list(subs) or [(r"^", "")])
+    config = json.load(open(config_src))
+    if config_edit:
+        config_edit(config)
+    json.dump(config, open(os.path.join(d, f"{stem}.json"), "w"), indent=2)
+    return scene
+
+
+def out_dir(name):
+    d = os.path.join(HERE, name)
+    shutil.rmtree(d, ignore_errors=True)
+    return d
+
+
+def summary_row(c, method="radiancegraph", mode="equal-spp"):
+    """A method's errors over the seeds, relative to the reference's mean, and its times."""
+    s = c.summary(method, mode)
+    ref_mean = c.results["reference"]["mean"]
+    row = {
+        "command": c.command,
+        "seconds": s["seconds"],
+        "setup_seconds": s["setup_seconds"],
+        "mae": c.error(method, mode, "mae"),
+        "mpe": c.error(method, mode, "mpe"),
+        "mne": c.error(method, mode, "mne"),
+        "relmse": c.error(method, mode, "relmse"),
+        "bias": c.bias(method, mode),
+        "ref_mean": ref_mean,
+    }
+    if method != "volpath" and c.results["baseline"] == "volpath":
+        row["speedup_mae"] = c.speedup(method, mode, "mae")
+        v = c.summary("volpath", mode)
+        row["volpath_seconds"] = v["seconds"]
+        row["volpath_mae"] = c.error("volpath", mode, "mae")
+    return row
+
+
+def rel_pm(stat, ref_mean):
+    """A stat of an absolute error as 'x.xx ± y.yy %' of the reference's mean."""
+    scaled = {**stat, "mean": stat["mean"] / ref_mean}
+    if stat.get("standard_error") is not None:
+        scaled["standard_error"] = stat["standard_error"] / ref_mean
+    return pm(scaled, "{:.2%}").replace("%", "") + " %"
+
+
+def bias_text(b):
+    return f"{b['relative']:+.2%} (z {b['bias_z']:.1f})" if b.get("bias_z") is not None else f"{b['relative']:+.2%}"
 
 
 def main():
-    import matplotlib
+    os.makedirs(WORK, exist_ok=True)
+    results = {"seeds": SEEDS, "spp": SPP, "reference_spp": REF_SPP}
+    cloud_src = os.path.join(SCENES, "graph-constraints-cloud.pbrt")
+    maxdepth10 = [(r'"integer maxdepth" \[ 12 \]', '"integer maxdepth" [ 10 ]')]
+    cases = {
+        "cloud": (cloud_src, os.path.join(HERE, "scenes", "cloud.json"), maxdepth10),
+        "cube": (os.path.join(HERE, "scenes", "cube.pbrt"), os.path.join(HERE, "scenes", "cube.json"), []),
+    }
+    collision = [(r"^Integrator [^\n]*", 'Integrator "radiancegraph" "string estimator" "collision"')]
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    # 1. Accuracy and speed at SPP spp, each seed building its graph.
+    main_rows, references = [], {}
+    for name, (src, config, subs) in cases.items():
+        scene = scene_dir(name, src, config, subs)
+        _, stats = graph_stats(scene, scene.replace(".pbrt", ".json"), os.path.join(WORK, name, "graph"))
+        c = compare(scene, ["volpath", "radiancegraph"], out_dir(name), spp=SPP, seeds=SEEDS, reference_spp=REF_SPP,
+                    html=True)
+        references[name] = [os.path.join(os.path.dirname(scene), os.path.basename(p)) for p in c.results["reference"]["paths"]]
+        # The collision variant names radiancegraph in its Integrator line, so volpath is not
+        # rendered from it (it would lose the scene's maxdepth): its times come from above.
+        col_scene = scene_dir(f"{name}-collision", src, config, list(subs) + collision)
+        cc = compare(col_scene, ["radiancegraph"], out_dir(f"{name}-collision"), spp=SPP, seeds=SEEDS,
+                     reference=references[name])
+        main_rows.append({"scene": name, **stats, "graph": summary_row(c), "volpath": summary_row(c, "volpath"),
+                          "collision": summary_row(cc)})
+    results["accuracy"] = main_rows
 
-    if not os.path.exists(NIMBUS):
-        sys.exit("build nimbus first: cargo build --release")
-    work = tempfile.mkdtemp(prefix="nimbus-radiancegraph-")
-    try:
-        results = {}
-        cloud = scene_variant(
-            os.path.join(ROOT, "pbrt-scenes", "graph-constraints-cloud.pbrt"),
-            os.path.join(work, "cloud.pbrt"),
-            [(r'"integer maxdepth" \[ 12 \]', '"integer maxdepth" [ 10 ]')],
-        )
-        shutil.copy(os.path.join(HERE, "scenes", "cloud.json"), os.path.join(work, "cloud.json"))
-        cube = scene_variant(os.path.join(HERE, "scenes", "cube.pbrt"), os.path.join(work, "cube.pbrt"), [])
-        shutil.copy(os.path.join(HERE, "scenes", "cube.json"), os.path.join(work, "cube.json"))
+    # 2. Denser graphs (4x the light paths, 4x the direct-light samples per node).
+    dense_rows = []
+    for name, (src, _, subs) in cases.items():
+        dense = os.path.join(HERE, "scenes", f"{name}-dense.json")
+        row = {"scene": name}
+        for est, extra in [("graph", []), ("collision", collision)]:
+            scene = scene_dir(f"{name}-dense-{est}", src, dense, list(subs) + extra)
+            if est == "graph":
+                _, row["stats"] = graph_stats(scene, scene.replace(".pbrt", ".json"), os.path.join(os.path.dirname(scene), "graph"))
+            c = compare(scene, ["radiancegraph"], out_dir(f"{name}-dense-{est}"), spp=SPP, seeds=SEEDS,
+                        reference=references[name], keep_images=False)
+            row[est] = summary_row(c)
+            shutil.rmtree(c.out, ignore_errors=True)
+        dense_rows.append(row)
+    results["accuracy_dense"] = dense_rows
 
-        # 1. Accuracy and speed at 128 spp.
-        main_rows = []
-        for name, scene in [("cloud", cloud), ("cube", cube)]:
-            ref = os.path.join(work, f"{name}-ref.exr")
-            t_ref = render(scene, ref, REF_SPP)
-            graph, stats = build(scene, os.path.join(work, f"{name}.json"), work)
-            g_img, v_img = os.path.join(work, f"{name}-graph.exr"), os.path.join(work, f"{name}-volpath.exr")
-            t_graph = render(scene, g_img, SPP, ["--integrator", "graph", "--graph-data", graph])
-            t_vp = render(scene, v_img, SPP)
-            eg, ev = diff(g_img, ref, os.path.join(HERE, f"{name}-graph-error.png")), diff(v_img, ref, os.path.join(HERE, f"{name}-volpath-error.png"))
-            # nimbus's collision estimator along camera rays (same graph, same integral).
-            col_scene = scene_variant(scene, os.path.join(work, f"{name}-collision.pbrt"), [(r'Integrator [^\n]*', 'Integrator "radiancegraph" "string estimator" "collision"')])
-            c_img = os.path.join(work, f"{name}-collision.exr")
-            t_col = render(col_scene, c_img, SPP, ["--graph-data", graph])
-            ec = diff(c_img, ref, os.path.join(HERE, f"{name}-collision-error.png"))
-            run(["convert", g_img, os.path.join(HERE, f"{name}-graph.png")])
-            run(["convert", ref, os.path.join(HERE, f"{name}-reference.png")])
-            row = {
-                "scene": name,
-                "nodes": stats["amounts"]["vertices"],
-                "edges": stats["amounts"]["edges"],
-                "build_s": stats["nimbus"]["seconds"],
-                "bytes_per_node": stats["nimbus"]["build_peak_bytes_per_node"],
-                "bytes_per_edge": stats["nimbus"]["build_peak_bytes_per_edge"],
-                "graph_s": t_graph,
-                "collision_s": t_col,
-                "volpath_s": t_vp,
-                "reference_s": t_ref,
-                "graph": eg,
-                "collision": ec,
-                "volpath": ev,
-            }
-            main_rows.append(row)
-        results["accuracy"] = main_rows
+    # 3a. Node radius (thesis Sec. 5.4, node size) on the cloud: radiusModifier scaled by k.
+    src, config, subs = cases["cloud"]
+    base_modifier = json.load(open(config))["graphBuilder"]["radiusModifier"]
+    radius_rows = []
+    for k in RADII:
+        def edit(cfg, k=k):
+            cfg["graphBuilder"]["radiusModifier"] = base_modifier * k
+        scene = scene_dir(f"radius-{k}", src, config, subs, edit)
+        _, stats = graph_stats(scene, scene.replace(".pbrt", ".json"), os.path.join(os.path.dirname(scene), "graph"))
+        c = compare(scene, ["radiancegraph"], out_dir(f"radius-{k}"), spp=SPP, seeds=SEEDS, reference=references["cloud"],
+                    keep_images=False)
+        radius_rows.append({"k": k, "radius": stats["node_radius"], **stats, **summary_row(c)})
+        shutil.rmtree(c.out, ignore_errors=True)
+    results["node_radius"] = radius_rows
 
-        # 1b. The same with denser graphs (4x the light paths, 4x the direct-light samples per
-        # node: scenes/*-dense.json): how far the error is the graph's own noise.
-        dense_rows = []
-        for name, scene in [("cloud", cloud), ("cube", cube)]:
-            d = os.path.join(work, f"{name}-dense")
-            os.makedirs(d)
-            shutil.copy(os.path.join(HERE, "scenes", f"{name}-dense.json"), os.path.join(d, f"{name}-dense.json"))
-            graph, stats = build(scene, os.path.join(d, f"{name}-dense.json"), d)
-            ref = os.path.join(work, f"{name}-ref.exr")
-            row = {"scene": name, "nodes": stats["amounts"]["vertices"], "edges": stats["amounts"]["edges"], "build_s": stats["nimbus"]["seconds"]}
-            for est in ["graph", "collision"]:
-                src = scene if est == "graph" else os.path.join(work, f"{name}-collision.pbrt")
-                img = os.path.join(d, f"{est}.exr")
-                row[f"{est}_s"] = render(src, img, SPP, ["--integrator", "graph", "--graph-data", graph] if est == "graph" else ["--graph-data", graph])
-                row[est] = diff(img, ref)
-            dense_rows.append(row)
-        results["accuracy_dense"] = dense_rows
+    # 3b. Volume size (thesis Sec. 5.4) on the cube: the volume scaled by s, the node radius
+    # kept (radiusModifier / s: the default radius is the scene radius / 500), light paths kept.
+    src, config, _ = cases["cube"]
+    cube_modifier = json.load(open(config))["graphBuilder"]["radiusModifier"]
+    volume_rows = []
+    for s in VOLUME_SCALES:
+        def edit(cfg, s=s):
+            cfg["graphBuilder"]["radiusModifier"] = cube_modifier / s
+        scene = scene_dir(f"size-{s}", src, config,
+                          [(r"Scale 5 5 5", f"Scale {5 * s} {5 * s} {5 * s}"), (r"LookAt 20 0 0", f"LookAt {20 * s} 0 0")], edit)
+        _, stats = graph_stats(scene, scene.replace(".pbrt", ".json"), os.path.join(os.path.dirname(scene), "graph"))
+        c = compare(scene, ["volpath", "radiancegraph"], out_dir(f"size-{s}"), spp=SPP, seeds=SEEDS,
+                    reference_spp=SWEEP_REF_SPP, keep_images=False)
+        volume_rows.append({"scale": s, "volume_radius": stats["scene_radius"], **stats, **summary_row(c)})
+        shutil.rmtree(c.out, ignore_errors=True)
+    results["volume_size"] = volume_rows
 
-        # 2. Node radius sweep (thesis Table 5.4, node size) on the cloud.
-        base = next(r for r in main_rows if r["scene"] == "cloud")
-        with open(os.path.join(work, "cloud_stats.json")) as f:
-            default_radius = json.load(f)["sizes"]["node_radius"]
-        sweep = []
-        for k in [0.5, 1, 2, 4, 8]:
-            d = os.path.join(work, f"radius-{k}")
-            os.makedirs(d)
-            r = default_radius * k
-            graph, stats = build(cloud, os.path.join(work, "cloud.json"), d, ["--node-radius", f"{r:.6g}"])
-            img = os.path.join(d, "g.exr")
-            t = render(cloud, img, SPP, ["--integrator", "graph", "--graph-data", graph])
-            e = diff(img, os.path.join(work, "cloud-ref.exr"))
-            sweep.append({"radius": r, "nodes": stats["amounts"]["vertices"], "edges": stats["amounts"]["edges"], "build_s": stats["nimbus"]["seconds"], "render_s": t, **e})
-        results["node_radius"] = sweep
+    # 4. Orbit: 16 cameras around the cloud from one saved graph.
+    src, config, subs = cases["cloud"]
+    scene = scene_dir("orbit", src, config, subs)
+    graph, stats = graph_stats(scene, scene.replace(".pbrt", ".json"), os.path.join(WORK, "orbit", "graph"))
+    orbit = []
+    for i in range(16):
+        a = 2 * math.pi * i / 16
+        eye = (3.6 * math.cos(a), 0.8, 3.6 * math.sin(a))
+        frame = variant(scene, os.path.join(WORK, "orbit", f"frame-{i}.pbrt"), [
+            (r"^LookAt [^\n]*", f"LookAt {eye[0]:.4f} {eye[1]:.4f} {eye[2]:.4f}  0 0 0  0 1 0"),
+            (r'"integer xresolution" \[ 96 \] "integer yresolution" \[ 96 \]',
+             f'"integer xresolution" [ {ORBIT_RES} ] "integer yresolution" [ {ORBIT_RES} ]'),
+        ])
+        times = {}
+        for method, extra in [("radiancegraph", ["--precomputed", graph]), ("volpath", [])]:
+            img = os.path.join(WORK, "orbit", f"frame-{i}-{method}.exr")
+            times[method] = render_seconds(frame, img, method, extra)
+            if method == "radiancegraph" and i % 4 == 0:
+                run(["convert", img, os.path.join(HERE, f"orbit-{i:02d}.png")])
+            os.remove(img)
+        orbit.append({"frame": i, "graph_s": times["radiancegraph"], "volpath_s": times["volpath"]})
+    build_s = stats["build_s"]
+    per_frame_gain = sum(o["volpath_s"] - o["graph_s"] for o in orbit) / len(orbit)
+    break_even = math.ceil(build_s / per_frame_gain) if per_frame_gain > 0 else None
+    results["orbit"] = {"frames": orbit, "build_s": build_s, "break_even_frames": break_even}
 
-        # 3. Volume size sweep (thesis Table 5.4, volume size) on the cube: the volume scaled,
-        # node radius and light paths fixed.
-        with open(os.path.join(work, "cube_stats.json")) as f:
-            cube_radius = json.load(f)["sizes"]["node_radius"]
-        vsweep = []
-        for s in [0.5, 1, 2, 4]:
-            d = os.path.join(work, f"size-{s}")
-            os.makedirs(d)
-            scene = scene_variant(cube, os.path.join(d, "cube.pbrt"), [(r"Scale 5 5 5", f"Scale {5 * s} {5 * s} {5 * s}"), (r"LookAt 20 0 0", f"LookAt {20 * s} 0 0")])
-            shutil.copy(os.path.join(work, "cube.json"), os.path.join(d, "cube.json"))
-            ref = os.path.join(d, "ref.exr")
-            render(scene, ref, SWEEP_REF_SPP)
-            graph, stats = build(scene, os.path.join(d, "cube.json"), d, ["--node-radius", f"{cube_radius:.6g}"])
-            img = os.path.join(d, "g.exr")
-            t = render(scene, img, SPP, ["--integrator", "graph", "--graph-data", graph])
-            tv = render(scene, os.path.join(d, "v.exr"), SPP)
-            e = diff(img, ref)
-            vsweep.append({"scale": s, "volume_radius": stats["sizes"]["scene_radius"], "nodes": stats["amounts"]["vertices"], "edges": stats["amounts"]["edges"], "build_s": stats["nimbus"]["seconds"], "render_s": t, "volpath_s": tv, **e})
-        results["volume_size"] = vsweep
+    with open(os.path.join(HERE, "results.json"), "w") as f:
+        json.dump(results, f, indent=2)
+    charts(radius_rows, volume_rows, orbit, build_s, break_even)
+    table(results)
 
-        # 4. Orbit: 16 cameras around the cloud from one saved graph.
-        graph = os.path.join(work, "cloud_d10.txt")
-        orbit = []
-        for i in range(16):
-            a = 2 * math.pi * i / 16
-            eye = (3.6 * math.cos(a), 0.8, 3.6 * math.sin(a))
-            scene = scene_variant(cloud, os.path.join(work, f"orbit-{i}.pbrt"), [
-                (r"LookAt [^\n]*", f"LookAt {eye[0]:.4f} {eye[1]:.4f} {eye[2]:.4f}  0 0 0  0 1 0"),
-                (r'"integer xresolution" \[ 96 \] "integer yresolution" \[ 96 \]', f'"integer xresolution" [ {ORBIT_RES} ] "integer yresolution" [ {ORBIT_RES} ]'),
-            ])
-            tg = render(scene, os.path.join(work, f"orbit-{i}-g.exr"), SPP, ["--integrator", "graph", "--graph-data", graph])
-            tv = render(scene, os.path.join(work, f"orbit-{i}-v.exr"), SPP)
-            orbit.append({"frame": i, "graph_s": tg, "volpath_s": tv})
-            if i % 4 == 0:
-                run(["convert", os.path.join(work, f"orbit-{i}-g.exr"), os.path.join(HERE, f"orbit-{i:02d}.png")])
-        build_s = base["build_s"]
-        per_frame_gain = sum(o["volpath_s"] - o["graph_s"] for o in orbit) / len(orbit)
-        break_even = math.ceil(build_s / per_frame_gain) if per_frame_gain > 0 else None
-        results["orbit"] = {"frames": orbit, "build_s": build_s, "break_even_frames": break_even}
 
-        with open(os.path.join(HERE, "results.json"), "w") as f:
-            json.dump(results, f, indent=2)
+def render_seconds(scene, out, method, extra):
+    """`nimbus render` at SPP spp, seed 1: the seconds it reports (a frame's time, no error
+    measured, so no comparison is needed)."""
+    args = ["render", scene, "--integrator", method, "--spp", str(SPP), "--seed", "1", "--nthreads", THREADS,
+            "--outfile", out] + extra
+    r = subprocess.run([NIMBUS] + args, capture_output=True, text=True)
+    if r.returncode != 0:
+        sys.exit(f"nimbus {' '.join(args)} failed:\n{r.stderr}")
+    return float(re.search(r"in ([0-9.]+) s", r.stderr).group(1))
 
-        # Charts.
-        def error_panel(ax, xs, rows, xlabel, title):
-            for k, c in [("mae", "black"), ("mpe", "green"), ("mne", "red")]:
-                ax.plot(xs, [r[k] / r["ref_mean"] for r in rows], "o-", color=c, label=k.upper())
-            ax.set_xscale("log")
-            ax.set_xlabel(xlabel)
-            ax.set_ylabel("error / reference mean")
-            ax.set_title(title)
-            ax.legend()
 
-        fig, ax = plt.subplots(1, 2, figsize=(10, 4))
-        rs = [s["radius"] for s in sweep]
-        error_panel(ax[0], rs, sweep, "node radius", "cloud: error against node radius")
-        ax[1].plot(rs, [s["nodes"] for s in sweep], "o-", label="nodes")
-        ax[1].plot(rs, [s["edges"] for s in sweep], "s-", label="edges")
-        ax[1].set_xscale("log")
-        ax[1].set_yscale("log")
-        ax[1].set_xlabel("node radius")
-        ax[1].set_title("graph size against node radius")
-        ax[1].legend()
-        fig.tight_layout()
-        fig.savefig(os.path.join(HERE, "node-radius.png"), dpi=110)
-
-        fig, ax = plt.subplots(1, 2, figsize=(10, 4))
-        vr = [s["volume_radius"] for s in vsweep]
-        error_panel(ax[0], vr, vsweep, "volume radius (node radius fixed)", "cube: error against volume size")
-        ax[1].plot(vr, [s["build_s"] for s in vsweep], "o-", label="graph build")
-        ax[1].plot(vr, [s["render_s"] for s in vsweep], "s-", label=f"graph render ({SPP} spp)")
-        ax[1].plot(vr, [s["volpath_s"] for s in vsweep], "^-", label=f"volpath render ({SPP} spp)")
-        ax[1].set_xscale("log")
-        ax[1].set_yscale("log")
-        ax[1].set_xlabel("volume radius")
-        ax[1].set_ylabel("seconds")
-        ax[1].set_title("time against volume size")
-        ax[1].legend()
-        fig.tight_layout()
-        fig.savefig(os.path.join(HERE, "volume-size.png"), dpi=110)
-
-        fig, ax = plt.subplots(figsize=(6, 4))
-        frames = list(range(0, 17))
-        cg = [build_s + sum(o["graph_s"] for o in orbit[:n]) for n in frames]
-        cv = [sum(o["volpath_s"] for o in orbit[:n]) for n in frames]
-        ax.plot(frames, cg, "o-", label="graph (build + frames)")
-        ax.plot(frames, cv, "s-", label="volpath")
-        ax.set_xlabel("frames of the orbit")
-        ax.set_ylabel("cumulative seconds")
-        ax.set_title(f"orbit of 16 cameras: break-even at frame {break_even}")
+def charts(radius_rows, volume_rows, orbit, build_s, break_even):
+    def error_panel(ax, xs, rows, xlabel, title):
+        for k, c in [("mae", "black"), ("mpe", "green"), ("mne", "red")]:
+            ys = [r[k]["mean"] / r["ref_mean"] for r in rows]
+            es = [(r[k]["standard_error"] or 0) / r["ref_mean"] for r in rows]
+            ax.errorbar(xs, ys, yerr=es, fmt="o-", color=c, capsize=3, label=k.upper())
+        ax.set_xscale("log")
+        ax.set_xlabel(xlabel)
+        ax.set_ylabel(f"error / reference mean ({SEEDS} seeds, ± SE)")
+        ax.set_title(title)
         ax.legend()
-        fig.tight_layout()
-        fig.savefig(os.path.join(HERE, "orbit.png"), dpi=110)
 
-        # Table.
-        lines = ["# radiancegraph against volpath", "", "Generated by `run.py` (see its docstring). Errors against a volpath reference "
-                 f"(maxdepth 10, {REF_SPP} spp); renders at {SPP} spp, 2 threads.", "",
-                 "| scene | nodes | edges | build s | B/node | B/edge | graph render s | volpath render s | speed-up | graph MAE/mean | MPE | MNE | mean vs ref | volpath MAE/mean |",
-                 "|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|"]
-        for r in main_rows:
-            g, v = r["graph"], r["volpath"]
-            lines.append(
-                f"| {r['scene']} | {r['nodes']} | {r['edges']} | {r['build_s']:.2f} | {r['bytes_per_node']:.1f} | {r['bytes_per_edge']:.1f} | "
-                f"{r['graph_s']:.2f} | {r['volpath_s']:.2f} | {r['volpath_s'] / r['graph_s']:.1f}× | {g['mae'] / g['ref_mean']:.2%} | "
-                f"{g['mpe']:.2e} | {g['mne']:.2e} | {g['mean'] / g['ref_mean'] - 1:+.2%} | {v['mae'] / v['ref_mean']:.2%} |")
-        lines += ["", "With the collision estimator along camera rays (`\"string estimator\" \"collision\"`, same graphs):", "",
-                  "| scene | render s | speed-up | MAE/mean | MPE | MNE | mean vs ref |", "|---|--:|--:|--:|--:|--:|--:|"]
-        for r in main_rows:
-            c = r["collision"]
-            lines.append(f"| {r['scene']} | {r['collision_s']:.2f} | {r['volpath_s'] / r['collision_s']:.1f}× | {c['mae'] / c['ref_mean']:.2%} | {c['mpe']:.2e} | {c['mne']:.2e} | {c['mean'] / c['ref_mean'] - 1:+.2%} |")
-        lines += ["", "Denser graphs (`scenes/*-dense.json`: 4× the light paths and 4× the direct-light samples per node; the cube is homogeneous, so both estimators are one):", "",
-                  "| scene | nodes | edges | build s | graph MAE/mean | mean vs ref | collision MAE/mean | mean vs ref | collision render s |", "|---|--:|--:|--:|--:|--:|--:|--:|--:|"]
-        for r in dense_rows:
-            g, c = r["graph"], r["collision"]
-            lines.append(f"| {r['scene']} | {r['nodes']} | {r['edges']} | {r['build_s']:.2f} | {g['mae'] / g['ref_mean']:.2%} | {g['mean'] / g['ref_mean'] - 1:+.2%} | "
-                         f"{c['mae'] / c['ref_mean']:.2%} | {c['mean'] / c['ref_mean'] - 1:+.2%} | {r['collision_s']:.2f} |")
-        lines += ["", "Node radius (cloud):", "", "| radius | nodes | edges | MAE/mean | MPE | MNE |", "|--:|--:|--:|--:|--:|--:|"]
-        for s in sweep:
-            lines.append(f"| {s['radius']:.4f} | {s['nodes']} | {s['edges']} | {s['mae'] / s['ref_mean']:.2%} | {s['mpe']:.2e} | {s['mne']:.2e} |")
-        lines += ["", "Volume size (cube, node radius fixed):", "", "| volume radius | nodes | edges | build s | graph s | volpath s | MAE/mean | MPE | MNE |", "|--:|--:|--:|--:|--:|--:|--:|--:|--:|"]
-        for s in vsweep:
-            lines.append(f"| {s['volume_radius']:.2f} | {s['nodes']} | {s['edges']} | {s['build_s']:.2f} | {s['render_s']:.2f} | {s['volpath_s']:.2f} | {s['mae'] / s['ref_mean']:.2%} | {s['mpe']:.2e} | {s['mne']:.2e} |")
-        tg = sum(o["graph_s"] for o in orbit) / 16
-        tv = sum(o["volpath_s"] for o in orbit) / 16
-        lines += ["", f"Orbit (cloud, 16 cameras of {ORBIT_RES}×{ORBIT_RES} at {SPP} spp, one graph): graph {tg:.2f} s/frame, volpath {tv:.2f} s/frame, build {build_s:.2f} s: "
-                  f"break-even at frame {break_even}.", ""]
-        with open(os.path.join(HERE, "results.md"), "w") as f:
-            f.write("\n".join(lines))
-        print("\n".join(lines))
-    finally:
-        shutil.rmtree(work, ignore_errors=True)
+    fig, ax = plt.subplots(1, 2, figsize=(10, 4))
+    rs = [r["radius"] for r in radius_rows]
+    error_panel(ax[0], rs, radius_rows, "node radius", "cloud: error against node radius")
+    ax[1].plot(rs, [r["nodes"] for r in radius_rows], "o-", label="nodes")
+    ax[1].plot(rs, [r["edges"] for r in radius_rows], "s-", label="edges")
+    ax[1].set_xscale("log")
+    ax[1].set_yscale("log")
+    ax[1].set_xlabel("node radius")
+    ax[1].set_title("graph size against node radius")
+    ax[1].legend()
+    fig.tight_layout()
+    fig.savefig(os.path.join(HERE, "node-radius.png"), dpi=110)
+
+    fig, ax = plt.subplots(1, 2, figsize=(10, 4))
+    vr = [r["volume_radius"] for r in volume_rows]
+    error_panel(ax[0], vr, volume_rows, "volume radius (node radius fixed)", "cube: error against volume size")
+    ax[1].plot(vr, [r["build_s"] for r in volume_rows], "o-", label="graph build")
+    ax[1].plot(vr, [r["seconds"]["mean"] - r["setup_seconds"]["mean"] for r in volume_rows], "s-",
+               label=f"graph render ({SPP} spp)")
+    ax[1].plot(vr, [r["volpath_seconds"]["mean"] for r in volume_rows], "^-", label=f"volpath render ({SPP} spp)")
+    ax[1].set_xscale("log")
+    ax[1].set_yscale("log")
+    ax[1].set_xlabel("volume radius")
+    ax[1].set_ylabel("seconds")
+    ax[1].set_title("time against volume size")
+    ax[1].legend()
+    fig.tight_layout()
+    fig.savefig(os.path.join(HERE, "volume-size.png"), dpi=110)
+
+    fig, ax = plt.subplots(figsize=(6, 4))
+    frames = list(range(0, 17))
+    ax.plot(frames, [build_s + sum(o["graph_s"] for o in orbit[:n]) for n in frames], "o-", label="graph (build + frames)")
+    ax.plot(frames, [sum(o["volpath_s"] for o in orbit[:n]) for n in frames], "s-", label="volpath")
+    ax.set_xlabel("frames of the orbit")
+    ax.set_ylabel("cumulative seconds")
+    ax.set_title(f"orbit of 16 cameras: break-even at frame {break_even}")
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(os.path.join(HERE, "orbit.png"), dpi=110)
+
+
+def table(results):
+    f2 = "{:.2f}"
+    lines = [
+        "# radiancegraph against volpath", "",
+        f"Generated by `run.py` (see its docstring). Every error is one `nimbus compare` over {SEEDS} seeds "
+        f"(mean ± standard error; each seed builds its own graph) against a volpath reference (maxdepth 10, "
+        f"{REF_SPP} spp as two independent halves) with the reference's noise removed; renders at {SPP} spp, "
+        "2 threads. Render time excludes the graph build; speed-up at equal MAE includes it.", "",
+        "| scene | nodes | edges | build s | B/node | B/edge | graph render s | volpath render s | speed-up per frame | "
+        "graph MAE/mean | MPE/mean | MNE/mean | mean vs ref (z) | volpath MAE/mean | speed-up at equal MAE, build included |",
+        "|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|"]
+    for r in results["accuracy"]:
+        g, v = r["graph"], r["volpath"]
+        render_s = g["seconds"]["mean"] - g["setup_seconds"]["mean"]
+        m = g["ref_mean"]
+        lines.append(
+            f"| {r['scene']} | {r['nodes']} | {r['edges']} | {r['build_s']:.2f} | {r['bytes_per_node']:.1f} | "
+            f"{r['bytes_per_edge']:.1f} | {render_s:.2f} | {v['seconds']['mean']:.2f} | {v['seconds']['mean'] / render_s:.1f}× | "
+            f"{rel_pm(g['mae'], m)} | {rel_pm(g['mpe'], m)} | {rel_pm(g['mne'], m)} | {bias_text(g['bias'])} | "
+            f"{rel_pm(v['mae'], m)} | {pm(g['speedup_mae'], '{:.2f}', '×')} |")
+    lines += ["", "With the collision estimator along camera rays (`\"string estimator\" \"collision\"`):", "",
+              "| scene | render s | speed-up per frame | MAE/mean | MPE/mean | MNE/mean | mean vs ref (z) |",
+              "|---|--:|--:|--:|--:|--:|--:|"]
+    for r in results["accuracy"]:
+        c = r["collision"]
+        render_s = c["seconds"]["mean"] - c["setup_seconds"]["mean"]
+        m = c["ref_mean"]
+        volpath_s = r["volpath"]["seconds"]["mean"]
+        lines.append(f"| {r['scene']} | {render_s:.2f} | {volpath_s / render_s:.1f}× | {rel_pm(c['mae'], m)} | "
+                     f"{rel_pm(c['mpe'], m)} | {rel_pm(c['mne'], m)} | {bias_text(c['bias'])} |")
+    lines += ["", "Denser graphs (`scenes/*-dense.json`: 4× the light paths and 4× the direct-light samples per node; "
+              "the cube is homogeneous, so both estimators are one):", "",
+              "| scene | nodes | edges | build s | graph MAE/mean | mean vs ref (z) | collision MAE/mean | mean vs ref (z) |",
+              "|---|--:|--:|--:|--:|--:|--:|--:|"]
+    for r in results["accuracy_dense"]:
+        g, c, s = r["graph"], r["collision"], r["stats"]
+        m = g["ref_mean"]
+        lines.append(f"| {r['scene']} | {s['nodes']} | {s['edges']} | {s['build_s']:.2f} | {rel_pm(g['mae'], m)} | {bias_text(g['bias'])} | "
+                     f"{rel_pm(c['mae'], m)} | {bias_text(c['bias'])} |")
+    lines += ["", "Node radius (cloud; radiusModifier scaled):", "",
+              "| radius | nodes | edges | build s | MAE/mean | MPE/mean | MNE/mean | mean vs ref (z) |", "|--:|--:|--:|--:|--:|--:|--:|--:|"]
+    for r in results["node_radius"]:
+        m = r["ref_mean"]
+        lines.append(f"| {r['radius']:.4f} | {r['nodes']} | {r['edges']} | {f2.format(r['build_s'])} | {rel_pm(r['mae'], m)} | "
+                     f"{rel_pm(r['mpe'], m)} | {rel_pm(r['mne'], m)} | {bias_text(r['bias'])} |")
+    lines += ["", f"Volume size (cube, node radius fixed; references {SWEEP_REF_SPP} spp in two halves):", "",
+              "| volume radius | nodes | edges | build s | graph render s | volpath s | MAE/mean | MPE/mean | MNE/mean | mean vs ref (z) |",
+              "|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|"]
+    for r in results["volume_size"]:
+        m = r["ref_mean"]
+        render_s = r["seconds"]["mean"] - r["setup_seconds"]["mean"]
+        lines.append(f"| {r['volume_radius']:.2f} | {r['nodes']} | {r['edges']} | {r['build_s']:.2f} | {render_s:.2f} | "
+                     f"{r['volpath_seconds']['mean']:.2f} | {rel_pm(r['mae'], m)} | {rel_pm(r['mpe'], m)} | {rel_pm(r['mne'], m)} | "
+                     f"{bias_text(r['bias'])} |")
+    o = results["orbit"]
+    tg = sum(f["graph_s"] for f in o["frames"]) / len(o["frames"])
+    tv = sum(f["volpath_s"] for f in o["frames"]) / len(o["frames"])
+    lines += ["", f"Orbit (cloud, 16 cameras of {ORBIT_RES}×{ORBIT_RES} at {SPP} spp, one graph loaded with "
+              f"`--precomputed`): graph {tg:.2f} s/frame, volpath {tv:.2f} s/frame, build {o['build_s']:.2f} s: "
+              f"break-even at frame {o['break_even_frames']}.", "",
+              "The commands behind the tables (run from the repository root; scenes in .work/):", ""]
+    for r in results["accuracy"]:
+        lines += [f"- {r['scene']}: `{r['graph']['command']}`", f"- {r['scene']}, collision: `{r['collision']['command']}`"]
+    lines.append("")
+    with open(os.path.join(HERE, "results.md"), "w") as f:
+        f.write("\n".join(lines))
+    print("\n".join(lines))
 
 
 if __name__ == "__main__":

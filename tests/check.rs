@@ -214,3 +214,50 @@ fn volpathcustom_is_volpath() {
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(stdout.contains("integrator  volpath (as \"volpathcustom\") maxdepth 10"), "{stdout}");
 }
+
+/// `check` builds what `render` builds short of tracing rays: it stops at the same first error
+/// as `render` (an image texture read only when the scene is built, a method's constraints),
+/// and lists every other problem its readers find rather than only the first missing file.
+#[test]
+fn check_reports_every_error_and_the_first_one_render_stops_at() {
+    let dir = scratch_dir("check-render");
+    let first_error = |out: &std::process::Output| {
+        String::from_utf8_lossy(&out.stderr).lines().find(|l| l.contains(": error: ")).unwrap_or_default().to_string()
+    };
+    let head = "LookAt 0 0 5  0 0 0  0 1 0\nCamera \"perspective\"\nFilm \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8\n";
+    let cases = [
+        // Two missing meshes and a missing image: every one named, the build's first.
+        (
+            "missing.pbrt",
+            format!(
+                "{head}WorldBegin\nTexture \"img\" \"spectrum\" \"imagemap\" \"string filename\" \"nope.png\"\n\
+                 Material \"diffuse\" \"texture reflectance\" \"img\"\nShape \"plymesh\" \"string filename\" \"a.ply\"\n\
+                 Shape \"plymesh\" \"string filename\" \"b.ply\"\n"
+            ),
+            3,
+        ),
+        // Readers pass; the radiance graph's constraints do not (an anisotropic medium).
+        (
+            "constraints.pbrt",
+            format!(
+                "{head}Integrator \"radiancegraph\"\nWorldBegin\nLightSource \"distant\" \"rgb L\" [1 1 1]\n\
+                 MakeNamedMedium \"m\" \"string type\" \"homogeneous\" \"float g\" 0.5\n\
+                 AttributeBegin\nMediumInterface \"m\" \"\"\nMaterial \"interface\"\nShape \"sphere\"\nAttributeEnd\n"
+            ),
+            1,
+        ),
+    ];
+    for (name, text, count) in cases {
+        let scene = dir.join(name);
+        std::fs::write(&scene, text).unwrap();
+        let s = scene.to_str().unwrap();
+        let check = nimbus(&["check", s]);
+        let render = nimbus(&["render", s, "--outfile", dir.join("o.exr").to_str().unwrap()]);
+        assert_eq!(check.status.code(), Some(1), "{name}");
+        assert_eq!(render.status.code(), Some(1), "{name}");
+        assert_eq!(first_error(&check), first_error(&render), "{name}");
+        assert!(!first_error(&check).is_empty(), "{name}");
+        let errors = String::from_utf8_lossy(&check.stderr).matches(": error: ").count();
+        assert_eq!(errors, count, "{name}: {}", String::from_utf8_lossy(&check.stderr));
+    }
+}

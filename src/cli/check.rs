@@ -1,11 +1,13 @@
-//! `nimbus check scene.pbrt`: parse, read every entity's settings, print a summary.
+//! `nimbus check scene.pbrt`: parse, read every entity's settings, build the scene as
+//! `render` builds it, check the method's constraints, print every error or a summary.
 
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
 use anyhow::Result;
-use nimbus::setup::check_scene;
+use nimbus::scene::BuildOptions;
+use nimbus::setup::check_scene_full;
 
 /// Arguments of `nimbus check`.
 #[derive(clap::Args)]
@@ -27,15 +29,27 @@ fn counts(m: &BTreeMap<String, usize>) -> String {
     format!("{total} ({})", parts.join(", "))
 }
 
-/// Runs the check; scene errors print as `file:line:col: error: message`.
+/// Runs the check; scene errors print as `file:line:col: error: message`, every one found.
 pub fn run(args: &CheckArgs) -> Result<ExitCode> {
-    let report = nimbus::parser::load_file(&args.scene).and_then(|scene| check_scene(&scene));
-    let report = match report {
-        Ok(r) => r,
+    let desc = match nimbus::parser::load_file(&args.scene) {
+        Ok(d) => d,
         Err(e) => {
-            match &e.loc {
-                Some(loc) => eprintln!("{loc}: error: {}", e.message),
-                None => eprintln!("error: {}", e.message),
+            super::render::scene_error(&e, &args.scene);
+            return Ok(ExitCode::FAILURE);
+        }
+    };
+    let opts =
+        BuildOptions { scene_file: (args.scene.as_os_str() != "-").then(|| args.scene.clone()), ..Default::default() };
+    let full = check_scene_full(&desc, &opts);
+    // The first is where `render` stops; the others are what else the readers found.
+    for e in &full.errors {
+        super::render::scene_error(e, &args.scene);
+    }
+    let report = match full.summary {
+        Some(r) if full.errors.is_empty() => r,
+        _ => {
+            if full.errors.len() > 1 {
+                eprintln!("{} errors", full.errors.len());
             }
             return Ok(ExitCode::FAILURE);
         }

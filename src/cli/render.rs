@@ -75,10 +75,12 @@ pub struct RenderArgs {
     spectral: Option<SpectralMode>,
 }
 
-fn scene_error(e: &nimbus::parser::Error) {
+/// Prints a scene's error at its place, or at the scene file when it has none (as `nimbus
+/// check` prints it).
+pub(crate) fn scene_error(e: &nimbus::parser::Error, scene: &std::path::Path) {
     match &e.loc {
         Some(loc) => eprintln!("{loc}: error: {}", e.message),
-        None => eprintln!("error: {}", e.message),
+        None => eprintln!("{}: error: {}", scene.display(), e.message),
     }
 }
 
@@ -106,7 +108,7 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
     let mut desc = match nimbus::parser::load_file(&args.scene) {
         Ok(d) => d,
         Err(e) => {
-            scene_error(&e);
+            scene_error(&e, &args.scene);
             return Ok(ExitCode::FAILURE);
         }
     };
@@ -134,7 +136,7 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
     let setup = match nimbus::setup::build(&desc, &opts) {
         Ok(s) => s,
         Err(e) => {
-            scene_error(&e);
+            scene_error(&e, &args.scene);
             return Ok(ExitCode::FAILURE);
         }
     };
@@ -157,7 +159,7 @@ pub fn run(args: &RenderArgs) -> Result<ExitCode> {
     let prepared = match setup.prepare() {
         Ok(p) => p,
         Err(e) => {
-            eprintln!("{}: error: {e}", args.scene.display());
+            scene_error(&nimbus::setup::method_error(&desc, &e), &args.scene);
             return Ok(ExitCode::FAILURE);
         }
     };

@@ -133,6 +133,13 @@ pub trait MethodSettings: SettingsBox + std::fmt::Debug + Send + Sync + Any {
         None
     }
 
+    /// Whether the method can render `scene` at all (its constraints), without preparing
+    /// anything: what `nimbus check` asks. The error is the one [`MethodSettings::create`]
+    /// would give.
+    fn check(&self, _scene: &Scene) -> crate::Result<()> {
+        Ok(())
+    }
+
     /// The job `nimbus cluster` runs before the method's render tasks, for `scene_file`.
     fn precompute(&self, _scene_file: &Path) -> crate::Result<Option<Precompute>> {
         Ok(None)

@@ -116,30 +116,89 @@ pub fn unused_parameters(scene: &SceneDescription) -> Vec<Warning> {
     w
 }
 
-/// Reads every entity of `scene` through its settings reader. Errors stop at the first; the
-/// result lists warnings, including every parameter no reader used.
+/// Reads every entity of `scene` through its settings reader. Errors stop at the first;
+/// the result lists warnings, including every parameter no reader used.
 pub fn check_scene(scene: &SceneDescription) -> Result<SceneCheck, Error> {
-    let mut warnings = scene.warnings.clone();
+    let mut errors = Vec::new();
+    match read_all(scene, &mut errors) {
+        Some(check) if errors.is_empty() => Ok(check),
+        _ => Err(errors.swap_remove(0)),
+    }
+}
 
-    let camera = CameraSettings::from_entity(&scene.camera)?;
+/// What `nimbus check` reports: the summary of what the readers found, and every error.
+pub struct FullCheck {
+    /// The summary (`None` when the camera or film could not be read).
+    pub summary: Option<SceneCheck>,
+    /// Every problem found. The first is the one rendering the scene stops at.
+    pub errors: Vec<Error>,
+}
+
+/// Everything `nimbus render` does short of tracing rays: every entity read (every problem
+/// the readers find, not only the first), then the scene built as `render` builds it for the
+/// scene's method (lights, media, textures and their images, displacement, the BVH), and the
+/// method's constraints on the scene checked. The first error is the build's or the method's
+/// when there is one, so `check` and `render` stop at the same first error.
+pub fn check_scene_full(scene: &SceneDescription, opts: &crate::scene::BuildOptions) -> FullCheck {
+    let mut errors = Vec::new();
+    let mut summary = read_all(scene, &mut errors);
+    let first = match super::build(scene, opts) {
+        Err(e) => Some(e),
+        Ok(setup) => {
+            // What building says besides (conversions pbrt-v4 warns of, notes).
+            if let Some(summary) = &mut summary {
+                for w in setup.scene.warnings.iter() {
+                    if !summary.warnings.contains(w) {
+                        summary.warnings.push(w.clone());
+                    }
+                }
+            }
+            setup.integrator.check(&setup.scene).err().map(|e| super::method_error(scene, &e))
+        }
+    };
+    if let Some(e) = first {
+        errors.retain(|x| x.message != e.message || x.loc != e.loc);
+        errors.insert(0, e);
+    }
+    FullCheck { summary, errors }
+}
+
+/// Reads every entity, pushing each error to `errors` and going on; the summary when the
+/// camera and film could be read.
+fn read_all(scene: &SceneDescription, errors: &mut Vec<Error>) -> Option<SceneCheck> {
+    let mut warnings = scene.warnings.clone();
+    let ok = |r: Result<(), Error>, errors: &mut Vec<Error>| {
+        if let Err(e) = r {
+            errors.push(e);
+        }
+    };
+
+    let camera = CameraSettings::from_entity(&scene.camera).map_err(|e| errors.push(e)).ok();
     unused(&scene.camera.entity.params, &mut warnings);
-    warnings.extend(camera.aperture_warning(&scene.camera));
-    let film = FilmSettings::from_entity(&scene.film)?;
+    if let Some(camera) = &camera {
+        warnings.extend(camera.aperture_warning(&scene.camera));
+    }
+    let film = FilmSettings::from_entity(&scene.film).map_err(|e| errors.push(e)).ok();
     unused(&scene.film.params, &mut warnings);
     // A lens that cannot focus or lets no light through is refused here as rendering refuses it.
-    if let Projection::Realistic(r) = &camera.projection {
-        crate::camera::RealisticLens::validate(r, film.resolution, film.diagonal)
-            .map_err(|m| Error::new(&scene.camera.entity.loc, format!("realistic camera: {m}")))?;
+    if let (Some(camera), Some(film)) = (&camera, &film)
+        && let Projection::Realistic(r) = &camera.projection
+    {
+        let lens = crate::camera::RealisticLens::validate(r, film.resolution, film.diagonal)
+            .map_err(|m| Error::new(&scene.camera.entity.loc, format!("realistic camera: {m}")));
+        ok(lens.map(|_| ()), errors);
     }
-    FilterSettings::from_entity(&scene.filter)?;
+    ok(FilterSettings::from_entity(&scene.filter).map(|_| ()), errors);
     unused(&scene.filter.params, &mut warnings);
-    let sampler = SamplerSettings::from_entity(&scene.sampler, scene.options.seed, &mut warnings)?;
+    let sampler = SamplerSettings::from_entity(&scene.sampler, scene.options.seed, &mut warnings)
+        .map_err(|e| errors.push(e))
+        .ok();
     unused(&scene.sampler.params, &mut warnings);
-    IntegratorSettings::from_entity(&scene.integrator, None)?;
+    ok(IntegratorSettings::from_entity(&scene.integrator, None).map(|_| ()), errors);
     warnings.extend(IntegratorSettings::substitution_note(&scene.integrator, None));
     unused(&scene.integrator.params, &mut warnings);
     if scene.accelerator.name != "bvh" && scene.accelerator.name != "kdtree" {
-        return Err(Error::new(
+        errors.push(Error::new(
             &scene.accelerator.loc,
             format!("unknown accelerator \"{}\" (bvh or kdtree)", scene.accelerator.name),
         ));
@@ -156,20 +215,22 @@ pub fn check_scene(scene: &SceneDescription) -> Result<SceneCheck, Error> {
     let mut triangles = 0;
     let object_shapes = scene.instance_definitions.iter().flat_map(|d| d.shapes.iter());
     for shape in scene.shapes.iter().chain(object_shapes) {
-        let settings = ShapeSettings::from_entity(shape)?;
-        triangles += shape_triangles(shape, &settings)?;
+        match ShapeSettings::from_entity(shape).and_then(|settings| shape_triangles(shape, &settings)) {
+            Ok(n) => triangles += n,
+            Err(e) => errors.push(e),
+        }
         unused(&shape.entity.params, &mut warnings);
         *shapes.entry(shape.entity.name.clone()).or_insert(0) += 1;
     }
 
     let mut lights = BTreeMap::new();
     for light in &scene.lights {
-        LightSettings::from_entity(light)?;
+        ok(LightSettings::from_entity(light).map(|_| ()), errors);
         unused(&light.entity.params, &mut warnings);
         *lights.entry(light.entity.name.clone()).or_insert(0) += 1;
     }
     for area in &scene.area_lights {
-        AreaLightSettings::from_entity(area)?;
+        ok(AreaLightSettings::from_entity(area).map(|_| ()), errors);
         unused(&area.params, &mut warnings);
         *lights.entry(format!("area ({})", area.name)).or_insert(0) += 1;
     }
@@ -189,26 +250,27 @@ pub fn check_scene(scene: &SceneDescription) -> Result<SceneCheck, Error> {
     let uses_default = scene.shapes.iter().any(|s| s.material == nimbus_parser::MaterialRef::Index(0));
     for (i, m) in scene.materials.iter().enumerate() {
         if i > 0 || uses_default {
-            material(m, &mut warnings)?;
+            ok(material(m, &mut warnings), errors);
         }
     }
     for m in &scene.named_materials {
-        material(&m.entity, &mut warnings)?;
+        ok(material(&m.entity, &mut warnings), errors);
     }
 
     let mut textures = BTreeMap::new();
     for t in &scene.textures {
-        TextureSettings::from_entity(t)?;
+        ok(TextureSettings::from_entity(t).map(|_| ()), errors);
         unused(&t.entity.params, &mut warnings);
         *textures.entry(t.entity.name.clone()).or_insert(0) += 1;
     }
 
     let mut media = BTreeMap::new();
     for m in &scene.media {
-        MediumSettings::from_entity(m)?;
+        ok(MediumSettings::from_entity(m).map(|_| ()), errors);
         unused(&m.entity.params, &mut warnings);
         *media.entry(m.entity.name.clone()).or_insert(0) += 1;
     }
+    let (camera, film, sampler) = (camera?, film?, sampler?);
 
     let camera_text = match &camera.projection {
         Projection::Perspective { fov } => format!("{}, fov {fov}°", scene.camera.entity.name),
@@ -228,7 +290,7 @@ pub fn check_scene(scene: &SceneDescription) -> Result<SceneCheck, Error> {
         Some(m) => format!("{camera_text}, inside medium \"{m}\""),
         None => camera_text,
     };
-    Ok(SceneCheck {
+    Some(SceneCheck {
         camera: camera_text,
         resolution: film.resolution,
         filename: film.filename,

@@ -6,7 +6,7 @@
 
 mod check;
 
-pub use check::{SceneCheck, check_scene, unused_parameters};
+pub use check::{FullCheck, SceneCheck, check_scene, check_scene_full, unused_parameters};
 
 use nimbus_parser::{Error, SceneDescription, Warning};
 
@@ -37,6 +37,13 @@ impl Setup {
     pub fn prepare(&self) -> crate::Result<Prepared> {
         registry::prepare(&*self.integrator, &self.scene)
     }
+}
+
+/// A method's refusal of a scene (its constraints, a failed preparation), placed at the
+/// scene's `Integrator` directive when it has one.
+pub fn method_error(desc: &SceneDescription, e: &crate::Error) -> Error {
+    let loc = &desc.integrator.loc;
+    Error { loc: (loc.line > 0).then(|| loc.clone()), message: e.to_string() }
 }
 
 /// Reads the method, then builds the scene it needs.

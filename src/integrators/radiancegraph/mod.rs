@@ -77,6 +77,12 @@ impl MethodSettings for RadianceGraphSettings {
         Ok(Some(Precompute::Command { args, file: format!("graph/{stem}_d{depth}.txt") }))
     }
 
+    /// The thesis's constraints (one gray isotropic medium, its lights), every violated one
+    /// named.
+    fn check(&self, scene: &Scene) -> crate::Result<()> {
+        Volume::new(scene).map(|_| ())
+    }
+
     fn create(&self, scene: &Scene) -> crate::Result<Box<dyn super::Integrator>> {
         Ok(Box::new(create(self, scene)?))
     }

@@ -36,7 +36,8 @@ pub struct SceneCheck {
     pub integrator_params: Vec<String>,
     /// Shapes by type (instanced object shapes included once).
     pub shapes: BTreeMap<String, usize>,
-    /// Triangles in all meshes (each instanced mesh counted once).
+    /// Triangles in all meshes (each instanced mesh counted once; as built by `nimbus check`,
+    /// displacement and subdivision included).
     pub triangles: u64,
     /// Object instances.
     pub instances: usize,
@@ -147,6 +148,8 @@ pub fn check_scene_full(scene: &SceneDescription, opts: &crate::scene::BuildOpti
         Ok(setup) => {
             // What building says besides (conversions pbrt-v4 warns of, notes).
             if let Some(summary) = &mut summary {
+                // As built: displaced and subdivided meshes refined, each object once.
+                summary.triangles = setup.scene.stats.triangles as u64;
                 for w in setup.scene.warnings.iter() {
                     if !summary.warnings.contains(w) {
                         summary.warnings.push(w.clone());

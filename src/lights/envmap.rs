@@ -56,6 +56,16 @@ impl EnvironmentMap {
         })
     }
 
+    /// The map with directions looked up (and their density evaluated) through
+    /// `light_from_world` instead of the inverse of the frame samples are placed by. pbrt-v4
+    /// places samples by the 3×3 of its render-from-light matrix and looks directions up by the
+    /// 3×3 of that matrix's inverse; the two are each other's inverse unless the matrix is
+    /// projective, where pbrt-v4's image is what this pair makes.
+    pub fn with_lookup_frame(mut self, light_from_world: Affine3A) -> EnvironmentMap {
+        self.light_from_world = light_from_world;
+        self
+    }
+
     /// Applies `f` to every pixel (e.g. RGB transport converting each texel through a camera
     /// sensor once); the sampling distribution is kept, as it only needs to be proportional
     /// to the radiance roughly.

@@ -70,13 +70,36 @@ pub(super) fn light(
     spectra: &SpectrumResolver<'_>,
     transport: Transport,
     medium: u32,
+    render_origin: Vec3,
     warnings: &mut Vec<Warning>,
 ) -> Result<Option<Light>, Error> {
     let e = &l.entity;
     let settings = LightSettings::from_entity(l)?;
-    let world = match settings.kind {
-        LightSpec::Infinite { .. } => direction_frame(&l.world_from_light.start, &e.loc)?,
-        _ => affine(&l.world_from_light.start, &e.loc)?,
+    // An infinite light's directions: pbrt-v4 places samples by one frame and looks
+    // directions up by another (see `direction_frames`); the others are placed by the affine.
+    let (world, lookup) = match settings.kind {
+        LightSpec::Infinite { filename: Some(_), .. } => {
+            let f = direction_frames(&l.world_from_light.start, render_origin, &e.loc)?;
+            if f.bent {
+                warnings.push(Warning::new(
+                    &e.loc,
+                    "infinite light under a projective transform: pbrt-v4 looks its directions up through the \
+                     inverse's 3x3 but places its light samples through the transform's own 3x3, unnormalised, so \
+                     its image mixes two skies; nimbus renders the sky pbrt-v4's camera rays see, sampled \
+                     consistently (the two agree only with the camera at the origin)",
+                ));
+            }
+            (f.forward, f.inverse)
+        }
+        LightSpec::Infinite { .. } => {
+            // A uniform sky, or a portal's 1x1 image of L, has no orientation to get wrong.
+            let f = direction_frames(&l.world_from_light.start, render_origin, &e.loc)?;
+            (f.forward, f.inverse)
+        }
+        _ => {
+            let a = affine(&l.world_from_light.start, &e.loc)?;
+            (a, a.inverse())
+        }
     };
     let rgb = |s: &SpectrumSpec| spectra.illuminant(s, e.color_space).map_err(|m| err(&e.loc, m.to_string()));
     let kind = match &settings.kind {
@@ -185,7 +208,7 @@ pub(super) fn light(
             // The corners are world-space points (pbrt-v4 does not apply the light's transform
             // to them), the image is oriented by the light's transform.
             let loc = e.params.loc("portal").unwrap_or(&e.loc);
-            let mut map = PortalMap::new(&image, cs, world, scale, corners.map(Vec3::from))
+            let mut map = PortalMap::new(&image, cs, lookup.inverse(), scale, corners.map(Vec3::from))
                 .map_err(|m| err(loc, format!("infinite light: {m}")))?;
             if transport == Transport::Rgb && !spectra.sensor.is_passthrough() {
                 map.map_pixels(|p| spectra.emitted_texel(p, cs));
@@ -203,7 +226,8 @@ pub(super) fn light(
             if let Some(ev) = illuminance {
                 scale *= illuminance_factor(*ev, Some(path), &image).map_err(|m| err(&e.loc, m))?;
             }
-            let mut map = EnvironmentMap::new(&image, cs, world, scale).map_err(|m| err(&e.loc, m))?;
+            let mut map =
+                EnvironmentMap::new(&image, cs, world, scale).map_err(|m| err(&e.loc, m))?.with_lookup_frame(lookup);
             // RGB transport sees each texel's film RGB; through a camera sensor that is the
             // texel's illuminant spectrum seen by the sensor (spectral transport converts at
             // lookup).

@@ -233,7 +233,10 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions, needs: &SceneNe
     };
     for l in &desc.lights {
         let medium = l.medium.as_deref().map_or(NONE, |n| media_ids.get(n).copied().unwrap_or(NONE));
-        if let Some(light) = light(l, &spectra, transport.transport, medium, &mut warnings)? {
+        // pbrt-v4's render space is world space moved to the camera: an infinite light's
+        // projective transform depends on where that is.
+        let render_origin = camera.position();
+        if let Some(light) = light(l, &spectra, transport.transport, medium, render_origin, &mut warnings)? {
             lights.push(light);
         }
     }

@@ -33,29 +33,39 @@ pub(super) fn affine(m: &DMat4, loc: &FileLoc) -> Result<Affine3A, Error> {
     Ok(a)
 }
 
-/// The frame of an infinite light: pbrt-v4 transforms only directions by it, through the
-/// upper 3×3 of the matrix and of its inverse, so translation does not matter and neither does
-/// a projective last row while the translation column is zero (the inverse's 3×3 is then the
-/// 3×3's inverse). Published scenes rotate environment maps this way (sssdragon).
-pub(super) fn direction_frame(m: &DMat4, loc: &FileLoc) -> Result<Affine3A, Error> {
-    let row3 = m.row(3);
-    let projective = (row3.x, row3.y, row3.z) != (0.0, 0.0, 0.0) || row3.w != 1.0;
-    let col3 = m.col(3);
-    if projective && (col3.x, col3.y, col3.z) != (0.0, 0.0, 0.0) {
-        return Err(err(
-            loc,
-            "infinite light under a projective transform with a translation: its directions would not be those \
-             of a linear map (pbrt-v4 would bend them through the inverse's 3x3), which nimbus does not follow",
-        ));
-    }
-    if projective && row3.w <= 0.0 {
-        return Err(err(loc, "infinite light under a projective transform whose last entry is not positive"));
-    }
-    let a = Affine3A::from_mat3(glam::DMat3::from_mat4(*m).as_mat3());
-    if !a.is_finite() || a.matrix3.determinant() == 0.0 {
+/// The frames of an infinite light. pbrt-v4 transforms only its directions: it looks a
+/// direction up through the upper 3×3 of R⁻¹, R its render-from-light matrix (render space
+/// being world space moved to the camera, `render_origin`), and places light samples through
+/// the upper 3×3 of R without normalising them. For an affine transform these are a rotation
+/// and its inverse, translation playing no part. A projective last row (published scenes
+/// rotate environment maps with one: sssdragon) leaves the lookup a rotation but bends and
+/// scales pbrt-v4's samples (unless the camera is at the origin), so its light samples and its
+/// camera rays see two different skies. nimbus renders the sky its lookup sees, sampling it
+/// consistently, and `bent` says when pbrt-v4's samples would differ.
+pub(super) struct DirectionFrames {
+    /// World from light, for placing samples (the inverse of `inverse`).
+    pub forward: Affine3A,
+    /// Light from world, for looking directions up (pbrt-v4's).
+    pub inverse: Affine3A,
+    /// pbrt-v4 places this light's samples through another frame than `forward`.
+    pub bent: bool,
+}
+
+pub(super) fn direction_frames(m: &DMat4, render_origin: glam::Vec3, loc: &FileLoc) -> Result<DirectionFrames, Error> {
+    let r = DMat4::from_translation(-render_origin.as_dvec3()) * *m;
+    let inverse = glam::DMat3::from_mat4(r.inverse());
+    if !inverse.is_finite() || inverse.determinant() == 0.0 || m.determinant() == 0.0 {
         return Err(err(loc, "the infinite light's transform is singular or not finite"));
     }
-    Ok(a)
+    let forward = inverse.inverse();
+    let pbrt_forward = glam::DMat3::from_mat4(r);
+    let bent =
+        (0..3).any(|c| (forward.col(c) - pbrt_forward.col(c)).length() > 1e-6 * forward.col(c).length().max(1.0));
+    Ok(DirectionFrames {
+        forward: Affine3A::from_mat3(forward.as_mat3()),
+        inverse: Affine3A::from_mat3(inverse.as_mat3()),
+        bent,
+    })
 }
 
 #[cfg(test)]
@@ -63,23 +73,30 @@ mod tests {
     use super::*;
 
     #[test]
-    fn infinite_lights_take_the_3x3_of_a_projective_rotation() {
+    fn infinite_lights_look_up_as_pbrt_v4_and_sample_consistently() {
         let loc = FileLoc::new("t.pbrt".into(), 1, 1);
-        // sssdragon's environment frame: a rotation with (0, 0, 8.87, 1) as its last row.
+        let v = glam::Vec3::new(0.3, -0.5, 0.8);
+        // An affine transform: its rotation and the inverse, translation and camera aside.
+        let rot = DMat4::from_rotation_translation(glam::DQuat::from_rotation_y(0.7), glam::DVec3::new(1.0, 2.0, 3.0));
+        let f = direction_frames(&rot, glam::Vec3::new(4.0, 5.0, 6.0), &loc).unwrap();
+        let expected = glam::Quat::from_rotation_y(0.7) * v;
+        assert!((f.forward.transform_vector3(v) - expected).length() < 1e-5);
+        assert!((f.inverse.transform_vector3(expected) - v).length() < 1e-5);
+        // sssdragon's environment frame: a rotation with (0, 0, 8.87, 1) as its last row. The
+        // lookup is the rotation wherever the camera is; pbrt-v4's samples bend unless it is at
+        // the origin.
         let m = DMat4::from_cols_array(&[
             -0.224951, 0.0, -0.97437, 0.0, -0.97437, 0.0, 0.224951, 0.0, 0.0, 1.0, 0.0, 8.87, 0.0, 0.0, 0.0, 1.0,
         ]);
         assert!(affine(&m, &loc).is_err());
-        let a = direction_frame(&m, &loc).unwrap();
-        let d = a.transform_vector3(glam::Vec3::Z);
-        assert!((d - glam::Vec3::Y).length() < 1e-6, "{d}");
-        assert_eq!(a.translation, glam::Vec3A::ZERO);
-        // Translation alone is dropped; translation with a projective row is refused.
-        let moved = DMat4::from_translation(glam::DVec3::new(1.0, 2.0, 3.0));
-        assert_eq!(direction_frame(&moved, &loc).unwrap(), Affine3A::IDENTITY);
-        let mut both = moved;
-        both.x_axis.w = 0.5;
-        assert!(direction_frame(&both, &loc).unwrap_err().to_string().contains("with a translation"));
-        assert!(direction_frame(&DMat4::ZERO, &loc).is_err());
+        let at_origin = direction_frames(&m, glam::Vec3::ZERO, &loc).unwrap();
+        assert!((at_origin.forward.transform_vector3(glam::Vec3::Z) - glam::Vec3::Y).length() < 1e-6);
+        assert!((at_origin.inverse.transform_vector3(glam::Vec3::Y) - glam::Vec3::Z).length() < 1e-5);
+        assert!(!at_origin.bent && !f.bent);
+        let moved = direction_frames(&m, glam::Vec3::new(0.0, 1.0, -4.0), &loc).unwrap();
+        assert!((moved.inverse.transform_vector3(glam::Vec3::Y) - glam::Vec3::Z).length() < 1e-5);
+        assert!((moved.forward.transform_vector3(glam::Vec3::Z) - glam::Vec3::Y).length() < 1e-5);
+        assert!(moved.bent, "pbrt-v4 bends this one's samples");
+        assert!(direction_frames(&DMat4::ZERO, glam::Vec3::ZERO, &loc).is_err());
     }
 }

@@ -349,6 +349,13 @@ AttributeEnd
     let seen = |alpha: &str| render_scene(&load_scene(&scene(up, alpha), &BuildOptions::default())).mean();
     assert!(seen("")[0] > 1.0, "the visible light fills the view");
     assert_eq!(seen(r#""float alpha" 0"#).to_array(), [0.0; 3], "the invisible light is seen through");
+    // simplevolpath reaches lights only by tracing towards them: it refuses such a scene.
+    let setup = load_scene(
+        &scene(room, r#""float alpha" 0"#),
+        &BuildOptions { integrator: Some("simplevolpath".into()), ..Default::default() },
+    );
+    let e = setup.prepare().err().expect("refused").to_string();
+    assert!(e.contains("invisible") && e.contains("volpath"), "{e}");
 }
 
 /// `text` rendered at seeds 1–4: each image's pixels as R + G + B.

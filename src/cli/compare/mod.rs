@@ -179,8 +179,8 @@ fn preparing_integrator(desc: &nimbus::parser::SceneDescription, names: &[String
     match preparing[..] {
         [one] => Ok(one.to_string()),
         [] => anyhow::bail!(
-            "--precomputed: none of {} prepares anything before rendering (radiancegraph's graph and \
-             guided's guide cache are what such a file holds)",
+            "--precomputed: none of {} prepares anything before rendering (such a file holds what a \
+             method builds or trains before its renders: a graph, a guide cache)",
             names.join(", ")
         ),
         _ => anyhow::bail!(

@@ -48,7 +48,24 @@ impl MethodSettings for SimpleVolPathSettings {
         Ok(())
     }
 
+    /// The mixture reaches a luminaire only by tracing the direction it sampled towards it,
+    /// so a light no ray can hit (pbrt-v4's invisible alpha-0 area light) would add nothing:
+    /// such a scene is refused by name rather than rendered without that light.
+    fn check(&self, scene: &Scene) -> crate::Result<()> {
+        let invisible =
+            scene.lights.iter().any(|l| matches!(l.kind, crate::lights::LightKind::Area { invisible: true, .. }));
+        if invisible {
+            return Err(crate::Error::Unsupported(
+                "simplevolpath reaches area lights by tracing towards them, and this scene has an invisible one \
+                 (a shape of constant alpha 0, which no ray hits): render it with volpath"
+                    .into(),
+            ));
+        }
+        Ok(())
+    }
+
     fn create(&self, scene: &Scene) -> crate::Result<Box<dyn super::Integrator>> {
+        self.check(scene)?;
         Ok(Box::new(SimpleVolPath::new(self, scene)))
     }
 }

@@ -52,6 +52,15 @@ pub(super) struct DirectionFrames {
 }
 
 pub(super) fn direction_frames(m: &DMat4, render_origin: glam::Vec3, loc: &FileLoc) -> Result<DirectionFrames, Error> {
+    let row3 = m.row(3);
+    if (row3.x, row3.y, row3.z, row3.w) == (0.0, 0.0, 0.0, 1.0) {
+        // Affine: the rotation and its inverse, exactly as every other light's frame is made.
+        let a = Affine3A::from_mat3(glam::DMat3::from_mat4(*m).as_mat3());
+        if !a.is_finite() || a.matrix3.determinant() == 0.0 {
+            return Err(err(loc, "the infinite light's transform is singular or not finite"));
+        }
+        return Ok(DirectionFrames { forward: a, inverse: a.inverse(), bent: false });
+    }
     let r = DMat4::from_translation(-render_origin.as_dvec3()) * *m;
     let inverse = glam::DMat3::from_mat4(r.inverse());
     if !inverse.is_finite() || inverse.determinant() == 0.0 || m.determinant() == 0.0 {

@@ -25,7 +25,12 @@ const GRAPH_CONFIG: &str = r#"{"graphBuilder": {"radiusModifier": 40, "dimension
 /// Every scene nimbus ships: the suite, pbrt-v4's references and nimbus's own parity scenes.
 fn shipped_scenes(root: &Path) -> Vec<PathBuf> {
     let mut scenes = Vec::new();
-    for dir in ["pbrt-scenes", "pbrt-scenes/pbrt-v4-references/scenes", "pbrt-scenes/pbrt-v4-parity"] {
+    for dir in [
+        "pbrt-scenes",
+        "pbrt-scenes/pbrt-v4-references/scenes",
+        "pbrt-scenes/pbrt-v4-parity",
+        "pbrt-scenes/disney-cloud",
+    ] {
         for entry in std::fs::read_dir(root.join(dir)).unwrap_or_else(|e| panic!("{dir}: {e}")) {
             let path = entry.unwrap().path();
             if path.extension().is_some_and(|e| e == "pbrt") {

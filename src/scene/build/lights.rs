@@ -206,7 +206,8 @@ pub(super) fn light(
                 scale *= illuminance_factor(*ev, filename.as_deref(), &image).map_err(|m| err(&e.loc, m))?;
             }
             // The corners are world-space points (pbrt-v4 does not apply the light's transform
-            // to them), the image is oriented by the light's transform.
+            // to them), the image is oriented by the light's transform: the frame pbrt-v4 looks
+            // its directions up by, inverted.
             let loc = e.params.loc("portal").unwrap_or(&e.loc);
             let mut map = PortalMap::new(&image, cs, lookup.inverse(), scale, corners.map(Vec3::from))
                 .map_err(|m| err(loc, format!("infinite light: {m}")))?;

@@ -61,10 +61,12 @@ RADII = [0.5, 1, 2, 4, 8]
 VOLUME_SCALES = [0.5, 1, 2, 4]
 
 
-def graph_stats(scene, config, out_dir, extra=()):
-    """One `nimbus graph build` of `scene` with `config`: the graph file and its statistics
-    (nodes, edges, build time, bytes per node and edge at the peak)."""
-    run(["graph", "build", scene, "--config", config, "--out", out_dir, "--quiet"] + list(extra))
+def graph_stats(scene):
+    """One `nimbus graph build` of `scene` with the config beside it (written by `scene_dir`),
+    into a `graph/` folder beside it: the graph file and its statistics (nodes, edges, build
+    time, bytes per node and edge at the peak)."""
+    config, out_dir = scene.replace(".pbrt", ".json"), os.path.join(os.path.dirname(scene), "graph")
+    run(["graph", "build", scene, "--config", config, "--out", out_dir, "--quiet"])
     stem = os.path.splitext(os.path.basename(config))[0]
     stats = json.load(open(os.path.join(out_dir, f"{stem}_stats.json")))
     graph = [p for p in os.listdir(out_dir) if p.startswith(stem + "_d") and p.endswith(".txt")][0]
@@ -150,7 +152,7 @@ def main():
     main_rows, references = [], {}
     for name, (src, config, subs) in cases.items():
         scene = scene_dir(name, src, config, subs)
-        _, stats = graph_stats(scene, scene.replace(".pbrt", ".json"), os.path.join(WORK, name, "graph"))
+        _, stats = graph_stats(scene)
         c = compare(scene, ["volpath", "radiancegraph"], out_dir(name), spp=SPP, seeds=SEEDS, reference_spp=REF_SPP,
                     html=True)
         references[name] = [os.path.join(os.path.dirname(scene), os.path.basename(p)) for p in c.results["reference"]["paths"]]
@@ -171,7 +173,7 @@ def main():
         for est, extra in [("graph", []), ("collision", collision)]:
             scene = scene_dir(f"{name}-dense-{est}", src, dense, list(subs) + extra)
             if est == "graph":
-                _, row["stats"] = graph_stats(scene, scene.replace(".pbrt", ".json"), os.path.join(os.path.dirname(scene), "graph"))
+                _, row["stats"] = graph_stats(scene)
             c = compare(scene, ["radiancegraph"], out_dir(f"{name}-dense-{est}"), spp=SPP, seeds=SEEDS,
                         reference=references[name], keep_images=False)
             row[est] = summary_row(c)
@@ -187,7 +189,7 @@ def main():
         def edit(cfg, k=k):
             cfg["graphBuilder"]["radiusModifier"] = base_modifier * k
         scene = scene_dir(f"radius-{k}", src, config, subs, edit)
-        _, stats = graph_stats(scene, scene.replace(".pbrt", ".json"), os.path.join(os.path.dirname(scene), "graph"))
+        _, stats = graph_stats(scene)
         c = compare(scene, ["radiancegraph"], out_dir(f"radius-{k}"), spp=SPP, seeds=SEEDS, reference=references["cloud"],
                     keep_images=False)
         radius_rows.append({"k": k, "radius": stats["node_radius"], **stats, **summary_row(c)})
@@ -204,7 +206,7 @@ def main():
             cfg["graphBuilder"]["radiusModifier"] = cube_modifier / s
         scene = scene_dir(f"size-{s}", src, config,
                           [(r"Scale 5 5 5", f"Scale {5 * s} {5 * s} {5 * s}"), (r"LookAt 20 0 0", f"LookAt {20 * s} 0 0")], edit)
-        _, stats = graph_stats(scene, scene.replace(".pbrt", ".json"), os.path.join(os.path.dirname(scene), "graph"))
+        _, stats = graph_stats(scene)
         c = compare(scene, ["volpath", "radiancegraph"], out_dir(f"size-{s}"), spp=SPP, seeds=SEEDS,
                     reference_spp=SWEEP_REF_SPP, keep_images=False)
         volume_rows.append({"scale": s, "volume_radius": stats["scene_radius"], **stats, **summary_row(c)})
@@ -214,7 +216,7 @@ def main():
     # 4. Orbit: 16 cameras around the cloud from one saved graph.
     src, config, subs = cases["cloud"]
     scene = scene_dir("orbit", src, config, subs)
-    graph, stats = graph_stats(scene, scene.replace(".pbrt", ".json"), os.path.join(WORK, "orbit", "graph"))
+    graph, stats = graph_stats(scene)
     orbit = []
     for i in range(16):
         a = 2 * math.pi * i / 16

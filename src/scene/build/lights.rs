@@ -77,10 +77,11 @@ pub(super) fn light(
     let settings = LightSettings::from_entity(l)?;
     // An infinite light's directions: pbrt-v4 places samples by one frame and looks
     // directions up by another (see `direction_frames`); the others are placed by the affine.
-    let (world, lookup) = match settings.kind {
-        LightSpec::Infinite { filename: Some(_), .. } => {
+    let (world, lookup) = match &settings.kind {
+        LightSpec::Infinite { filename, .. } => {
             let f = direction_frames(&l.world_from_light.start, render_origin, &e.loc)?;
-            if f.bent {
+            // A uniform sky, or a portal's 1x1 image of L, has no orientation to get wrong.
+            if f.bent && filename.is_some() {
                 warnings.push(Warning::new(
                     &e.loc,
                     "infinite light under a projective transform: pbrt-v4 looks its directions up through the \
@@ -89,11 +90,6 @@ pub(super) fn light(
                      consistently (the two agree only with the camera at the origin)",
                 ));
             }
-            (f.forward, f.inverse)
-        }
-        LightSpec::Infinite { .. } => {
-            // A uniform sky, or a portal's 1x1 image of L, has no orientation to get wrong.
-            let f = direction_frames(&l.world_from_light.start, render_origin, &e.loc)?;
             (f.forward, f.inverse)
         }
         _ => {

@@ -2,7 +2,7 @@
 //! analytic answers: `mix`, `diffusetransmission`, `coatedconductor`, `subsurface`, bump and
 //! normal maps, alpha, `loopsubdiv`, `curve`.
 
-use crate::common::{assert_channels, load_scene, render_scene, transport};
+use crate::common::{Estimate, assert_agree, assert_channels, load_scene, render_scene, transport};
 
 /// A plane at z = 0 of `material`, seen straight down by an orthographic camera, lit by a
 /// distant light of radiance (2, 4, 6) from `from`; one bounce, 16×16 pixels at `spp`.
@@ -246,8 +246,9 @@ Shape "loopsubdiv" "integer levels" 4 "integer indices" [{}] "point3 P" [{}]"#,
 
 /// `subsurface` is rendered as what its BSSRDF approximates: a dielectric boundary around a
 /// homogeneous medium. The same scene written that way explicitly renders the same image,
-/// sample for sample; named coefficients are pbrt-v4's (scaled), and the ways pbrt-v4 refuses
-/// (and the one nimbus lacks) are errors naming the place.
+/// sample for sample, where `maxdepth` ends no path (events inside a subsurface medium do not
+/// count towards it, see `subsurface_is_one_event_for_maxdepth`); named coefficients are
+/// pbrt-v4's (scaled), and the ways pbrt-v4 refuses are errors naming the place.
 #[test]
 fn subsurface_is_a_dielectric_around_its_medium() {
     let scene = |shape_block: &str| {
@@ -256,7 +257,7 @@ fn subsurface_is_a_dielectric_around_its_medium() {
 Camera "perspective" "float fov" 35
 Sampler "zsobol" "integer pixelsamples" 8
 Film "rgb" "integer xresolution" 24 "integer yresolution" 24
-Integrator "volpath" "integer maxdepth" 32
+Integrator "volpath" "integer maxdepth" 3000
 WorldBegin
 LightSource "distant" "point3 from" [1 3 2] "point3 to" [0 0 0] "rgb L" [3 3 3]
 LightSource "infinite" "rgb L" [0.2 0.25 0.3]
@@ -324,17 +325,130 @@ Shape "sphere" "float radius" 0.8"#,
 
     for (material, message) in [
         (r#"Material "subsurface" "rgb sigma_a" [1 1 1]"#, "without \"sigma_s\""),
-        (
-            r#"Texture "t" "spectrum" "constant"
-Material "subsurface" "texture reflectance" "t""#,
-            "textured \"reflectance\"",
-        ),
         (r#"Material "subsurface" "string name" "Moonrock""#, "\"Moonrock\" not found"),
     ] {
         let text = scene(&format!("{material}\nShape \"sphere\""));
         let desc = nimbus::parser::load_str(&text, "sss.pbrt").unwrap();
         let e = nimbus::setup::build(&desc, &transport(false)).err().expect("refused");
         assert!(e.to_string().contains("sss.pbrt:") && e.to_string().contains(message), "{material}: {e}");
+    }
+}
+
+/// pbrt-v4's BSSRDF is one scattering event, counted at the entry vertex, and nimbus's medium
+/// stands for it: the events inside a subsurface medium (and at its boundary from inside) do
+/// not count towards `maxdepth`. A convex subsurface sphere under a sky, which no light leaves
+/// to come back, then renders the same at `maxdepth` 1 as at 64, sample for sample; the same
+/// medium declared explicitly (where every event counts) is far darker at 1.
+#[test]
+fn subsurface_is_one_event_for_maxdepth() {
+    let scene = |depth: u32, shape_block: &str| {
+        format!(
+            r#"LookAt 0 0.5 4  0 0 0  0 1 0
+Camera "perspective" "float fov" 30
+Sampler "zsobol" "integer pixelsamples" 8
+Film "rgb" "integer xresolution" 24 "integer yresolution" 24
+Integrator "volpath" "integer maxdepth" {depth}
+WorldBegin
+LightSource "infinite" "rgb L" [1 1 1]
+{shape_block}"#
+        )
+    };
+    let sss = r#"Material "subsurface" "rgb reflectance" [0.7 0.5 0.3] "rgb mfp" [0.05 0.05 0.05]
+Shape "sphere" "float radius" 0.8"#;
+    let render = |text: String| render_scene(&load_scene(&text, &transport(false)));
+    let (one, many) = (render(scene(1, sss)), render(scene(64, sss)));
+    assert!(one.pixels == many.pixels, "maxdepth 1 and 64 differ");
+    // The centre: the reflectance's colour, most of it through the medium.
+    let c = one.get(12, 12);
+    assert!(c.x > 0.3 && c.x > c.y && c.y > c.z, "{c:?}");
+    // The same medium, explicit: one event only, the rest cut off.
+    let from_r = load_scene(&scene(1, sss), &transport(false));
+    let nimbus::media::MediumKind::Homogeneous { sigma_a, sigma_s, .. } = &from_r.media[0].kind else {
+        panic!("a homogeneous medium")
+    };
+    let (a, s) = (sigma_a.rgb, sigma_s.rgb);
+    let explicit = render(scene(
+        1,
+        &format!(
+            r#"MakeNamedMedium "inner" "string type" "homogeneous" "rgb sigma_a" [{} {} {}] "rgb sigma_s" [{} {} {}]
+MediumInterface "inner" ""
+Material "dielectric" "float eta" 1.33
+Shape "sphere" "float radius" 0.8"#,
+            a.x, a.y, a.z, s.x, s.y, s.z
+        ),
+    ));
+    let e = explicit.get(12, 12);
+    assert!(e.x < 0.5 * c.x, "explicit medium at maxdepth 1: {e:?} against {c:?}");
+}
+
+/// pbrt-v4 evaluates a subsurface material's textured inputs where a path enters (its
+/// BSSRDF's coefficients are the entry point's), and nimbus's medium takes them there. A
+/// `constant` texture renders as the value does, sample for sample (for `reflectance`, `mfp`
+/// and `sigma_a`); a sphere whose lower half has
+/// one reflectance and upper half another shows, away from the seam (many diffusion lengths),
+/// what each reflectance alone gives there.
+#[test]
+fn subsurface_takes_textured_inputs_where_paths_enter() {
+    let scene = |seed: u32, block: &str| {
+        format!(
+            r#"LookAt 0 0 4  0 0 0  0 1 0
+Camera "perspective" "float fov" 30
+Sampler "zsobol" "integer pixelsamples" 16 "integer seed" {seed}
+Film "rgb" "integer xresolution" 32 "integer yresolution" 32
+WorldBegin
+LightSource "infinite" "rgb L" [1 1 1]
+{block}
+AttributeBegin
+Rotate -90 1 0 0
+Shape "sphere" "float radius" 0.8
+AttributeEnd"#
+        )
+    };
+    let render = |text: String| render_scene(&load_scene(&text, &transport(false)));
+    let value = |r: &str| format!(r#"Material "subsurface" "rgb reflectance" [{r}] "rgb mfp" [0.01 0.01 0.01]"#);
+    let (lower, upper) = ("0.5 0.2 0.1", "0.1 0.2 0.5");
+    let reference = render(scene(1, &value(lower)));
+    for textured in [
+        format!(
+            r#"Texture "r" "spectrum" "constant" "rgb value" [{lower}]
+Material "subsurface" "texture reflectance" "r" "rgb mfp" [0.01 0.01 0.01]"#
+        ),
+        format!(
+            r#"Texture "m" "spectrum" "constant" "rgb value" [0.01 0.01 0.01]
+Material "subsurface" "rgb reflectance" [{lower}] "texture mfp" "m""#
+        ),
+    ] {
+        assert!(render(scene(1, &textured)).pixels == reference.pixels, "{textured}: not the value's image");
+    }
+    let sigma = r#"Material "subsurface" "rgb sigma_a" [0.1 0.2 0.3] "rgb sigma_s" [20 25 30]"#;
+    let sigma_textured = r#"Texture "a" "spectrum" "constant" "rgb value" [0.1 0.2 0.3]
+Material "subsurface" "texture sigma_a" "a" "rgb sigma_s" [20 25 30]"#;
+    assert!(render(scene(1, sigma)).pixels == render(scene(1, sigma_textured)).pixels, "textured sigma_a");
+
+    // The halves: pbrt-v4's sphere has v = 0 at the bottom (its -z pole, here rotated to -y),
+    // so a checkerboard with vscale 2 gives tex1 to the lower half.
+    let checker = format!(
+        r#"Texture "r" "spectrum" "checkerboard" "float vscale" 2 "rgb tex1" [{lower}] "rgb tex2" [{upper}]
+Material "subsurface" "texture reflectance" "r" "rgb mfp" [0.01 0.01 0.01]"#
+    );
+    // Rows 5-10 and 21-26 are 0.3 to 0.65 from the equator (the sphere spans rows 4-27);
+    // the diffusion length is at most 0.03 there.
+    let crop = |img: &nimbus::imageio::Image, rows: std::ops::Range<usize>| {
+        let mut out = nimbus::imageio::Image::new(8, rows.len());
+        out.pixels = rows.flat_map(|y| (12..20).map(move |x| img.get(x, y))).collect();
+        out
+    };
+    let seeds = 1..5u32;
+    let renders = |block: &str| seeds.clone().map(|s| render(scene(s, block))).collect::<Vec<_>>();
+    let (mixed, low, up) = (renders(&checker), renders(&value(lower)), renders(&value(upper)));
+    for (rows, name, alone, other) in [(21..27, "lower", &low, &up), (5..11, "upper", &up, &low)] {
+        let est = |imgs: &[nimbus::imageio::Image]| {
+            Estimate::from_seeds(&imgs.iter().map(|i| crop(i, rows.clone())).collect::<Vec<_>>())
+        };
+        let (m, a, o) = (est(&mixed), est(alone), est(other));
+        assert_agree(&format!("{name} half"), &m, &a, 0.0, "none: the other half's light does not reach");
+        // And the test can tell the halves apart.
+        assert!((a.mean[0] - o.mean[0]).abs() > 20.0 * a.se[0], "{name}: {a:?} against {o:?}");
     }
 }
 

@@ -14,6 +14,7 @@ const N_RHO: usize = 100;
 const N_RADIUS: usize = 64;
 
 /// ρ_eff as a function of ρ, for one (g, η).
+#[derive(Debug)]
 pub struct DiffusionTable {
     rho: Vec<f32>,
     rho_eff: Vec<f32>,
@@ -176,8 +177,14 @@ impl DiffusionTable {
     /// pbrt-v4's `SubsurfaceFromDiffuse` for one channel: (σa, σs) with total diffuse
     /// reflectance `reflectance` and mean free path `mfp` (σt = 1/mfp).
     pub fn coefficients(&self, reflectance: f32, mfp: f32) -> (f32, f32) {
-        let rho = invert_catmull_rom(&self.rho, &self.rho_eff, reflectance);
+        let rho = self.albedo(reflectance);
         ((1.0 - rho) / mfp, rho / mfp)
+    }
+
+    /// The single-scattering albedo ρ whose total diffuse reflectance ρ_eff is `reflectance`.
+    #[inline]
+    pub fn albedo(&self, reflectance: f32) -> f32 {
+        invert_catmull_rom(&self.rho, &self.rho_eff, reflectance)
     }
 }
 

@@ -6,6 +6,7 @@ pub mod diffusion;
 mod material;
 pub mod measured;
 mod shading;
+pub mod subsurface;
 
 pub use material::{ConductorInput, HairAbsorption, Material, RoughnessTex, resolve};
 pub use shading::ShadingPerturbation;

@@ -166,6 +166,50 @@ pub struct Medium {
     pub chromatic: bool,
     /// True when the medium emits.
     pub emissive: bool,
+    /// The medium inside a `subsurface` material: it stands for pbrt-v4's BSSRDF, which counts
+    /// as one scattering event, so the events inside do not count towards `maxdepth`.
+    pub subsurface: bool,
+    /// For a `subsurface` material with textured inputs: a path takes its coefficients where it
+    /// enters it (the scene keeps them as functions of the entry point; [`MediumView`]), and
+    /// `kind`'s are never used for transport.
+    pub from_entry: bool,
+}
+
+/// A medium as one path sees it: its own coefficients, or those the path fixed where it
+/// entered a medium whose coefficients come [`Medium::from_entry`].
+#[derive(Clone, Copy)]
+pub struct MediumView<'a, C> {
+    /// The medium.
+    pub medium: &'a Medium,
+    /// The path's coefficients for it, homogeneous.
+    pub entered: Option<MediumPoint<C>>,
+}
+
+impl<'a, C> From<&'a Medium> for MediumView<'a, C> {
+    #[inline]
+    fn from(medium: &'a Medium) -> MediumView<'a, C> {
+        MediumView { medium, entered: None }
+    }
+}
+
+impl<C: Channels> MediumView<'_, C> {
+    /// Coefficients at world point `p`.
+    #[inline]
+    pub fn sample_point(&self, p: Vec3, lambda: &C::Lambda) -> MediumPoint<C> {
+        match &self.entered {
+            Some(mp) => *mp,
+            None => self.medium.sample_point(p, lambda),
+        }
+    }
+
+    /// Majorant segments along the ray between 0 and `t_max`.
+    #[inline]
+    pub fn segments(&self, ray: &Ray, t_max: f32, lambda: &C::Lambda) -> Segments<'_, C> {
+        match &self.entered {
+            Some(mp) => Segments::Single(Some(Segment { t_min: 0.0, t_max, sigma_maj: mp.sigma_a + mp.sigma_s })),
+            None => self.medium.segments(ray, t_max, lambda),
+        }
+    }
 }
 
 /// Majorant segments along a ray.
@@ -199,7 +243,15 @@ impl Medium {
     ) -> Medium {
         let chromatic = !sigma_a.is_constant() || !sigma_s.is_constant();
         let emissive = !le.is_zero();
-        Medium { name, kind: MediumKind::Homogeneous { sigma_a, sigma_s, le }, g, chromatic, emissive }
+        Medium {
+            name,
+            kind: MediumKind::Homogeneous { sigma_a, sigma_s, le },
+            g,
+            chromatic,
+            emissive,
+            subsurface: false,
+            from_entry: false,
+        }
     }
 
     /// A density-grid medium; builds its majorant grid (pbrt-v4 uses 16³ for grids).
@@ -249,6 +301,8 @@ impl Medium {
             g,
             chromatic,
             emissive,
+            subsurface: false,
+            from_entry: false,
         }
     }
 
@@ -300,6 +354,8 @@ impl Medium {
             g,
             chromatic,
             emissive,
+            subsurface: false,
+            from_entry: false,
         }
     }
 

@@ -9,5 +9,5 @@ mod medium;
 pub mod phase;
 mod rgbgrid;
 
-pub use medium::{Density, Emission, Field, GridMedium, Medium, MediumKind, MediumPoint, Segments};
+pub use medium::{Density, Emission, Field, GridMedium, Medium, MediumKind, MediumPoint, MediumView, Segments};
 pub use rgbgrid::RgbGridMedium;

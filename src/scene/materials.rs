@@ -56,24 +56,36 @@ pub enum HairAbsorptionSpec {
     },
 }
 
-/// How a `subsurface` material gives its medium.
+/// How a `subsurface` material gives its medium. Any input may be a texture: pbrt-v4 evaluates
+/// them where a path enters the surface (its BSSRDF's coefficients are the entry point's).
 #[derive(Clone, Debug, PartialEq)]
 pub enum SubsurfaceCoefficients {
     /// σa and σs (named, given, or pbrt-v4's defaults).
     Sigma {
         /// Absorption.
-        sigma_a: SpectrumSpec,
+        sigma_a: SpectrumInput,
         /// Scattering.
-        sigma_s: SpectrumSpec,
+        sigma_s: SpectrumInput,
     },
     /// A total diffuse reflectance and a mean free path, inverted through the photon beam
     /// diffusion profile as pbrt-v4 does.
     Reflectance {
         /// `reflectance`.
-        reflectance: SpectrumSpec,
+        reflectance: SpectrumInput,
         /// `mfp`.
-        mfp: SpectrumSpec,
+        mfp: SpectrumInput,
     },
+}
+
+impl SubsurfaceCoefficients {
+    /// True when some input is a texture, so the coefficients vary over the surface.
+    pub fn textured(&self) -> bool {
+        let t = |i: &SpectrumInput| matches!(i, SpectrumInput::Texture(_));
+        match self {
+            SubsurfaceCoefficients::Sigma { sigma_a, sigma_s } => t(sigma_a) || t(sigma_s),
+            SubsurfaceCoefficients::Reflectance { reflectance, mfp } => t(reflectance) || t(mfp),
+        }
+    }
 }
 
 /// What a material is.
@@ -254,8 +266,8 @@ fn subsurface(e: &Entity, warnings: &mut Vec<Warning>) -> Result<MaterialKind, E
     let p = &e.params;
     let mut g = p.get_one_float("g", 0.0)?;
     let sigma = |a: [f32; 3], s: [f32; 3]| SubsurfaceCoefficients::Sigma {
-        sigma_a: SpectrumSpec::Rgb(a),
-        sigma_s: SpectrumSpec::Rgb(s),
+        sigma_a: SpectrumInput::Value(SpectrumSpec::Rgb(a)),
+        sigma_s: SpectrumInput::Value(SpectrumSpec::Rgb(s)),
     };
     let coefficients = if let Some(name) = p.get_opt_string("name")? {
         let Some((_, ss, sa)) = super::media::MEDIUM_PRESETS.iter().find(|(n, _, _)| *n == name) else {
@@ -273,16 +285,7 @@ fn subsurface(e: &Entity, warnings: &mut Vec<Warning>) -> Result<MaterialKind, E
         g = 0.0;
         sigma(*sa, *ss)
     } else {
-        let constant = |name: &str| -> Result<Option<SpectrumSpec>, Error> {
-            if p.peek(name).is_some_and(|q| q.ty == nimbus_parser::ParamType::Texture) {
-                return Err(Error::new(
-                    p.loc(name).unwrap_or(&e.loc),
-                    format!("subsurface: a textured \"{name}\" is not supported by nimbus (its medium is homogeneous)"),
-                ));
-            }
-            spectrum(p, name)
-        };
-        match (constant("sigma_a")?, constant("sigma_s")?) {
+        match (spectrum_input(p, "sigma_a")?, spectrum_input(p, "sigma_s")?) {
             (Some(sigma_a), Some(sigma_s)) => SubsurfaceCoefficients::Sigma { sigma_a, sigma_s },
             (Some(_), None) => {
                 return Err(Error::new(
@@ -296,10 +299,10 @@ fn subsurface(e: &Entity, warnings: &mut Vec<Warning>) -> Result<MaterialKind, E
                     "subsurface: \"sigma_s\" given without \"sigma_a\"",
                 ));
             }
-            (None, None) => match constant("reflectance")? {
+            (None, None) => match spectrum_input(p, "reflectance")? {
                 Some(reflectance) => SubsurfaceCoefficients::Reflectance {
                     reflectance,
-                    mfp: constant("mfp")?.unwrap_or(SpectrumSpec::Rgb([1.0; 3])),
+                    mfp: spectrum_input(p, "mfp")?.unwrap_or(SpectrumInput::Value(SpectrumSpec::Rgb([1.0; 3]))),
                 },
                 // pbrt-v4's defaults (whole milk, per mm).
                 None => sigma([0.0011, 0.0024, 0.014], [2.55, 3.21, 3.77]),

@@ -23,6 +23,7 @@ use crate::camera::{Camera, Differentials};
 use crate::film::filter::Filter;
 use crate::film::settings::FilmSettings;
 use crate::lights::{Light, LightSampler, SceneSphere};
+use crate::materials::subsurface::EntryCoefficients;
 use crate::materials::{Material, ShadingPerturbation, resolve};
 use crate::media::Medium;
 use crate::samplers::settings::SamplerSettings;
@@ -68,6 +69,9 @@ pub struct Scene {
     pub has_interfaces: bool,
     /// Media the scene uses (unused named media are not built).
     pub media: Vec<Medium>,
+    /// Per medium, for those whose coefficients come [`Medium::from_entry`] (a textured
+    /// `subsurface`), the coefficients as functions of the entry point; empty when none do.
+    pub entry_coefficients: Vec<Option<EntryCoefficients>>,
     /// (inside, outside) medium of each boundary surface; primitives index this.
     pub interfaces: Vec<[u32; 2]>,
     /// Medium around the camera, or [`NONE`].
@@ -90,6 +94,25 @@ impl Scene {
     /// True when shapes or the camera move over the shutter interval (motion blur).
     pub fn has_motion(&self) -> bool {
         self.camera.moves() || self.surfaces.instances.iter().any(|i| i.motion.is_some())
+    }
+
+    /// A medium whose coefficients a path takes from where it enters it (a `subsurface`
+    /// material with textured inputs), for the methods that cannot carry them.
+    pub fn entered_medium(&self) -> Option<&Medium> {
+        self.media.iter().find(|m| m.from_entry)
+    }
+
+    /// The coefficients a path takes into `medium` where it enters it at the surface point
+    /// `ctx` (`None` for a medium with its own).
+    #[inline]
+    pub fn entered_at<C: crate::channels::Channels>(
+        &self,
+        medium: u32,
+        ctx: &TexContext,
+        lambda: &C::Lambda,
+    ) -> Option<crate::media::MediumPoint<C>> {
+        let e = self.entry_coefficients.get(medium as usize)?.as_ref()?;
+        Some(e.at(&self.textures, ctx, lambda))
     }
 
     /// The material that scatters at `hit` seen from `wo` (`mix` resolved), with the hit's

@@ -18,6 +18,7 @@ use crate::media::phase::HenyeyGreenstein;
 use crate::samplers::Sampler;
 use crate::sampling::rng::{Pcg32, hash_sample};
 use crate::scene::Scene;
+use crate::textures::TexContext;
 
 /// What scatters at a vertex: a BSDF in a local frame, or a phase function.
 pub(super) enum Scatterer<'a, C> {
@@ -111,8 +112,21 @@ pub(super) fn sample_direct<C: Channels, O: PathObserver<C>>(
         Some(h) => ((h.surface.n, h.surface.p_error), medium_after(scene, h, ls.wi, medium)),
         None => ((Vec3::ZERO, 0.0), medium),
     };
+    // In the path's medium the ray sees the coefficients the path took in; entering another
+    // here, those of this point.
+    let entered = match hit {
+        Some(h) if shadow_medium != medium => {
+            let s = &h.surface;
+            let ctx = TexContext {
+                face: scene.surfaces.shapes.face_index(h.prim.geometry),
+                ..TexContext::at(s.p, s.uv, s.n)
+            };
+            scene.entered_at(shadow_medium, &ctx, lambda)
+        }
+        _ => st.entered,
+    };
     let ShadowEstimate { t_ray, r_u, r_l } =
-        transmittance(scene, p, n, shadow_medium, &ls, (st.hero, st.time), lambda, stats)?;
+        transmittance(scene, p, n, (shadow_medium, entered), &ls, (st.hero, st.time), lambda, stats)?;
     // Where the path is guided, the scattering technique MIS weighs against is the guide's
     // (looked up only for unoccluded samples: inside a dielectric most are blocked).
     let pdf_scatter = match scatterer {

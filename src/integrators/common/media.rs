@@ -8,10 +8,10 @@ use glam::Vec3;
 use crate::channels::Channels;
 use crate::color::Rgb;
 use crate::geometry::Ray;
-use crate::media::{Medium, MediumKind, MediumPoint};
+use crate::media::{Medium, MediumKind, MediumPoint, MediumView};
 use crate::sampling::rng::Pcg32;
 
-/// Walks `ray` (unit direction) through `medium` up to `t_max`, sampling tentative collisions
+/// Walks `ray` (unit direction) through `medium` (as the path sees it) up to `t_max`, sampling tentative collisions
 /// with density σmaj[hero]·exp(−σmaj[hero] t) in each majorant segment. At each collision
 /// `callback(p, point, σmaj, T_maj, rng)` decides whether to go on (`true`); T_maj is the
 /// majorant transmittance since the previous collision. Returns the majorant transmittance
@@ -25,7 +25,7 @@ use crate::sampling::rng::Pcg32;
 #[inline]
 #[allow(clippy::too_many_arguments)] // pbrt-v4's SampleT_maj takes the same inputs
 pub fn sample_t_maj<C: Channels, F>(
-    medium: &Medium,
+    medium: MediumView<'_, C>,
     ray: &Ray,
     t_max: f32,
     mut u: f32,
@@ -38,7 +38,7 @@ where
     F: FnMut(Vec3, &MediumPoint<C>, C, C, &mut Pcg32) -> bool,
 {
     let mut t_maj = C::ONE;
-    for seg in medium.segments::<C>(ray, t_max, lambda) {
+    for seg in medium.segments(ray, t_max, lambda) {
         let sigma = seg.sigma_maj[hero];
         let gray = seg.sigma_maj.max_element() == seg.sigma_maj.min_element();
         if sigma == 0.0 {
@@ -55,7 +55,7 @@ where
                     t_maj *= (seg.sigma_maj * (t - t_min)).exp_neg();
                 }
                 let p = ray.at(t);
-                let mp = medium.sample_point::<C>(p, lambda);
+                let mp = medium.sample_point(p, lambda);
                 if !callback(p, &mp, seg.sigma_maj, t_maj, rng) {
                     return C::ONE;
                 }
@@ -98,7 +98,7 @@ impl<C: Channels> Default for ShadowEstimate<C> {
 /// fallen below 0.05.
 #[inline]
 pub fn ratio_tracking<C: Channels>(
-    medium: &Medium,
+    medium: MediumView<'_, C>,
     ray: &Ray,
     t_max: f32,
     rng: &mut Pcg32,
@@ -202,7 +202,7 @@ mod tests {
         let mut sum = 0.0;
         for _ in 0..n {
             let mut est = ShadowEstimate::default();
-            ratio_tracking(&m, &ray, 0.7, &mut rng, 0, &(), &mut est);
+            ratio_tracking((&m).into(), &ray, 0.7, &mut rng, 0, &(), &mut est);
             sum += (est.t_ray / crate::color::average(est.r_l)).x as f64;
         }
         let est = sum / n as f64;
@@ -275,18 +275,27 @@ mod heterogeneous_tests {
         let (mut ratio, mut delta) = (0.0f64, 0.0f64);
         for _ in 0..n {
             let mut est = ShadowEstimate::default();
-            ratio_tracking(&m, &ray, t_max, &mut rng, 0, &(), &mut est);
+            ratio_tracking((&m).into(), &ray, t_max, &mut rng, 0, &(), &mut est);
             ratio += (est.t_ray / crate::color::average(est.r_l)).x as f64;
             let u = rng.uniform();
             let mut escaped = true;
-            sample_t_maj(&m, &ray, t_max, u, &mut rng, 0, &(), |p, mp: &MediumPoint<Rgb>, sigma_maj: Rgb, _, r| {
-                assert!((mp.sigma_a + mp.sigma_s).x <= sigma_maj.x * 1.0001, "majorant below σt at {p:?}");
-                if r.uniform() < (mp.sigma_a + mp.sigma_s).x / sigma_maj.x {
-                    escaped = false;
-                    return false;
-                }
-                true
-            });
+            sample_t_maj(
+                (&m).into(),
+                &ray,
+                t_max,
+                u,
+                &mut rng,
+                0,
+                &(),
+                |p, mp: &MediumPoint<Rgb>, sigma_maj: Rgb, _, r| {
+                    assert!((mp.sigma_a + mp.sigma_s).x <= sigma_maj.x * 1.0001, "majorant below σt at {p:?}");
+                    if r.uniform() < (mp.sigma_a + mp.sigma_s).x / sigma_maj.x {
+                        escaped = false;
+                        return false;
+                    }
+                    true
+                },
+            );
             delta += escaped as u8 as f64;
         }
         let (ratio, delta) = (ratio / n as f64, delta / n as f64);

@@ -12,6 +12,13 @@ pub use observer::{
 };
 pub use path::{PathConfig, medium_after, shading_frame, trace_path};
 
+/// Most scattering events a path makes inside `subsurface` media, which do not count towards
+/// `maxdepth` (they stand for pbrt-v4's BSSRDF, one event): a bound for walks in media of
+/// albedo near 1, where neither absorption nor Russian roulette (β stays near 1) ends them. Measured against no bound, same
+/// samples: −0.04 % of the red channel on a sphere 80 mean free paths across of reflectance
+/// 0.95 (9 pixels of 1,024 changed at 64 spp), nothing on the skin parity scene.
+pub const MAX_SUBSURFACE_EVENTS: u32 = 4096;
+
 /// Rays traced, for `--stats`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct RayStats {

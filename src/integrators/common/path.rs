@@ -9,10 +9,10 @@
 
 use glam::{Vec2, Vec3};
 
-use super::RayStats;
 use super::direct::{Scatterer, extra_direct, sample_direct};
 use super::media::{line_transmittance, sample_t_maj};
 use super::observer::{EmissionEvent, PathObserver, VertexEvent};
+use super::{MAX_SUBSURFACE_EVENTS, RayStats};
 use crate::accel::{Hit, NONE};
 use crate::camera::Differentials;
 use crate::channels::Channels;
@@ -21,9 +21,11 @@ use crate::lights::LightContext;
 use crate::materials::bxdf::{Bxdf, ReflTransFlags, TransportMode};
 use crate::math::Frame;
 use crate::media::phase::HenyeyGreenstein;
+use crate::media::{MediumPoint, MediumView};
 use crate::samplers::Sampler;
 use crate::sampling::rng::{Pcg32, hash_sample};
 use crate::scene::Scene;
+use crate::textures::TexContext;
 
 /// Parameters of the loop.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -106,6 +108,9 @@ pub(super) struct PathState<C: Channels> {
     rr_scale: f32,
     /// The path's time (its camera ray's): every ray of the path sees moving shapes there.
     pub(super) time: f32,
+    /// The coefficients of the medium the path is in when that medium takes them from where
+    /// the path entered it ([`crate::media::Medium::entered`], a textured `subsurface`).
+    pub(super) entered: Option<MediumPoint<C>>,
 }
 
 /// One copy of a path between events: where it goes, what it carries, and what the next
@@ -116,6 +121,9 @@ struct Walk<C: Channels> {
     st: PathState<C>,
     /// Scattering vertices so far.
     depth: u32,
+    /// Those of them inside `subsurface` media, which stand for pbrt-v4's BSSRDF: one event
+    /// that its entry vertex already counted. `depth - free` is what `maxdepth` bounds.
+    free: u32,
     /// The last vertex scattered perfectly specularly: emission found next is not weighed
     /// against light sampling.
     specular_bounce: bool,
@@ -149,6 +157,7 @@ struct Branch<C: Channels> {
     medium: u32,
     st: PathState<C>,
     depth: u32,
+    free: u32,
     prev_p: Vec3,
     eta_scale: f32,
     extra_done: bool,
@@ -164,6 +173,7 @@ impl<C: Channels> Walk<C> {
             medium: b.medium,
             st: b.st,
             depth: b.depth,
+            free: b.free,
             specular_bounce: false,
             any_non_specular: true,
             eta_scale: b.eta_scale,
@@ -227,8 +237,9 @@ pub fn trace_path<C: Channels, O: PathObserver<C>>(
     let mut walk = Walk {
         ray,
         medium,
-        st: PathState { beta: C::ONE, r_u: C::ONE, r_l: C::ONE, hero, rr_scale: 1.0, time: ray.time },
+        st: PathState { beta: C::ONE, r_u: C::ONE, r_l: C::ONE, hero, rr_scale: 1.0, time: ray.time, entered: None },
         depth: 0,
+        free: 0,
         specular_bounce: false,
         any_non_specular: false,
         eta_scale: 1.0,
@@ -318,6 +329,7 @@ impl<C: Channels, O: PathObserver<C>> Tracer<'_, C, O> {
     fn track_medium(&mut self, w: &mut Walk<C>, hit: Option<&Hit>) -> Tracked {
         let config = self.config;
         let m = &self.scene.media[w.medium as usize];
+        let view = MediumView { medium: m, entered: w.st.entered };
         let hero = w.st.hero;
         let t_max = hit.map_or(f32::INFINITY, |h| h.surface.t);
         let mut rng =
@@ -325,15 +337,22 @@ impl<C: Channels, O: PathObserver<C>> Tracer<'_, C, O> {
         let u = self.sampler.get_1d();
         let (mut scattered, mut terminated) = (false, false);
         let mut scatter_p = Vec3::ZERO;
-        let (st, depth, l, observer) = (&mut w.st, &mut w.depth, &mut self.l, &mut *self.observer);
-        let t_maj =
-            sample_t_maj::<C, _>(m, &w.ray, t_max, u, &mut rng, hero, self.lambda, |p, mp, sigma_maj, t_maj, rng| {
+        let (st, depth, free, l, observer) = (&mut w.st, &mut w.depth, &mut w.free, &mut self.l, &mut *self.observer);
+        let t_maj = sample_t_maj::<C, _>(
+            view,
+            &w.ray,
+            t_max,
+            u,
+            &mut rng,
+            hero,
+            self.lambda,
+            |p, mp, sigma_maj, t_maj, rng| {
                 if st.beta.is_zero() {
                     terminated = true;
                     return false;
                 }
                 // Medium emission, weighted by the chance of having reached it.
-                if *depth < config.max_depth && !mp.le.is_zero() {
+                if *depth - *free < config.max_depth && !mp.le.is_zero() {
                     let pdf = sigma_maj[hero] * t_maj[hero];
                     let betap = st.beta * t_maj / pdf;
                     let r_e = st.r_u * sigma_maj * t_maj / pdf;
@@ -352,7 +371,13 @@ impl<C: Channels, O: PathObserver<C>> Tracer<'_, C, O> {
                     terminated = true;
                     false
                 } else if um < p_absorb + p_scatter {
-                    if *depth >= config.max_depth {
+                    if m.subsurface {
+                        if *free >= MAX_SUBSURFACE_EVENTS {
+                            terminated = true;
+                            return false;
+                        }
+                        *free += 1;
+                    } else if *depth - *free >= config.max_depth {
                         terminated = true;
                         return false;
                     }
@@ -381,7 +406,8 @@ impl<C: Channels, O: PathObserver<C>> Tracer<'_, C, O> {
                     }
                     !st.beta.is_zero() && !st.r_u.is_zero()
                 }
-            });
+            },
+        );
         if terminated || w.st.beta.is_zero() || w.st.r_u.is_zero() {
             return Tracked::Ended;
         }
@@ -506,6 +532,7 @@ impl<C: Channels, O: PathObserver<C>> Tracer<'_, C, O> {
                     medium,
                     st,
                     depth: w.depth,
+                    free: w.free,
                     prev_p: p,
                     eta_scale: w.eta_scale,
                     extra_done: w.extra_done,
@@ -569,6 +596,16 @@ impl<C: Channels, O: PathObserver<C>> Tracer<'_, C, O> {
         self.observer.on_emission(&EmissionEvent { depth: w.depth, contribution: c, pdf_light });
     }
 
+    /// The walk goes on in `medium` from the surface point `ctx`: a medium that takes its
+    /// coefficients from where the path enters it gets them here.
+    #[inline]
+    fn enter(&mut self, w: &mut Walk<C>, medium: u32, ctx: &TexContext) {
+        if medium != w.medium {
+            w.medium = medium;
+            w.st.entered = self.scene.entered_at(medium, ctx, self.lambda);
+        }
+    }
+
     /// At a surface: an `interface` is crossed without counting a bounce; otherwise
     /// next-event estimation, then the BSDF samples the continuation and Russian roulette
     /// may end the path. False when the path ends.
@@ -583,11 +620,19 @@ impl<C: Channels, O: PathObserver<C>> Tracer<'_, C, O> {
         let (material, tex_ctx) = scene.surface_material(&mut hit, wo, w.diff.as_ref());
         let Some(mut bxdf) = material.bxdf::<C>(&scene.textures, &tex_ctx, self.lambda) else {
             // An interface: cross it without counting a bounce.
-            w.medium = medium_after(scene, &hit, w.ray.d, w.medium);
+            self.enter(w, medium_after(scene, &hit, w.ray.d, w.medium), &tex_ctx);
             w.ray = hit.spawn_ray(w.ray.d);
             return true;
         };
-        if w.depth == config.max_depth {
+        // Inside a subsurface medium the boundary's scattering is part of the BSSRDF's one
+        // event (pbrt-v4 samples the exit point's BSDF without counting it).
+        let inside = w.medium != NONE && scene.media[w.medium as usize].subsurface;
+        if inside {
+            if w.free >= MAX_SUBSURFACE_EVENTS {
+                return false;
+            }
+            w.free += 1;
+        } else if w.depth - w.free == config.max_depth {
             return false;
         }
         w.depth += 1;
@@ -646,7 +691,7 @@ impl<C: Channels, O: PathObserver<C>> Tracer<'_, C, O> {
             w.eta_scale *= bs.eta * bs.eta;
         }
         (w.prev_p, w.prev_n) = (s.p, s.ns);
-        w.medium = medium_after(scene, &hit, wi, w.medium);
+        self.enter(w, medium_after(scene, &hit, wi, w.medium), &tex_ctx);
         w.ray = hit.spawn_ray(wi);
         !rr(&mut w.st, w.eta_scale, w.depth, self.sampler)
     }

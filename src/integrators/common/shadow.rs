@@ -11,6 +11,7 @@ use crate::accel::NONE;
 use crate::channels::Channels;
 use crate::geometry::{Ray, offset_origin_by};
 use crate::lights::LightSample;
+use crate::media::{MediumPoint, MediumView};
 use crate::sampling::rng::Pcg32;
 use crate::scene::Scene;
 
@@ -24,7 +25,7 @@ pub(super) fn transmittance<C: Channels>(
     scene: &Scene,
     p: Vec3,
     (n, p_error): (Vec3, f32),
-    mut medium: u32,
+    (mut medium, entered): (u32, Option<MediumPoint<C>>),
     ls: &LightSample<C>,
     (hero, time): (usize, f32),
     lambda: &C::Lambda,
@@ -40,6 +41,7 @@ pub(super) fn transmittance<C: Channels>(
         return (!scene.surfaces.occluded(&ray, remaining)).then_some(est);
     }
     let mut rng = Pcg32::new(crate::sampling::rng::hash_vec3(ray.o), crate::sampling::rng::hash_vec3(ray.d));
+    let mut first = true;
     loop {
         stats.shadow += 1;
         let hit = scene.surfaces.intersect(&ray, remaining);
@@ -50,12 +52,20 @@ pub(super) fn transmittance<C: Channels>(
         }
         if medium != NONE {
             let t_max = hit.as_ref().map_or(remaining, |h| h.surface.t);
-            ratio_tracking(&scene.media[medium as usize], &ray, t_max, &mut rng, hero, lambda, &mut est);
+            let m = &scene.media[medium as usize];
+            // Only the first medium can take its coefficients from an entry point: such a
+            // medium's boundary is its subsurface material's dielectric, never an interface.
+            let entered = if first { entered } else { None };
+            if m.from_entry && entered.is_none() {
+                return None;
+            }
+            ratio_tracking(MediumView { medium: m, entered }, &ray, t_max, &mut rng, hero, lambda, &mut est);
             if est.t_ray.is_zero() {
                 return None;
             }
         }
         let Some(h) = hit else { return Some(est) };
+        first = false;
         medium = medium_after(scene, &h, ray.d, medium);
         let travelled = h.surface.t;
         ray = h.spawn_ray(ray.d);

@@ -65,7 +65,21 @@ impl MethodSettings for GuidedSettings {
         Ok(Some(Precompute::FirstRender { file: "guide.cache".into() }))
     }
 
+    /// Training traces photons from the lights, which read a medium's own coefficients.
+    fn check(&self, scene: &Scene) -> crate::Result<()> {
+        if scene.entered_medium().is_some() {
+            return Err(crate::Error::Unsupported(
+                "guided trains on photons that read a medium's coefficients where they are, and this scene has a \
+                 subsurface material with textured inputs (coefficients taken where a path enters): render it with \
+                 volpath or pathgraph"
+                    .into(),
+            ));
+        }
+        Ok(())
+    }
+
     fn create(&self, scene: &Scene) -> crate::Result<Box<dyn super::Integrator>> {
+        self.check(scene)?;
         Ok(Box::new(create(self, scene)?))
     }
 }

@@ -285,7 +285,7 @@ pub fn trace<C: Channels>(
             let t_max = hit.as_ref().map_or(f32::INFINITY, |h| h.surface.t);
             let (mut scattered, mut absorbed) = (None, false);
             let u = rng.uniform();
-            sample_t_maj::<C, _>(m, &ray, t_max, u, rng, c, lambda, |p, mp, sigma_maj, _, rng| {
+            sample_t_maj::<C, _>(m.into(), &ray, t_max, u, rng, c, lambda, |p, mp, sigma_maj, _, rng| {
                 let um = rng.uniform() * sigma_maj[c];
                 if um < mp.sigma_a[c] {
                     absorbed = true;

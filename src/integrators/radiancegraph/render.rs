@@ -265,19 +265,28 @@ impl RayIntegrator for RadianceGraphIntegrator {
                     },
                     Estimator::Collision => {
                         let u = u_first.take().unwrap_or_else(|| rng.uniform());
-                        sample_t_maj::<Rgb, _>(medium, &ray, t_max, u, &mut rng, 0, &(), |p, mp, sigma_maj, _, rng| {
-                            let s = sigma_maj[0];
-                            l += self.radiance_at(p, beta * mp.sigma_s[0] / s, le);
-                            beta *= ((s - mp.sigma_a[0] - mp.sigma_s[0]) / s).max(0.0);
-                            if beta < 0.05 {
-                                if rng.uniform() < 0.75 {
-                                    beta = 0.0;
-                                } else {
-                                    beta /= 0.25;
+                        sample_t_maj::<Rgb, _>(
+                            medium.into(),
+                            &ray,
+                            t_max,
+                            u,
+                            &mut rng,
+                            0,
+                            &(),
+                            |p, mp, sigma_maj, _, rng| {
+                                let s = sigma_maj[0];
+                                l += self.radiance_at(p, beta * mp.sigma_s[0] / s, le);
+                                beta *= ((s - mp.sigma_a[0] - mp.sigma_s[0]) / s).max(0.0);
+                                if beta < 0.05 {
+                                    if rng.uniform() < 0.75 {
+                                        beta = 0.0;
+                                    } else {
+                                        beta /= 0.25;
+                                    }
                                 }
-                            }
-                            beta > 0.0
-                        });
+                                beta > 0.0
+                            },
+                        );
                         if beta == 0.0 {
                             return l;
                         }

@@ -249,7 +249,7 @@ impl<'a> Volume<'a> {
     /// multiplying ever smaller ratios to the far side. The thesis tracks to the end.
     pub fn transmittance(&self, ray: &Ray, t_max: f32, rng: &mut Pcg32) -> f32 {
         let mut est = ShadowEstimate::<Rgb> { t_ray: Rgb::ONE, r_u: Rgb::ZERO, r_l: Rgb::ONE };
-        ratio_tracking(self.medium, ray, t_max, rng, 0, &(), &mut est);
+        ratio_tracking(self.medium.into(), ray, t_max, rng, 0, &(), &mut est);
         est.t_ray[0] / est.r_l[0]
     }
 }
@@ -259,7 +259,7 @@ impl<'a> Volume<'a> {
 #[inline]
 pub fn sample_event(medium: &Medium, ray: &Ray, t_max: f32, u: f32, rng: &mut Pcg32) -> Event {
     let mut event = Event::Pass;
-    sample_t_maj::<Rgb, _>(medium, ray, t_max, u, rng, 0, &(), |p, mp, sigma_maj, _, rng| {
+    sample_t_maj::<Rgb, _>(medium.into(), ray, t_max, u, rng, 0, &(), |p, mp, sigma_maj, _, rng| {
         let um = rng.uniform() * sigma_maj[0];
         if um < mp.sigma_a[0] {
             event = Event::Absorb;

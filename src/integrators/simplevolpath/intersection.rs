@@ -163,7 +163,7 @@ fn medium_hit<C: Channels>(
 ) -> Option<(Vec3, MediumPoint<C>)> {
     let mut found = None;
     let t_maj =
-        sample_t_maj(m, ray, t_end, u, rng, hero, lambda, |p, point: &MediumPoint<C>, sigma_maj, t_maj, rng| {
+        sample_t_maj(m.into(), ray, t_end, u, rng, hero, lambda, |p, point: &MediumPoint<C>, sigma_maj, t_maj, rng| {
             let sigma_t = point.sigma_a + point.sigma_s;
             // A tentative collision is a particle with probability σt/σmaj (1 in a homogeneous
             // medium, where no generator value is spent).

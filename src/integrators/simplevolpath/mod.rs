@@ -61,6 +61,14 @@ impl MethodSettings for SimpleVolPathSettings {
                     .into(),
             ));
         }
+        // Its probabilistic intersection reads a medium's own coefficients.
+        if scene.entered_medium().is_some() {
+            return Err(crate::Error::Unsupported(
+                "simplevolpath reads a medium's coefficients where its rays are, and this scene has a subsurface \
+                 material with textured inputs (coefficients taken where a path enters): render it with volpath"
+                    .into(),
+            ));
+        }
         Ok(())
     }
 

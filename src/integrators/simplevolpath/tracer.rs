@@ -26,7 +26,7 @@ use super::mixture::{Mixture, Scatterer};
 use crate::accel::{Hit, NONE};
 use crate::channels::Channels;
 use crate::geometry::Ray;
-use crate::integrators::common::{RayStats, medium_after, shading_frame};
+use crate::integrators::common::{MAX_SUBSURFACE_EVENTS, RayStats, medium_after, shading_frame};
 use crate::lights::LightContext;
 use crate::media::phase::HenyeyGreenstein;
 use crate::samplers::Sampler;
@@ -43,6 +43,9 @@ struct Path<C> {
     hero: usize,
     /// Scattering events so far.
     depth: u32,
+    /// Those inside `subsurface` media, which `maxdepth` does not count (pbrt-v4's BSSRDF is
+    /// one event, counted at its entry vertex).
+    free: u32,
     /// Product of η² over refractions (undone for Russian roulette).
     eta_scale: f32,
     /// The camera ray's time, which every ray of the path keeps.
@@ -61,6 +64,22 @@ impl<C: Channels> Path<C> {
     #[inline]
     fn weigh(&self, le: C) -> C {
         self.beta * le / self.r_u.average()
+    }
+
+    /// Counts a scattering event in `medium` (at a surface, the one the path arrives in);
+    /// false when `max_depth` (or, inside a subsurface medium, its own bound) ends the path.
+    #[inline]
+    fn count(&mut self, medium: Option<&crate::media::Medium>, max_depth: u32) -> bool {
+        if medium.is_some_and(|m| m.subsurface) {
+            if self.free >= MAX_SUBSURFACE_EVENTS {
+                return false;
+            }
+            self.free += 1;
+        } else if self.depth - self.free == max_depth {
+            return false;
+        }
+        self.depth += 1;
+        true
     }
 
     /// Russian roulette; true when the path ends. The sampler value is drawn at every vertex.
@@ -186,7 +205,7 @@ pub fn trace<C: Channels>(
     stats: &mut RayStats,
 ) -> C {
     let hero = if scene.has_chromatic_media { C::hero_channel(sampler.get_1d()) } else { 0 };
-    let mut path = Path { beta: C::ONE, r_u: C::ONE, hero, depth: 0, eta_scale: 1.0, time: ray.time };
+    let mut path = Path { beta: C::ONE, r_u: C::ONE, hero, depth: 0, free: 0, eta_scale: 1.0, time: ray.time };
     let mut l = C::ZERO;
     let seed = Seed::draw(scene, sampler);
     // The camera ray's differentials, for textures at the first event (pbrt-v4's SimpleVolPath
@@ -228,10 +247,9 @@ pub fn trace<C: Channels>(
                     path.carry(&isect);
                     continue;
                 };
-                if path.depth == max_depth {
+                if !path.count(scene.media.get(isect.medium as usize), max_depth) {
                     break;
                 }
-                path.depth += 1;
                 bxdf = b;
                 let frame = shading_frame(&hit);
                 (s.p, Some(hit), Scatterer::Surface { bxdf: &bxdf, frame, wo: frame.to_local(wo) })
@@ -240,13 +258,12 @@ pub fn trace<C: Channels>(
                 // The particle emits σa/σt·Le (what a 'hit' with probability ∝ σt sees of the
                 // σa·Le emitted per unit length), counted below maxdepth as pbrt-v4 does.
                 let sigma_t = point.sigma_a + point.sigma_s;
-                if path.depth < max_depth && !point.le.is_zero() {
+                if path.depth - path.free < max_depth && !point.le.is_zero() {
                     l += path.weigh(ratio(point.sigma_a, sigma_t) * point.le);
                 }
-                if path.depth == max_depth {
+                if !path.count(scene.media.get(medium as usize), max_depth) {
                     break;
                 }
-                path.depth += 1;
                 // Equation 5: the particle reflects the fraction Λ = σs/σt.
                 path.beta *= ratio(point.sigma_s, sigma_t);
                 if path.beta.is_zero() {

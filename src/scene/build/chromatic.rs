@@ -33,7 +33,7 @@ pub(super) fn choose_transport(
         let shapes = desc.shapes.iter().chain(desc.instance_definitions.iter().flat_map(|d| d.shapes.iter()));
         chromatic = shapes
             .filter_map(|shape| subsurface[(ctx.material_ids)(&shape.material) as usize].as_ref())
-            .find(|m| !m.sigma_a.is_constant() || !m.sigma_s.is_constant())
+            .find(|m| m.chromatic)
             .map(|m| format!("{}: subsurface material's sigma_a or sigma_s varies with wavelength", m.loc));
     }
     let mut transport = TransportChoice::new(mode, chromatic.as_deref());

@@ -92,10 +92,82 @@ pub(super) fn resolve_mixes(
 
 /// The homogeneous medium inside a `subsurface` material's boundary.
 pub(super) struct SubsurfaceMedium {
+    /// Its coefficients, when they are the same everywhere (zero otherwise).
     pub(super) sigma_a: SpectrumValue,
     pub(super) sigma_s: SpectrumValue,
+    /// Where an input is a texture: the coefficients as functions of the entry point.
+    pub(super) entered: Option<EntryCoefficients>,
+    /// The coefficients differ between wavelengths somewhere.
+    pub(super) chromatic: bool,
     pub(super) g: f32,
     pub(super) loc: FileLoc,
+}
+
+/// The medium a `subsurface` material describes: constant coefficients where every input is
+/// a value, else the inputs evaluated where paths enter.
+fn subsurface_medium(
+    coefficients: &SubsurfaceCoefficients,
+    scale: f32,
+    g: f32,
+    eta: f32,
+    tb: &TextureBuilder,
+    cs: ColorSpace,
+    loc: &FileLoc,
+) -> Result<SubsurfaceMedium, Error> {
+    let medium = |sigma_a: SpectrumValue, sigma_s: SpectrumValue| SubsurfaceMedium {
+        chromatic: !sigma_a.is_constant() || !sigma_s.is_constant(),
+        sigma_a,
+        sigma_s,
+        entered: None,
+        g,
+        loc: loc.clone(),
+    };
+    if coefficients.textured() {
+        let unbounded = |i: &SpectrumInput| tb.spectrum_as(i, cs, loc, true);
+        let inputs = match coefficients {
+            SubsurfaceCoefficients::Sigma { sigma_a, sigma_s } => {
+                SubsurfaceInputs::Sigma { sigma_a: unbounded(sigma_a)?, sigma_s: unbounded(sigma_s)? }
+            }
+            SubsurfaceCoefficients::Reflectance { reflectance, mfp } => SubsurfaceInputs::Reflectance {
+                reflectance: tb.spectrum(reflectance, cs, loc)?,
+                mfp: unbounded(mfp)?,
+                table: Arc::new(crate::materials::diffusion::DiffusionTable::new(g, eta)),
+            },
+        };
+        let chromatic = match &inputs {
+            SubsurfaceInputs::Sigma { sigma_a: a, sigma_s: b }
+            | SubsurfaceInputs::Reflectance { reflectance: a, mfp: b, .. } => {
+                tb.textures.is_chromatic(*a) || tb.textures.is_chromatic(*b)
+            }
+        };
+        return Ok(SubsurfaceMedium {
+            entered: Some(EntryCoefficients { inputs, scale }),
+            chromatic,
+            ..medium(SpectrumValue::ZERO, SpectrumValue::ZERO)
+        });
+    }
+    let value = |i: &SpectrumInput| match i {
+        SpectrumInput::Value(spec) => Ok(spec.clone()),
+        SpectrumInput::Texture(name) => Err(err(loc, format!("subsurface: texture \"{name}\" read as a value"))),
+    };
+    let unbounded = |s: &SpectrumSpec| tb.spectra.unbounded(s, cs).map_err(|x| err(loc, x.to_string()));
+    Ok(match coefficients {
+        SubsurfaceCoefficients::Sigma { sigma_a, sigma_s } => {
+            medium(unbounded(&value(sigma_a)?)?.scaled(scale), unbounded(&value(sigma_s)?)?.scaled(scale))
+        }
+        SubsurfaceCoefficients::Reflectance { reflectance, mfp } => {
+            // pbrt-v4 inverts per sampled wavelength; nimbus per RGB channel of the
+            // reflectance, the coefficients then upsampled as unbounded RGB.
+            let r = tb.spectra.albedo(&value(reflectance)?, cs).map_err(|x| err(loc, x.to_string()))?.rgb;
+            let mfp = unbounded(&value(mfp)?)?.rgb * scale;
+            let table = crate::materials::diffusion::DiffusionTable::new(g, eta);
+            let (mut a, mut s) = ([0.0f32; 3], [0.0f32; 3]);
+            for c in 0..3 {
+                (a[c], s[c]) = table.coefficients(r[c].clamp(0.0, 1.0), mfp[c].max(f32::MIN_POSITIVE));
+            }
+            medium(unbounded(&SpectrumSpec::Rgb(a))?, unbounded(&SpectrumSpec::Rgb(s))?)
+        }
+    })
 }
 
 /// A material as the scene uses it: what scatters at its surface, how it perturbs the
@@ -181,25 +253,7 @@ pub(super) fn material(
             }
         }
         MaterialKind::Subsurface { eta, roughness: r, coefficients, scale, g } => {
-            let unbounded = |s: &SpectrumSpec| tb.spectra.unbounded(s, cs).map_err(|x| err(loc, x.to_string()));
-            let (sigma_a, sigma_s) = match coefficients {
-                SubsurfaceCoefficients::Sigma { sigma_a, sigma_s } => {
-                    (unbounded(sigma_a)?.scaled(*scale), unbounded(sigma_s)?.scaled(*scale))
-                }
-                SubsurfaceCoefficients::Reflectance { reflectance, mfp } => {
-                    // pbrt-v4 inverts per sampled wavelength; nimbus per RGB channel of the
-                    // reflectance, the coefficients then upsampled as unbounded RGB.
-                    let r = tb.spectra.albedo(reflectance, cs).map_err(|x| err(loc, x.to_string()))?.rgb;
-                    let mfp = unbounded(mfp)?.rgb * *scale;
-                    let table = crate::materials::diffusion::DiffusionTable::new(*g, *eta);
-                    let (mut a, mut s) = ([0.0f32; 3], [0.0f32; 3]);
-                    for c in 0..3 {
-                        (a[c], s[c]) = table.coefficients(r[c].clamp(0.0, 1.0), mfp[c].max(f32::MIN_POSITIVE));
-                    }
-                    (unbounded(&SpectrumSpec::Rgb(a))?, unbounded(&SpectrumSpec::Rgb(s))?)
-                }
-            };
-            subsurface = Some(SubsurfaceMedium { sigma_a, sigma_s, g: *g, loc: loc.clone() });
+            subsurface = Some(subsurface_medium(coefficients, *scale, *g, *eta, tb, cs, loc)?);
             Material::Dielectric { eta: SpectrumValue::constant(*eta), roughness: roughness(r, tb, loc)? }
         }
         MaterialKind::Hair { absorption, eta, beta_m, beta_n, alpha } => Material::Hair {

@@ -145,6 +145,7 @@ pub(super) struct Media {
     pub(super) media: Vec<Medium>,
     pub(super) ids: HashMap<String, u32>,
     pub(super) subsurface: Vec<u32>,
+    pub(super) entry_coefficients: Vec<Option<EntryCoefficients>>,
 }
 
 /// Builds the media the camera, lights or boundary surfaces use (`used`), then one medium per
@@ -172,11 +173,25 @@ pub(super) fn build_media(
         .map(|(i, m)| match m {
             Some(m) => {
                 let name = format!("subsurface material {i}");
-                media.push(Medium::homogeneous(name, m.sigma_a, m.sigma_s, SpectrumValue::ZERO, m.g));
+                let mut medium = Medium::homogeneous(name, m.sigma_a, m.sigma_s, SpectrumValue::ZERO, m.g);
+                medium.subsurface = true;
+                medium.chromatic = m.chromatic;
+                medium.from_entry = m.entered.is_some();
+                media.push(medium);
                 media.len() as u32 - 1
             }
             None => NONE,
         })
         .collect();
-    Ok(Media { media, ids: media_ids, subsurface: subsurface_media })
+    // The media before them have their own coefficients.
+    let mut entry_coefficients: Vec<Option<EntryCoefficients>> = Vec::new();
+    if subsurface.iter().flatten().any(|m| m.entered.is_some()) {
+        entry_coefficients = (0..media.len()).map(|_| None).collect();
+        for (m, &i) in subsurface.iter().zip(&subsurface_media) {
+            if let Some(m) = m {
+                entry_coefficients[i as usize] = m.entered.clone();
+            }
+        }
+    }
+    Ok(Media { media, ids: media_ids, subsurface: subsurface_media, entry_coefficients })
 }

@@ -34,6 +34,7 @@ use crate::geometry::{Bounds3, MotionTransform};
 use crate::lights::{
     EmissionImage, EnvironmentMap, Light, LightKind, LightSampler, LightSamplerKind, PortalMap, SceneSphere,
 };
+use crate::materials::subsurface::{EntryCoefficients, SubsurfaceInputs};
 use crate::materials::{ConductorInput, HairAbsorption, Material, RoughnessTex, ShadingPerturbation};
 use crate::math::Frame;
 use crate::media::dense::DenseGrid;
@@ -167,7 +168,7 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions, needs: &SceneNe
     };
     let transport = choose_transport(desc, opts, &film, needs, &ctx, &subsurface)?;
 
-    let Media { media, ids: media_ids, subsurface: subsurface_media } =
+    let Media { media, ids: media_ids, subsurface: subsurface_media, entry_coefficients } =
         build_media(desc, &used, &spectra, transport.transport, &subsurface)?;
     old_spellings(desc, &mut warnings);
     let interfaces = std::cell::RefCell::new(Vec::<[u32; 2]>::new());
@@ -264,6 +265,7 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions, needs: &SceneNe
         sphere,
         has_interfaces,
         media,
+        entry_coefficients,
         interfaces,
         camera_medium,
         has_chromatic_media,

@@ -243,26 +243,29 @@ impl Mixture {
         self.base
     }
 
-    /// The coefficients at a vertex.
+    /// The coefficients at a vertex; `mix` false leaves the BSDF or phase function alone
+    /// (the path's throughput is above 1, see `tracer.rs`).
     #[inline]
-    pub fn weights<C: Channels>(&self, sc: &Scatterer<'_, C>) -> Weights {
-        if sc.mixes() { self.base } else { Weights::SCATTER_ONLY }
+    pub fn weights<C: Channels>(&self, sc: &Scatterer<'_, C>, mix: bool) -> Weights {
+        if mix && sc.mixes() { self.base } else { Weights::SCATTER_ONLY }
     }
 
     /// Draws ω' from p (the paper's 1D example: `u_comp` picks a density and, rescaled to
     /// [0, 1), drives it together with `u`). `None` when the chosen density has nothing to
     /// offer here (e.g. the back of a one-sided light): that sample contributes nothing, and
-    /// the densities below count only what can be drawn.
+    /// the densities below count only what can be drawn. `mix` as for [`Mixture::weights`].
+    #[allow(clippy::too_many_arguments)]
     pub fn sample<C: Channels>(
         &self,
         scene: &Scene,
         x: Vec3,
         sc: &Scatterer<'_, C>,
+        mix: bool,
         u_comp: f32,
         u: Vec2,
         lambda: &C::Lambda,
     ) -> Option<MixtureSample<C>> {
-        let w = self.weights(sc);
+        let w = self.weights(sc, mix);
         let rescale = |lo: f32, c: f32| ((u_comp - lo) / c).clamp(0.0, ONE_MINUS_EPSILON);
         if u_comp < w.scatter {
             let s = sc.sample(rescale(0.0, w.scatter), u)?;
@@ -342,7 +345,7 @@ impl Mixture {
         wi: Vec3,
         first: Option<&Hit>,
     ) -> f32 {
-        let w = self.weights(sc);
+        let w = self.weights(sc, true);
         let light = if w.light > 0.0 { self.light_pdf(scene, x, wi, first) } else { 0.0 };
         let env = if w.env > 0.0 { self.env_pdf(scene, wi) } else { 0.0 };
         w.scatter * sc.eval(wi).1 + w.light * light + w.env * env
@@ -489,7 +492,7 @@ AttributeEnd"#;
             for _ in 0..n {
                 let u_comp = rng.uniform();
                 let u = Vec2::new(rng.uniform(), rng.uniform());
-                let ms = m.sample::<Rgb>(&s, x, sc, u_comp, u, &()).expect("every density samples from x");
+                let ms = m.sample::<Rgb>(&s, x, sc, true, u_comp, u, &()).expect("every density samples from x");
                 let theta = (ms.wi.z as f64).clamp(-1.0, 1.0).acos();
                 let phi = (ms.wi.y as f64).atan2(ms.wi.x as f64).rem_euclid(2.0 * PI);
                 let i = ((theta / PI * NT as f64) as usize).min(NT - 1);
@@ -537,13 +540,14 @@ AttributeEnd"#;
         let m = mixture(&s);
         let x = Vec3::new(0.0, 0.0, 0.0);
         let sc = Scatterer::Medium { phase: HenyeyGreenstein::new(0.0), wo: Vec3::Z };
-        let w = m.weights(&sc);
+        let w = m.weights(&sc, true);
         let ms = (0..64)
             .find_map(|k| {
                 let ms = m.sample::<Rgb>(
                     &s,
                     x,
                     &sc,
+                    true,
                     w.scatter + 0.5 * w.light,
                     Vec2::new((k as f32 + 0.5) / 64.0, 0.3),
                     &(),

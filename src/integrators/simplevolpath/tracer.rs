@@ -82,6 +82,21 @@ impl<C: Channels> Path<C> {
         true
     }
 
+    /// Whether a medium vertex samples from the whole mixture. Its weight f/p is at most
+    /// Λ/c_s (c_s < 1 the phase function's share): unbiased at each vertex, but a product over
+    /// n vertices whose second moment can grow as (1/c_s)^n, which the long forward-scattering
+    /// chains of a dense cloud turn into fireflies (with g = 0.877, p_s ≫ p_e ahead, so most
+    /// vertices weigh about 1/c_s). The coefficients may depend on anything but the direction
+    /// drawn here, so a path whose throughput has risen above 1 samples the phase function
+    /// alone (weight Λ ≤ 1) until it falls back: β then never exceeds max(1, Λ/c_s) through
+    /// the media's mixtures, and each vertex stays an unbiased one-sample MIS estimator.
+    /// Surface vertices keep the mixture: their chains are short (ρ < 1, roulette), and a
+    /// small luminaire found by the BSDF alone would be a firefly of its own.
+    #[inline]
+    fn mixes(&self) -> bool {
+        (self.beta * self.eta_scale / self.r_u.average()).max_element() <= 1.0
+    }
+
     /// Russian roulette; true when the path ends. The sampler value is drawn at every vertex.
     #[inline]
     fn roulette(&mut self, sampler: &mut Sampler) -> bool {
@@ -282,7 +297,8 @@ pub fn trace<C: Channels>(
         // intersection, weighted by f / p with p evaluated where the ray went.
         let u_comp = sampler.get_1d();
         let u = sampler.get_2d();
-        let Some(s) = mixture.sample(scene, x, &sc, u_comp, u, lambda) else { break };
+        let mix = !matches!(sc, Scatterer::Medium { .. }) || path.mixes();
+        let Some(s) = mixture.sample(scene, x, &sc, mix, u_comp, u, lambda) else { break };
         if s.f.is_zero() {
             break;
         }

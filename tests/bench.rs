@@ -46,7 +46,7 @@ fn bench_reports_equal_spp_and_equal_error_ratios() {
     ]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(stdout.contains("| tiny | rgb (off) |") && stdout.contains("| tiny | spectral (on) |"), "{stdout}");
+    assert!(stdout.contains("| tiny | 4 | rgb (off) |") && stdout.contains("| tiny | 4 | spectral (on) |"), "{stdout}");
     let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     let rows = v["rows"].as_array().unwrap();
     assert_eq!(rows.len(), 2);
@@ -95,4 +95,59 @@ fn bench_failures_and_missing_references_are_reported() {
     assert_eq!(failures.len(), 1);
     assert_eq!(failures[0]["scene"], "bad");
     assert!(failures[0]["error"].as_str().unwrap().contains("missing.ply"), "{failures:?}");
+}
+
+/// A speed.json may name its scene and two independent reference halves: the MSE is then
+/// against their mean with its own noise, E[(h1 − h2)²]/4, removed — for an image equal to one
+/// half, MSE(h1, mean) − MSE(h1, h2)/4 = 0 — and the default spp is the file's.
+#[test]
+fn bench_removes_the_noise_of_reference_halves() {
+    let dir = scratch_dir("bench-halves");
+    std::fs::create_dir_all(dir.join("refs")).unwrap();
+    let scene = dir.join("tiny.pbrt");
+    std::fs::write(
+        &scene,
+        "LookAt 0 0 4  0 0 0  0 1 0\nCamera \"perspective\"\nSampler \"zsobol\" \"integer seed\" 1\nFilm \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8\nWorldBegin\nLightSource \"infinite\" \"rgb L\" [1 1 1]\nMaterial \"diffuse\" \"rgb reflectance\" [0.7 0.2 0.1]\nShape \"sphere\"\n",
+    )
+    .unwrap();
+    // The halves: nimbus's own renders at bench's seeds 1 and 2 and its spp, so each run's
+    // image is one of them.
+    for seed in ["1", "2"] {
+        let half = dir.join(format!("refs/h{seed}.exr"));
+        let args = ["render", scene.to_str().unwrap(), "--spp", "3", "--seed", seed, "--spectral", "off", "--quiet"];
+        let mut args = args.to_vec();
+        args.extend(["--nthreads", "1", "--outfile", half.to_str().unwrap()]);
+        let out = nimbus(&args);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    }
+    std::fs::write(
+        dir.join("speed.json"),
+        r#"{"spp": 3, "scenes": {"tiny": {"seconds": 2.0, "mse": 0.001, "scene": "tiny.pbrt",
+            "reference": ["refs/h1.exr", "refs/h2.exr"]}}}"#,
+    )
+    .unwrap();
+    let json = dir.join("out.json");
+    let args = ["bench", "--references", dir.to_str().unwrap(), "--nthreads", "1", "--spectral", "off"];
+    let mut args: Vec<&str> = args.to_vec();
+    args.extend(["--json", json.to_str().unwrap(), scene.to_str().unwrap()]);
+    let out = nimbus(&args);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let rows = v["rows"].as_array().unwrap();
+    let tiny = rows.iter().find(|r| r["scene"] == "tiny").expect("the file's scene");
+    assert_eq!(tiny["spp"], 3);
+    let mse = tiny["mse"].as_f64().unwrap();
+    // Each half against the mean: MSE(h1, h2)/4 each, minus the same noise.
+    assert!(mse.abs() < 1e-9, "{tiny}");
+    // A reference list of three paths is an error naming the file and key.
+    std::fs::write(
+        dir.join("speed.json"),
+        r#"{"spp": 3, "scenes": {"tiny": {"seconds": 2.0, "mse": 0.001, "reference": ["a", "b", "c"]}}}"#,
+    )
+    .unwrap();
+    let out = nimbus(&["bench", "--references", dir.to_str().unwrap(), scene.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("speed.json") && stderr.contains("scenes.tiny.reference"), "{stderr}");
+    std::fs::remove_dir_all(&dir).unwrap();
 }

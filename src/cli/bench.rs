@@ -1,8 +1,9 @@
-//! `nimbus bench`: speed on the parity scenes against pbrt-v4's own figures for them
-//! (`pbrt-scenes/pbrt-v4-references/speed.json`: wall seconds at `--nthreads 2 --spp 64` and the
-//! MSE against the reference images at that spp), at equal spp and at equal error, for each
-//! transport; plus a CPU baseline measured in the same run so figures from different machines
-//! can be compared.
+//! `nimbus bench`: speed on the parity scenes against pbrt-v4's own figures for them, at equal
+//! spp and at equal error, for each transport; plus a CPU baseline measured in the same run so
+//! figures from different machines can be compared. The figures are each folder's speed.json:
+//! `pbrt-scenes/pbrt-v4-references` (wall seconds at `--nthreads 2 --spp 64`, MSE against the
+//! reference images at that spp) and `pbrt-scenes/disney-cloud` (the real Disney cloud at 16 spp,
+//! MSE against two independent reference halves with their own noise removed).
 //!
 //! Equal error: for an unbiased Monte Carlo estimator MSE ∝ 1/time, so nimbus needs
 //! `t × mse / mse_pbrt` seconds to reach pbrt-v4's MSE, and its speed-up at equal error is
@@ -19,11 +20,12 @@ use nimbus::scene::transport::SpectralMode;
 /// Arguments of `nimbus bench`.
 #[derive(clap::Args)]
 pub struct BenchArgs {
-    /// Scenes to time (default: every scene of speed.json, and pbrt-scenes/default.pbrt).
+    /// Scenes to time (default: every scene of the speed.json files, and
+    /// pbrt-scenes/default.pbrt).
     scenes: Vec<PathBuf>,
-    /// Samples per pixel.
-    #[arg(long, default_value_t = 64)]
-    spp: u32,
+    /// Samples per pixel (default: each speed.json's, pbrt-v4's figures were measured at it).
+    #[arg(long)]
+    spp: Option<u32>,
     /// Worker threads (pbrt-v4's figures use 2).
     #[arg(long, default_value_t = 2)]
     nthreads: usize,
@@ -31,9 +33,11 @@ pub struct BenchArgs {
     /// is reported.
     #[arg(long, default_value_t = 2)]
     repeat: usize,
-    /// The pbrt-v4 references folder (scenes/, images/, speed.json).
-    #[arg(long)]
-    references: Option<PathBuf>,
+    /// Folders of pbrt-v4 figures, comma separated: each has a speed.json, and scenes/NAME.pbrt
+    /// and images/NAME.exr unless its speed.json names them (default:
+    /// pbrt-scenes/pbrt-v4-references and pbrt-scenes/disney-cloud).
+    #[arg(long, value_delimiter = ',')]
+    references: Vec<PathBuf>,
     /// Transports to time, comma separated (`off` = RGB, `on` = spectral, `auto`).
     #[arg(long, value_delimiter = ',', default_value = "off,on")]
     spectral: Vec<SpectralMode>,
@@ -53,10 +57,78 @@ struct PbrtFigures {
     mse: f64,
 }
 
+/// One scene of a speed.json: its figures, where its scene file and reference images are
+/// (one image, or two independent halves whose noise the MSE leaves out), and the spp and
+/// thread count they were measured at.
+#[derive(Clone, Debug)]
+struct Entry {
+    name: String,
+    figures: Option<PbrtFigures>,
+    scene: PathBuf,
+    reference: Vec<PathBuf>,
+    spp: u32,
+    threads: Option<u64>,
+}
+
 /// What speed.json says: pbrt-v4's spp, its thread count if given, and per-scene figures.
 type Speed = (u32, Option<u64>, Vec<(String, PbrtFigures)>);
 
-/// Reads speed.json: `{"spp": .., "threads": .., "scenes": {"name": {"seconds": .., "mse": ..}}}`.
+/// The entries of the speed.json in `folder`.
+fn read_entries(folder: &Path) -> Result<Vec<Entry>> {
+    let path = folder.join("speed.json");
+    let (spp, threads, figures) = read_speed(&path)?;
+    let text = std::fs::read_to_string(&path).with_context(|| format!("{}: cannot read", path.display()))?;
+    let v: serde_json::Value = serde_json::from_str(&text)?;
+    let mut out = Vec::new();
+    for (name, f) in figures {
+        let s = &v["scenes"][&name];
+        let scene = match s.get("scene") {
+            None => folder.join(format!("scenes/{name}.pbrt")),
+            Some(p) => folder
+                .join(p.as_str().with_context(|| format!("{}: scenes.{name}.scene must be a path", path.display()))?),
+        };
+        let reference = match s.get("reference") {
+            None => vec![folder.join(format!("images/{name}.exr"))],
+            Some(r) => {
+                let list = r.as_array().filter(|a| (1..=2).contains(&a.len()));
+                let list = list.with_context(|| {
+                    format!("{}: scenes.{name}.reference must be a list of one or two paths", path.display())
+                })?;
+                let paths: Option<Vec<PathBuf>> = list.iter().map(|p| p.as_str().map(|p| folder.join(p))).collect();
+                paths.with_context(|| format!("{}: scenes.{name}.reference must hold paths", path.display()))?
+            }
+        };
+        out.push(Entry { name, figures: Some(f), scene, reference, spp, threads });
+    }
+    Ok(out)
+}
+
+/// MSE of each image against `reference`: one image, or the mean of two independent halves,
+/// with the mean's own noise (E[(h1 − h2)²]/4) subtracted.
+fn mse_against(images: &[nimbus::imageio::Image], reference: &[PathBuf]) -> Result<f64, String> {
+    let read = |p: &PathBuf| nimbus::imageio::read_exr(p).map_err(|e| format!("{}: {e}", p.display()));
+    let refs = reference.iter().map(read).collect::<Result<Vec<_>, _>>()?;
+    let mse = |a: &nimbus::imageio::Image, b: &nimbus::imageio::Image| {
+        nimbus::metrics::error_metrics(a, b).map(|e| e.mse).map_err(|e| e.to_string())
+    };
+    let (mean, noise) = match refs.as_slice() {
+        [r] => (r.clone(), 0.0),
+        [a, b] => {
+            let mut m = a.clone();
+            for (p, q) in m.pixels.iter_mut().zip(&b.pixels) {
+                *p = 0.5 * (*p + *q);
+            }
+            (m, mse(a, b)? / 4.0)
+        }
+        _ => return Err("one reference image or two halves".into()),
+    };
+    let m = images.iter().map(|i| mse(i, &mean)).collect::<Result<Vec<_>, _>>()?;
+    Ok(m.iter().sum::<f64>() / m.len() as f64 - noise)
+}
+
+/// Reads speed.json: `{"spp": .., "threads": .., "scenes": {"name": {"seconds": .., "mse": ..}}}`,
+/// where a scene may also name its `"scene"` file and its `"reference"` images (one, or two
+/// independent halves), relative to the folder.
 fn read_speed(path: &Path) -> Result<Speed> {
     let text = std::fs::read_to_string(path).with_context(|| format!("{}: cannot read", path.display()))?;
     let v: serde_json::Value =
@@ -145,6 +217,7 @@ fn run_once(path: &Path, opts: &BuildOptions) -> Result<(f64, nimbus::imageio::I
 #[derive(Debug)]
 struct Row {
     scene: String,
+    spp: u32,
     mode: String,
     transport: String,
     seconds: f64,
@@ -158,7 +231,7 @@ struct Row {
 impl Row {
     fn to_json(&self) -> serde_json::Value {
         serde_json::json!({
-            "scene": self.scene, "mode": self.mode, "transport": self.transport, "seconds": self.seconds,
+            "scene": self.scene, "spp": self.spp, "mode": self.mode, "transport": self.transport, "seconds": self.seconds,
             "mse": self.mse, "pbrt_seconds": self.pbrt_seconds, "pbrt_mse": self.pbrt_mse,
             "speedup_equal_spp": self.speedup_equal_spp, "speedup_equal_error": self.speedup_equal_error,
         })
@@ -167,60 +240,93 @@ impl Row {
 
 /// Times each scene in each transport and prints a Markdown table.
 pub fn run(args: &BenchArgs) -> Result<ExitCode> {
-    let refs = args
-        .references
-        .clone()
-        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("pbrt-scenes/pbrt-v4-references"));
-    let (pbrt_spp, pbrt_threads, pbrt) = read_speed(&refs.join("speed.json"))?;
-    if args.spp != pbrt_spp {
-        eprintln!(
-            "note: speed.json holds pbrt-v4's figures at {pbrt_spp} spp; ratios at {} spp are not comparable",
-            args.spp
-        );
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let folders = if args.references.is_empty() {
+        vec![root.join("pbrt-scenes/pbrt-v4-references"), root.join("pbrt-scenes/disney-cloud")]
+    } else {
+        args.references.clone()
+    };
+    let mut entries = Vec::new();
+    for f in &folders {
+        entries.extend(read_entries(f)?);
     }
-    if let Some(t) = pbrt_threads
-        && t != args.nthreads as u64
-    {
-        eprintln!(
-            "note: speed.json holds pbrt-v4's figures on {t} threads; ratios on {} are not comparable",
-            args.nthreads
-        );
-    }
-    let scenes = if args.scenes.is_empty() {
-        let mut v: Vec<PathBuf> = pbrt.iter().map(|(n, _)| refs.join(format!("scenes/{n}.pbrt"))).collect();
-        v.push(Path::new(env!("CARGO_MANIFEST_DIR")).join("pbrt-scenes/default.pbrt"));
+    let first_spp = entries.first().map(|e| e.spp);
+    let entries: Vec<Entry> = if args.scenes.is_empty() {
+        let mut v = entries;
+        v.push(Entry {
+            name: "default".into(),
+            figures: None,
+            scene: root.join("pbrt-scenes/default.pbrt"),
+            reference: vec![folders[0].join("images/default.exr")],
+            spp: first_spp.unwrap_or(64),
+            threads: None,
+        });
         v
     } else {
-        args.scenes.clone()
+        // A scene named in a speed.json gets its figures and reference; another one the first
+        // folder's images/NAME.exr.
+        args.scenes
+            .iter()
+            .map(|p| {
+                let name = scene_name(p);
+                match entries.iter().find(|e| e.name == name) {
+                    Some(e) => Entry { scene: p.clone(), ..e.clone() },
+                    None => Entry {
+                        reference: vec![folders[0].join(format!("images/{name}.exr"))],
+                        name,
+                        figures: None,
+                        scene: p.clone(),
+                        spp: first_spp.unwrap_or(64),
+                        threads: None,
+                    },
+                }
+            })
+            .collect()
     };
+    for e in &entries {
+        if let Some(spp) = args.spp
+            && spp != e.spp
+            && e.figures.is_some()
+        {
+            eprintln!(
+                "note: {}: pbrt-v4's figures are at {} spp; ratios at {spp} spp are not comparable",
+                e.name, e.spp
+            );
+        }
+        if let Some(t) = e.threads
+            && t != args.nthreads as u64
+        {
+            eprintln!(
+                "note: {}: pbrt-v4's figures are on {t} threads; ratios on {} are not comparable",
+                e.name, args.nthreads
+            );
+        }
+    }
     if args.spectral.is_empty() {
         bail!("--spectral needs at least one of off, on, auto");
     }
     let pool = rayon::ThreadPoolBuilder::new().num_threads(args.nthreads.max(1)).build()?;
     let base = baseline_seconds();
-    println!("baseline (fixed CPU workload): {base:.3} s; {} threads, {} spp", args.nthreads, args.spp);
+    let spp_note = args.spp.map_or("each speed.json's spp".to_string(), |s| format!("{s} spp"));
+    println!("baseline (fixed CPU workload): {base:.3} s; {} threads, {spp_note}", args.nthreads);
     if let Some(i) = &args.integrator {
         println!("integrator: {i} (the scenes' own otherwise); pbrt-v4's figures are its VolPath's");
     }
     println!("equal error: speed-up = (pbrt-v4 s × pbrt-v4 MSE) / (nimbus s × nimbus MSE), as MSE ∝ 1/time");
     println!(
-        "| scene | transport | nimbus s | pbrt-v4 s | speed-up (equal spp) | nimbus MSE | pbrt-v4 MSE | speed-up (equal error) |"
+        "| scene | spp | transport | nimbus s | pbrt-v4 s | speed-up (equal spp) | nimbus MSE | pbrt-v4 MSE | speed-up (equal error) |"
     );
-    println!("|---|---|--:|--:|--:|--:|--:|--:|");
+    println!("|---|--:|---|--:|--:|--:|--:|--:|--:|");
     let mut rows = Vec::new();
     let mut failures = Vec::new();
-    for path in &scenes {
-        let name = scene_name(path);
-        let figures = pbrt.iter().find(|(n, _)| *n == name).map(|(_, f)| *f);
-        let ref_path = refs.join(format!("images/{name}.exr"));
+    for entry in &entries {
+        let (name, path, figures) = (&entry.name, &entry.scene, entry.figures);
+        let spp = args.spp.unwrap_or(entry.spp);
         // No reference means no MSE: say why instead of leaving a silent "-".
-        let reference = match nimbus::imageio::read_exr(&ref_path) {
-            Ok(r) => Some(r),
-            Err(e) => {
-                eprintln!("note: {name}: no MSE ({}: {e})", ref_path.display());
-                None
-            }
-        };
+        let missing = entry.reference.iter().find(|p| !p.exists());
+        if let Some(p) = missing {
+            eprintln!("note: {name}: no MSE ({}: no such file)", p.display());
+        }
         for &mode in &args.spectral {
             // Seeds 1 and 2 as pbrt-v4's MSE figure; the timed runs alternate them.
             let mut times = Vec::new();
@@ -228,9 +334,9 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode> {
             let mut transport = "";
             let mut failed = None;
             for k in 0..args.repeat.max(2) {
-                match pool.install(|| {
-                    run_once(path, &options(args.spp, 1 + (k % 2) as i32, mode, args.integrator.as_deref()))
-                }) {
+                match pool
+                    .install(|| run_once(path, &options(spp, 1 + (k % 2) as i32, mode, args.integrator.as_deref())))
+                {
                     Ok((t, img, tr)) => {
                         times.push(t);
                         transport = tr;
@@ -245,22 +351,19 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode> {
                 }
             }
             if let Some(e) = failed {
-                println!("| {name} | {mode} | failed: {e} | | | | | |");
+                println!("| {name} | {spp} | {mode} | failed: {e} | | | | | |");
                 failures.push(serde_json::json!({ "scene": name, "mode": mode.to_string(), "error": e }));
                 continue;
             }
             let seconds = median(&mut times);
-            let mse = match &reference {
-                None => None,
-                Some(r) => {
-                    let m: Result<Vec<f64>, nimbus::Error> =
-                        images.iter().map(|i| nimbus::metrics::error_metrics(i, r).map(|e| e.mse)).collect();
-                    match m {
-                        Ok(m) => Some(m.iter().sum::<f64>() / m.len() as f64),
-                        Err(e) => {
-                            eprintln!("note: {name}: no MSE against {}: {e}", ref_path.display());
-                            None
-                        }
+            let mse = if missing.is_some() {
+                None
+            } else {
+                match mse_against(&images, &entry.reference) {
+                    Ok(m) => Some(m),
+                    Err(e) => {
+                        eprintln!("note: {name}: no MSE: {e}");
+                        None
                     }
                 }
             };
@@ -269,7 +372,7 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode> {
             let fmt = |v: Option<f64>, p: usize| v.map_or("-".to_string(), |v| format!("{v:.p$}"));
             let fmte = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.3e}"));
             println!(
-                "| {name} | {transport} ({mode}) | {seconds:.2} | {} | {} | {} | {} | {} |",
+                "| {name} | {spp} | {transport} ({mode}) | {seconds:.2} | {} | {} | {} | {} | {} |",
                 fmt(figures.map(|f| f.seconds), 2),
                 equal_spp.map_or("-".into(), |v| format!("{v:.2}x")),
                 fmte(mse),
@@ -278,6 +381,7 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode> {
             );
             rows.push(Row {
                 scene: name.clone(),
+                spp,
                 mode: mode.to_string(),
                 transport: transport.to_string(),
                 seconds,
@@ -292,7 +396,7 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode> {
     if let Some(path) = &args.json {
         let rows: Vec<serde_json::Value> = rows.iter().map(Row::to_json).collect();
         let doc = serde_json::json!({
-            "baseline_seconds": base, "spp": args.spp, "threads": args.nthreads, "integrator": args.integrator,
+            "baseline_seconds": base, "threads": args.nthreads, "integrator": args.integrator,
             "rows": rows, "failures": failures,
         });
         std::fs::write(path, serde_json::to_string_pretty(&doc)?)

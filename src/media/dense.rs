@@ -71,8 +71,8 @@ impl<T: GridValue> DenseGrid<T> {
     #[inline]
     pub fn cell(&self, p: Vec3) -> (IVec3, Vec3) {
         let ps = p * self.n.as_vec3() - Vec3::splat(0.5);
-        let pf = ps.floor();
-        (pf.as_ivec3(), ps - pf)
+        let i = crate::math::floor_ivec3(ps);
+        (i, ps - i.as_vec3())
     }
 
     /// The indices into [`DenseGrid::values`] of the eight samples of the cell whose lowest
@@ -122,9 +122,9 @@ impl<T: GridValue> DenseGrid<T> {
     #[inline]
     pub fn lookup(&self, p: Vec3) -> T {
         let ps = p * self.n.as_vec3() - Vec3::splat(0.5);
-        let pf = ps.floor();
-        let d = ps - pf;
-        let (x, y, z) = (pf.x as i32, pf.y as i32, pf.z as i32);
+        let i = crate::math::floor_ivec3(ps);
+        let d = ps - i.as_vec3();
+        let (x, y, z) = (i.x, i.y, i.z);
         let lerp = |t: f32, a: T, b: T| a * (1.0 - t) + b * t;
         let d00 = lerp(d.x, self.at(x, y, z), self.at(x + 1, y, z));
         let d10 = lerp(d.x, self.at(x, y + 1, z), self.at(x + 1, y + 1, z));

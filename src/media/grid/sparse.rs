@@ -218,9 +218,8 @@ impl SparseGrid {
     /// libm call on CPUs built without FMA.
     #[inline]
     pub fn sample(&self, p: Vec3) -> f32 {
-        let f = p.floor();
-        let w = p - f;
-        let i = f.as_ivec3();
+        let i = crate::math::floor_ivec3(p);
+        let w = p - i.as_vec3();
         // v[x][y][z] as [x * 4 + y * 2 + z].
         let v: [f32; 8] = if (i & 7).cmplt(IVec3::splat(7)).all() {
             // All eight corners in one brick: one table lookup.

@@ -384,9 +384,8 @@ Shape "sphere" "float radius" 0.8"#,
 /// pbrt-v4 evaluates a subsurface material's textured inputs where a path enters (its
 /// BSSRDF's coefficients are the entry point's), and nimbus's medium takes them there. A
 /// `constant` texture renders as the value does, sample for sample (for `reflectance`, `mfp`
-/// and `sigma_a`); a sphere whose lower half has
-/// one reflectance and upper half another shows, away from the seam (many diffusion lengths),
-/// what each reflectance alone gives there.
+/// and `sigma_a`); a sphere whose lower half has one reflectance and upper half another shows,
+/// away from the seam (many diffusion lengths), what each reflectance alone gives there.
 #[test]
 fn subsurface_takes_textured_inputs_where_paths_enter() {
     let scene = |seed: u32, block: &str| {

@@ -29,8 +29,12 @@ mod tests {
         std::hint::black_box(&block);
         let after = super::peak_rss_bytes().unwrap();
         assert!(after >= before.max(64 << 20), "{before} -> {after}");
-        // The current size read first, the peak after: other tests' threads allocate too.
+        // The current size read first, the peak after: other tests' threads allocate too. Linux
+        // counts resident pages per CPU (per thread, in batches of 64 pages, before 6.2) and
+        // sums them approximately when read, so the peak may trail the size by a few MiB when
+        // tests run in parallel.
         let now = super::rss_bytes().unwrap();
-        assert!(now <= super::peak_rss_bytes().unwrap());
+        let peak = super::peak_rss_bytes().unwrap();
+        assert!(now <= peak + (16 << 20), "{now} > {peak}");
     }
 }

@@ -109,7 +109,7 @@ pub(super) struct PathState<C: Channels> {
     /// The path's time (its camera ray's): every ray of the path sees moving shapes there.
     pub(super) time: f32,
     /// The coefficients of the medium the path is in when that medium takes them from where
-    /// the path entered it ([`crate::media::Medium::entered`], a textured `subsurface`).
+    /// the path entered it ([`crate::media::Medium::from_entry`], a textured `subsurface`).
     pub(super) entered: Option<MediumPoint<C>>,
 }
 

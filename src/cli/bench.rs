@@ -70,24 +70,40 @@ struct Entry {
     threads: Option<u64>,
 }
 
-/// What speed.json says: pbrt-v4's spp, its thread count if given, and per-scene figures.
-type Speed = (u32, Option<u64>, Vec<(String, PbrtFigures)>);
-
-/// The entries of the speed.json in `folder`.
+/// The entries of `folder`'s speed.json: `{"spp": .., "threads": .., "scenes": {"name":
+/// {"seconds": .., "mse": ..}}}`, where a scene may also name its `"scene"` file and its
+/// `"reference"` images (one, or two independent halves), relative to the folder; by default
+/// scenes/NAME.pbrt and images/NAME.exr.
 fn read_entries(folder: &Path) -> Result<Vec<Entry>> {
-    let path = folder.join("speed.json");
-    let (spp, threads, figures) = read_speed(&path)?;
-    let text = std::fs::read_to_string(&path).with_context(|| format!("{}: cannot read", path.display()))?;
-    let v: serde_json::Value = serde_json::from_str(&text)?;
+    let path = &folder.join("speed.json");
+    let text = std::fs::read_to_string(path).with_context(|| format!("{}: cannot read", path.display()))?;
+    let v: serde_json::Value =
+        serde_json::from_str(&text).with_context(|| format!("{}: not valid JSON", path.display()))?;
+    let spp =
+        v.get("spp").and_then(|s| s.as_u64()).with_context(|| format!("{}: no integer \"spp\"", path.display()))?;
+    let threads = match v.get("threads") {
+        None => None,
+        Some(t) => Some(t.as_u64().with_context(|| format!("{}: \"threads\" must be an integer", path.display()))?),
+    };
+    let scenes = v
+        .get("scenes")
+        .and_then(|s| s.as_object())
+        .with_context(|| format!("{}: no \"scenes\" object", path.display()))?;
     let mut out = Vec::new();
-    for (name, f) in figures {
-        let s = &v["scenes"][&name];
-        let scene = match s.get("scene") {
+    for (name, f) in scenes {
+        let num = |key: &str| {
+            f.get(key)
+                .and_then(|x| x.as_f64())
+                .filter(|x| x.is_finite() && *x > 0.0)
+                .with_context(|| format!("{}: scenes.{name}.{key} must be a positive number", path.display()))
+        };
+        let figures = PbrtFigures { seconds: num("seconds")?, mse: num("mse")? };
+        let scene = match f.get("scene") {
             None => folder.join(format!("scenes/{name}.pbrt")),
             Some(p) => folder
                 .join(p.as_str().with_context(|| format!("{}: scenes.{name}.scene must be a path", path.display()))?),
         };
-        let reference = match s.get("reference") {
+        let reference = match f.get("reference") {
             None => vec![folder.join(format!("images/{name}.exr"))],
             Some(r) => {
                 let list = r.as_array().filter(|a| (1..=2).contains(&a.len()));
@@ -98,7 +114,7 @@ fn read_entries(folder: &Path) -> Result<Vec<Entry>> {
                 paths.with_context(|| format!("{}: scenes.{name}.reference must hold paths", path.display()))?
             }
         };
-        out.push(Entry { name, figures: Some(f), scene, reference, spp, threads });
+        out.push(Entry { name: name.clone(), figures: Some(figures), scene, reference, spp: spp as u32, threads });
     }
     Ok(out)
 }
@@ -124,36 +140,6 @@ fn mse_against(images: &[nimbus::imageio::Image], reference: &[PathBuf]) -> Resu
     };
     let m = images.iter().map(|i| mse(i, &mean)).collect::<Result<Vec<_>, _>>()?;
     Ok(m.iter().sum::<f64>() / m.len() as f64 - noise)
-}
-
-/// Reads speed.json: `{"spp": .., "threads": .., "scenes": {"name": {"seconds": .., "mse": ..}}}`,
-/// where a scene may also name its `"scene"` file and its `"reference"` images (one, or two
-/// independent halves), relative to the folder.
-fn read_speed(path: &Path) -> Result<Speed> {
-    let text = std::fs::read_to_string(path).with_context(|| format!("{}: cannot read", path.display()))?;
-    let v: serde_json::Value =
-        serde_json::from_str(&text).with_context(|| format!("{}: not valid JSON", path.display()))?;
-    let spp =
-        v.get("spp").and_then(|s| s.as_u64()).with_context(|| format!("{}: no integer \"spp\"", path.display()))?;
-    let threads = match v.get("threads") {
-        None => None,
-        Some(t) => Some(t.as_u64().with_context(|| format!("{}: \"threads\" must be an integer", path.display()))?),
-    };
-    let scenes = v
-        .get("scenes")
-        .and_then(|s| s.as_object())
-        .with_context(|| format!("{}: no \"scenes\" object", path.display()))?;
-    let mut out = Vec::new();
-    for (name, f) in scenes {
-        let num = |key: &str| {
-            f.get(key)
-                .and_then(|x| x.as_f64())
-                .filter(|x| x.is_finite() && *x > 0.0)
-                .with_context(|| format!("{}: scenes.{name}.{key} must be a positive number", path.display()))
-        };
-        out.push((name.clone(), PbrtFigures { seconds: num("seconds")?, mse: num("mse")? }));
-    }
-    Ok((spp as u32, threads, out))
 }
 
 /// A scene's name as speed.json and the reference images name it: the file name without

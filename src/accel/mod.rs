@@ -1,14 +1,11 @@
 //! Ray queries over the scene's surfaces: a compressed wide BVH (obvhs's CWBVH) over
 //! primitives, with object instances as BVHs of their own.
 
-use std::time::Duration;
+mod build;
 
 use glam::{Affine3A, Vec2, Vec3, Vec3A};
-use obvhs::aabb::Aabb;
 use obvhs::cwbvh::CwBvh;
-use obvhs::cwbvh::builder::build_cwbvh;
 use obvhs::ray::{Ray as BvhRay, RayHit};
-use obvhs::{Boundable, BvhBuildParams};
 
 use crate::geometry::{Bounds3, MotionTransform, Ray};
 use crate::shapes::{
@@ -243,40 +240,35 @@ fn ray_coin(ray: &Ray) -> bool {
     h & 1 == 1
 }
 
-struct Bound(Aabb);
-
-impl Boundable for Bound {
-    fn aabb(&self) -> Aabb {
-        self.0
-    }
-}
-
-/// A BVH over primitives (stored in BVH leaf order).
+/// A BVH over primitives (stored in BVH leaf order), or over parts that are BVHs of their own
+/// over consecutive primitives (a large set built a part at a time: `build.rs`).
 pub struct Accel {
     bvh: CwBvh,
     prims: Vec<Primitive>,
+    /// Empty, or the parts the top BVH's leaves name.
+    parts: Vec<Part>,
     bounds: Bounds3,
 }
 
-impl Accel {
-    /// Builds a BVH over `prims` whose bounds are `bounds[i]`. `None` for no primitives.
-    pub fn build(prims: Vec<Primitive>, bounds: &[Bounds3]) -> Option<Accel> {
-        if prims.is_empty() {
-            return None;
-        }
-        let mut total = Bounds3::EMPTY;
-        let aabbs: Vec<Bound> = bounds
-            .iter()
-            .map(|b| {
-                total = total.union(b);
-                Bound(Aabb::new(Vec3A::from(b.min), Vec3A::from(b.max)))
-            })
-            .collect();
-        let bvh = build_cwbvh(&aabbs, BvhBuildParams::medium_build(), &mut Duration::default());
-        let prims = bvh.primitive_indices.iter().map(|&i| prims[i as usize]).collect();
-        Some(Accel { bvh, prims, bounds: total })
-    }
+/// A BVH over `prims[start..]` (leaf positions count from `start`).
+struct Part {
+    bvh: CwBvh,
+    start: u32,
+}
 
+/// Hits this close are ties (a coplanar pass-through surface and an opaque one).
+#[inline]
+fn tie(a: f32, b: f32) -> bool {
+    (a - b).abs() <= 1e-5 * a.max(1.0)
+}
+
+/// A hit reported to the BVH slightly long, so that a coplanar partner is still visited.
+#[inline]
+fn slack(t: f32) -> f32 {
+    t * (1.0 + 3e-5) + 1e-6
+}
+
+impl Accel {
     /// World bounds of everything in the BVH.
     pub fn bounds(&self) -> Bounds3 {
         self.bounds
@@ -288,10 +280,33 @@ impl Accel {
     }
 
     fn closest(&self, scene: &Surfaces, ray: &Ray, t_max: f32, instance: u32, best: &mut Option<Candidate>) {
-        let bvh_ray = bvh_ray(ray, t_max);
+        if self.parts.is_empty() {
+            return self.closest_in(&self.bvh, 0, scene, ray, t_max, instance, best);
+        }
         let mut hit = RayHit::none();
-        self.bvh.ray_traverse(bvh_ray, &mut hit, |r, id| {
-            let prim = self.prims[id];
+        self.bvh.ray_traverse(bvh_ray(ray, t_max), &mut hit, |r, id| {
+            let part = &self.parts[id];
+            self.closest_in(&part.bvh, part.start as usize, scene, ray, r.tmax, instance, best);
+            best.map_or(f32::INFINITY, |b| slack(b.t))
+        });
+    }
+
+    /// The closest hit among the primitives of `bvh`, whose leaf positions count from `start`.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn closest_in(
+        &self,
+        bvh: &CwBvh,
+        start: usize,
+        scene: &Surfaces,
+        ray: &Ray,
+        t_max: f32,
+        instance: u32,
+        best: &mut Option<Candidate>,
+    ) {
+        let mut hit = RayHit::none();
+        bvh.ray_traverse(bvh_ray(ray, t_max), &mut hit, |r, id| {
+            let prim = self.prims[start + id];
             let found = match prim.geometry {
                 Geometry::Triangle { mesh, tri } => scene.shapes.meshes[mesh as usize]
                     .intersect(tri, ray, r.tmax)
@@ -325,8 +340,6 @@ impl Accel {
             // reference: 53% of rays skip the ground through the box's face). nimbus flips a
             // coin hashed from the ray so its images match pbrt-v4's. Hits are reported to the
             // BVH slightly long so that a coplanar partner is still visited.
-            let tie = |a: f32, b: f32| (a - b).abs() <= 1e-5 * a.max(1.0);
-            let slack = |t: f32| t * (1.0 + 3e-5) + 1e-6;
             let Some((t, detail)) = found else {
                 return f32::INFINITY;
             };
@@ -351,9 +364,20 @@ impl Accel {
     }
 
     fn any(&self, scene: &Surfaces, ray: &Ray, t_max: f32, instance: u32) -> bool {
-        let bvh_ray = bvh_ray(ray, t_max);
-        !self.bvh.ray_traverse_miss(bvh_ray, |r, id| {
-            let prim = self.prims[id];
+        if self.parts.is_empty() {
+            return self.any_in(&self.bvh, 0, scene, ray, t_max, instance);
+        }
+        !self.bvh.ray_traverse_miss(bvh_ray(ray, t_max), |r, id| {
+            let part = &self.parts[id];
+            if self.any_in(&part.bvh, part.start as usize, scene, ray, r.tmax, instance) { 0.0 } else { f32::INFINITY }
+        })
+    }
+
+    /// True when a primitive of `bvh` (leaf positions counting from `start`) blocks the ray.
+    #[inline(always)]
+    fn any_in(&self, bvh: &CwBvh, start: usize, scene: &Surfaces, ray: &Ray, t_max: f32, instance: u32) -> bool {
+        !bvh.ray_traverse_miss(bvh_ray(ray, t_max), |r, id| {
+            let prim = self.prims[start + id];
             if prim.alpha != NONE {
                 // Alpha-tested shapes need the hit to test.
                 return match scene.shapes.detail(prim.geometry, ray, r.tmax) {
@@ -652,7 +676,7 @@ mod tests {
             Primitive { geometry: Geometry::Sphere(0), material: 1, area_light: NONE, interface: NONE, alpha: NONE },
         ];
         let bounds: Vec<Bounds3> = prims.iter().map(|p| s.shapes.bounds(p.geometry)).collect();
-        s.top = Accel::build(prims, &bounds);
+        s.top = Accel::build(prims, bounds);
         s
     }
 
@@ -670,6 +694,73 @@ mod tests {
         assert!(s.occluded(&side, 10.0));
         assert!(!s.occluded(&side, 4.0));
         assert!(s.intersect(&Ray::new(Vec3::new(3.0, 0.0, 5.0), -Vec3::Z), f32::INFINITY).is_none());
+    }
+
+    /// A BVH built in parts finds the same closest hits and occlusions as one BVH over the same
+    /// primitives: a crumpled grid of triangles with spheres among them, 3,000 random rays.
+    #[test]
+    fn parts_find_what_one_bvh_finds() {
+        let mut rng = crate::sampling::rng::Pcg32::new(7, 0);
+        let n = 40;
+        let mut positions = Vec::new();
+        for j in 0..=n {
+            for i in 0..=n {
+                let (x, y) = (i as f32 / n as f32 * 2.0 - 1.0, j as f32 / n as f32 * 2.0 - 1.0);
+                positions.push([x, y, 0.2 * (5.0 * x).sin() * (4.0 * y).cos()]);
+            }
+        }
+        let mut indices = Vec::new();
+        for j in 0..n {
+            for i in 0..n {
+                let v = j * (n + 1) + i;
+                indices.extend_from_slice(&[v, v + 1, v + n + 2, v, v + n + 2, v + n + 1]);
+            }
+        }
+        let mut s = Surfaces::default();
+        s.shapes.meshes.push(Mesh::new(&Affine3A::IDENTITY, false, &positions, &[], &[], indices));
+        let prim =
+            |geometry, material| Primitive { geometry, material, area_light: NONE, interface: NONE, alpha: NONE };
+        let mut prims: Vec<Primitive> =
+            (0..2 * n * n).map(|tri| prim(Geometry::Triangle { mesh: 0, tri }, tri % 7)).collect();
+        for k in 0..50 {
+            let c = Vec3::new(rng.uniform() * 2.0 - 1.0, rng.uniform() * 2.0 - 1.0, rng.uniform() - 0.5);
+            s.shapes.spheres.push(Sphere::new(Affine3A::from_translation(c), false, 0.05, -0.05, 0.05, 360.0));
+            prims.push(prim(Geometry::Sphere(k), 100 + k));
+        }
+        let bounds: Vec<Bounds3> = prims.iter().map(|p| s.shapes.bounds(p.geometry)).collect();
+        let one = Accel::build_in_parts(prims.clone(), bounds.clone(), usize::MAX).unwrap();
+        let parted = Accel::build_in_parts(prims, bounds, 64).unwrap();
+        assert!(one.parts.is_empty() && parted.parts.len() > 40);
+        let mut sorted: Vec<Primitive> = parted.primitives().to_vec();
+        sorted.sort_by_key(|p| (p.material, format!("{:?}", p.geometry)));
+        let mut expected: Vec<Primitive> = one.primitives().to_vec();
+        expected.sort_by_key(|p| (p.material, format!("{:?}", p.geometry)));
+        assert_eq!(sorted, expected, "every primitive once");
+        let (mut hits, mut blocked) = (0, 0);
+        for _ in 0..3000 {
+            let o = Vec3::new(rng.uniform() * 3.0 - 1.5, rng.uniform() * 3.0 - 1.5, rng.uniform() * 2.0 - 1.0);
+            // Two rays in three aimed at the grid, the rest anywhere.
+            let target = Vec3::new(rng.uniform() * 2.0 - 1.0, rng.uniform() * 2.0 - 1.0, 0.0);
+            let random = Vec3::new(rng.uniform() - 0.5, rng.uniform() - 0.5, rng.uniform() - 0.5);
+            let d = if rng.uniform() < 0.67 { target - o } else { random }.normalize();
+            let ray = Ray::new(o, d);
+            let t_max = rng.uniform() * 3.0;
+            let (mut a, mut b) = (None, None);
+            one.closest(&s, &ray, f32::INFINITY, NONE, &mut a);
+            parted.closest(&s, &ray, f32::INFINITY, NONE, &mut b);
+            match (a, b) {
+                (None, None) => {}
+                (Some(a), Some(b)) => {
+                    assert_eq!((a.t, a.prim), (b.t, b.prim));
+                    hits += 1;
+                }
+                _ => panic!("{a:?} vs {b:?}"),
+            }
+            let occluded = one.any(&s, &ray, t_max, NONE);
+            assert_eq!(occluded, parted.any(&s, &ray, t_max, NONE));
+            blocked += occluded as u32;
+        }
+        assert!(hits > 1500 && blocked > 1000, "{hits} hits, {blocked} blocked");
     }
 
     #[test]

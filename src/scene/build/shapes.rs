@@ -276,7 +276,7 @@ impl ShapeBuilder<'_> {
             let motion = motion_transform(t, &shape.entity.loc)?;
             let (mut p, mut b) = (Vec::new(), Vec::new());
             self.add(shape, &desc.area_lights, false, Affine3A::IDENTITY, &mut p, &mut b)?;
-            if let Some(accel) = Accel::build(p, &b) {
+            if let Some(accel) = Accel::build(p, b) {
                 bounds.push(motion.bounds(&accel.bounds()));
                 blas.push(accel);
                 instances.push(Instance::moving(blas.len() as u32 - 1, motion));
@@ -291,7 +291,7 @@ impl ShapeBuilder<'_> {
                 let world = fixed_transform(&shape.world_from_object, &shape.entity.loc, "a shape inside ObjectBegin")?;
                 self.add(shape, &desc.area_lights, true, world, &mut p, &mut b)?;
             }
-            let accel = Accel::build(p, &b);
+            let accel = Accel::build(p, b);
             blas_of.insert(def.name.as_str(), accel.as_ref().map(|_| blas.len() as u32));
             if let Some(a) = accel {
                 blas.push(a);
@@ -315,6 +315,6 @@ impl ShapeBuilder<'_> {
             prims.push(Primitive::instance(instances.len() as u32 - 1));
         }
         let primitives = prims.len();
-        Ok(Placed { top: Accel::build(prims, &bounds), blas, instances, primitives })
+        Ok(Placed { top: Accel::build(prims, bounds), blas, instances, primitives })
     }
 }

@@ -148,7 +148,79 @@ fn morton3(v: u32) -> u64 {
 
 #[cfg(test)]
 mod tests {
+    use glam::{Affine3A, Vec3};
+
     use super::*;
+    use crate::accel::{Geometry, NONE, Surfaces};
+    use crate::geometry::Ray;
+    use crate::shapes::{Mesh, Sphere};
+
+    /// A BVH built in parts finds the same closest hits and occlusions as one BVH over the same
+    /// primitives: a crumpled grid of triangles with spheres among them, 3,000 random rays.
+    #[test]
+    fn parts_find_what_one_bvh_finds() {
+        let mut rng = crate::sampling::rng::Pcg32::new(7, 0);
+        let n = 40;
+        let mut positions = Vec::new();
+        for j in 0..=n {
+            for i in 0..=n {
+                let (x, y) = (i as f32 / n as f32 * 2.0 - 1.0, j as f32 / n as f32 * 2.0 - 1.0);
+                positions.push([x, y, 0.2 * (5.0 * x).sin() * (4.0 * y).cos()]);
+            }
+        }
+        let mut indices = Vec::new();
+        for j in 0..n {
+            for i in 0..n {
+                let v = j * (n + 1) + i;
+                indices.extend_from_slice(&[v, v + 1, v + n + 2, v, v + n + 2, v + n + 1]);
+            }
+        }
+        let mut s = Surfaces::default();
+        s.shapes.meshes.push(Mesh::new(&Affine3A::IDENTITY, false, &positions, &[], &[], indices));
+        let prim =
+            |geometry, material| Primitive { geometry, material, area_light: NONE, interface: NONE, alpha: NONE };
+        let mut prims: Vec<Primitive> =
+            (0..2 * n * n).map(|tri| prim(Geometry::Triangle { mesh: 0, tri }, tri % 7)).collect();
+        for k in 0..50 {
+            let c = Vec3::new(rng.uniform() * 2.0 - 1.0, rng.uniform() * 2.0 - 1.0, rng.uniform() - 0.5);
+            s.shapes.spheres.push(Sphere::new(Affine3A::from_translation(c), false, 0.05, -0.05, 0.05, 360.0));
+            prims.push(prim(Geometry::Sphere(k), 100 + k));
+        }
+        let bounds: Vec<Bounds3> = prims.iter().map(|p| s.shapes.bounds(p.geometry)).collect();
+        let one = Accel::build_in_parts(prims.clone(), bounds.clone(), usize::MAX).unwrap();
+        let parted = Accel::build_in_parts(prims, bounds, 64).unwrap();
+        assert!(one.parts.is_empty() && parted.parts.len() > 40);
+        let mut sorted: Vec<Primitive> = parted.primitives().to_vec();
+        sorted.sort_by_key(|p| (p.material, format!("{:?}", p.geometry)));
+        let mut expected: Vec<Primitive> = one.primitives().to_vec();
+        expected.sort_by_key(|p| (p.material, format!("{:?}", p.geometry)));
+        assert_eq!(sorted, expected, "every primitive once");
+        let (mut hits, mut blocked) = (0, 0);
+        for _ in 0..3000 {
+            let o = Vec3::new(rng.uniform() * 3.0 - 1.5, rng.uniform() * 3.0 - 1.5, rng.uniform() * 2.0 - 1.0);
+            // Two rays in three aimed at the grid, the rest anywhere.
+            let target = Vec3::new(rng.uniform() * 2.0 - 1.0, rng.uniform() * 2.0 - 1.0, 0.0);
+            let random = Vec3::new(rng.uniform() - 0.5, rng.uniform() - 0.5, rng.uniform() - 0.5);
+            let d = if rng.uniform() < 0.67 { target - o } else { random }.normalize();
+            let ray = Ray::new(o, d);
+            let t_max = rng.uniform() * 3.0;
+            let (mut a, mut b) = (None, None);
+            one.closest(&s, &ray, f32::INFINITY, NONE, &mut a);
+            parted.closest(&s, &ray, f32::INFINITY, NONE, &mut b);
+            match (a, b) {
+                (None, None) => {}
+                (Some(a), Some(b)) => {
+                    assert_eq!((a.t, a.prim), (b.t, b.prim));
+                    hits += 1;
+                }
+                _ => panic!("{a:?} vs {b:?}"),
+            }
+            let occluded = one.any(&s, &ray, t_max, NONE);
+            assert_eq!(occluded, parted.any(&s, &ray, t_max, NONE));
+            blocked += occluded as u32;
+        }
+        assert!(hits > 1500 && blocked > 1000, "{hits} hits, {blocked} blocked");
+    }
 
     #[test]
     fn morton_spreads_bits() {

@@ -13,7 +13,7 @@ use super::direct::{Scatterer, extra_direct, sample_direct};
 use super::media::{line_transmittance, sample_t_maj};
 use super::observer::{EmissionEvent, PathObserver, VertexEvent};
 use super::{MAX_SUBSURFACE_EVENTS, RayStats};
-use crate::accel::{Hit, NONE};
+use crate::accel::{Found, Hit, NONE};
 use crate::camera::Differentials;
 use crate::channels::Channels;
 use crate::geometry::Ray;
@@ -284,19 +284,19 @@ impl<C: Channels, O: PathObserver<C>> Tracer<'_, C, O> {
     fn follow(&mut self, w: &mut Walk<C>) {
         loop {
             self.stats.bounce += 1;
-            let hit = self.scene.surfaces.intersect(&w.ray, f32::INFINITY);
-            self.camera_line(w, hit);
+            let found = self.scene.surfaces.find(&w.ray, f32::INFINITY);
+            self.camera_line(w, found.as_ref());
             // Area lights on the camera line (depth 0) once it has been estimated.
             let line_counted = w.line_done && w.depth == 0;
             if w.medium != NONE {
-                match self.track_medium(w, hit.as_ref()) {
+                match self.track_medium(w, found.map_or(f32::INFINITY, |f| f.t())) {
                     Tracked::Ended => return,
                     Tracked::Scattered(p) if self.scatter_in_medium(w, p) => continue,
                     Tracked::Scattered(_) => return,
                     Tracked::Reached => {}
                 }
             }
-            let Some(hit) = hit else {
+            let Some(hit) = found.map(|f| self.scene.surfaces.resolve(&f)) else {
                 self.escape(w);
                 return;
             };
@@ -312,9 +312,10 @@ impl<C: Channels, O: PathObserver<C>> Tracer<'_, C, O> {
     /// The camera line's area lights, once, on the camera segment through a medium
     /// ([`PathConfig::camera_line`]).
     #[inline]
-    fn camera_line(&mut self, w: &mut Walk<C>, hit: Option<Hit>) {
+    fn camera_line(&mut self, w: &mut Walk<C>, found: Option<&Found>) {
         if self.config.camera_line && w.depth == 0 && w.medium != NONE && !w.line_done {
             w.line_done = true;
+            let hit = found.map(|f| self.scene.surfaces.resolve(f));
             let c = line_emission(self.scene, w.ray, hit, w.medium, &w.st, self.lambda, self.stats);
             if !c.is_zero() {
                 self.l += c;
@@ -323,15 +324,14 @@ impl<C: Channels, O: PathObserver<C>> Tracer<'_, C, O> {
         }
     }
 
-    /// Delta tracking through the current medium up to the surface `hit` (or infinity),
+    /// Delta tracking through the current medium up to the surface at `t_max` (or infinity),
     /// adding the medium's emission on the way (PBR 4th ed. §14.2.2).
     #[inline]
-    fn track_medium(&mut self, w: &mut Walk<C>, hit: Option<&Hit>) -> Tracked {
+    fn track_medium(&mut self, w: &mut Walk<C>, t_max: f32) -> Tracked {
         let config = self.config;
         let m = &self.scene.media[w.medium as usize];
         let view = MediumView { medium: m, entered: w.st.entered };
         let hero = w.st.hero;
-        let t_max = hit.map_or(f32::INFINITY, |h| h.surface.t);
         let mut rng =
             Pcg32::new(hash_sample(self.sampler.get_1d(), Vec2::ZERO), hash_sample(self.sampler.get_1d(), Vec2::ONE));
         let u = self.sampler.get_1d();

@@ -132,6 +132,9 @@ pub struct GridMedium {
     pub emission: Emission,
     /// Majorant grid over `bounds`.
     pub majorant: MajorantGrid,
+    /// For a sparse density: its index space from world space in one transform (a lookup
+    /// then costs one transform, not two).
+    index_from_world: Affine3A,
 }
 
 /// What a medium is.
@@ -287,10 +290,16 @@ impl Medium {
         };
         let chromatic = !sigma_a.is_constant() || !sigma_s.is_constant();
         let emissive = !matches!(emission, Emission::None);
+        let medium_from_world = world_from_medium.inverse();
+        let index_from_world = match &density {
+            Density::Field(Field::Sparse(g)) => g.index_from_world() * medium_from_world,
+            _ => Affine3A::IDENTITY,
+        };
         Medium {
             name,
             kind: MediumKind::Grid(Box::new(GridMedium {
-                medium_from_world: world_from_medium.inverse(),
+                medium_from_world,
+                index_from_world,
                 bounds,
                 density,
                 sigma_a,
@@ -420,13 +429,22 @@ impl Medium {
                 le: if self.emissive { C::eval(le, lambda) } else { C::ZERO },
             },
             MediumKind::Grid(g) => {
-                let pm = g.medium_from_world.transform_point3(p);
-                let pu = (pm - g.bounds.min) / (g.bounds.max - g.bounds.min);
-                let d = g.density.at(pm, pu);
+                let medium_point = || {
+                    let pm = g.medium_from_world.transform_point3(p);
+                    (pm, (pm - g.bounds.min) / (g.bounds.max - g.bounds.min))
+                };
+                let d = match &g.density {
+                    Density::Field(Field::Sparse(s)) => s.sample(g.index_from_world.transform_point3(p)),
+                    density => {
+                        let (pm, pu) = medium_point();
+                        density.at(pm, pu)
+                    }
+                };
                 let le = match &g.emission {
                     Emission::None => C::ZERO,
-                    Emission::Radiance { le, scale } => C::eval(le, lambda) * scale.lookup(pu),
+                    Emission::Radiance { le, scale } => C::eval(le, lambda) * scale.lookup(medium_point().1),
                     Emission::Temperature { grid, offset, scale, le_scale, scale_grid, table } => {
+                        let (pm, pu) = medium_point();
                         let t = (grid.at(pm, pu) - offset) * scale;
                         if t > 100.0 {
                             C::blackbody(t, table, lambda)

@@ -145,6 +145,11 @@ pub struct ZSobolSampler {
     base4_digits: u32,
     morton_index: u64,
     dimension: u32,
+    /// Per dimension, the permuted digits above the sample index's (they depend on the pixel
+    /// and the dimension only, so a pixel's samples share them: on grid-cloud at 64 spp the
+    /// permutation was a fifth of the render) and the pixel they are for (`pixel_tag`).
+    pixel_digits: Vec<(u64, u64)>,
+    pixel_tag: u64,
 }
 
 impl ZSobolSampler {
@@ -166,6 +171,8 @@ impl ZSobolSampler {
             base4_digits: res.ilog2() + log4_spp,
             morton_index: 0,
             dimension: 0,
+            pixel_digits: Vec::new(),
+            pixel_tag: 0,
         }
     }
 
@@ -178,7 +185,10 @@ impl ZSobolSampler {
     pub fn start_pixel_sample(&mut self, pixel: UVec2, sample_index: u32, dimension: u32) {
         debug_assert!(sample_index < self.samples_per_pixel());
         self.dimension = dimension;
-        self.morton_index = (encode_morton2(pixel.x, pixel.y) << self.log2_samples_per_pixel) | sample_index as u64;
+        let morton = encode_morton2(pixel.x, pixel.y);
+        self.morton_index = (morton << self.log2_samples_per_pixel) | sample_index as u64;
+        // Tags are the pixel's Morton code plus one: zero marks an entry never filled.
+        self.pixel_tag = morton + 1;
     }
 
     /// Hash that picks a digit permutation from the digits above it, as pbrt-v4 computes it:
@@ -189,19 +199,42 @@ impl ZSobolSampler {
         mix_bits(higher_digits ^ d)
     }
 
-    /// Index into the global Sobol' sequence of the current pixel sample and dimension.
-    fn sample_index(&self) -> u64 {
+    /// Digits `from..to` of the current pixel sample's index, each permuted by a hash of the
+    /// digits above it and of the dimension.
+    #[inline]
+    fn permuted_digits(&self, from: u32, to: u32) -> u64 {
         let odd_log2 = self.log2_samples_per_pixel & 1 == 1;
-        let last_digit = odd_log2 as u32;
         let mut index = 0u64;
-        // Permute every full base-4 digit, most significant first, each by the digits above.
-        for i in (last_digit..self.base4_digits).rev() {
+        for i in (from..to).rev() {
             let shift = 2 * i - odd_log2 as u32;
             let digit = (self.morton_index >> shift) & 3;
             let higher = self.morton_index.checked_shr(shift + 2).unwrap_or(0);
             let p = (self.digit_hash(higher) >> 24) % 24;
             index |= (PERMUTATIONS[p as usize][digit as usize] as u64) << shift;
         }
+        index
+    }
+
+    /// Index into the global Sobol' sequence of the current pixel sample and dimension.
+    fn sample_index(&mut self) -> u64 {
+        let odd_log2 = self.log2_samples_per_pixel & 1 == 1;
+        let last_digit = odd_log2 as u32;
+        // Digits from `pixel_from` up lie above the sample index's bits: the pixel's own.
+        let pixel_from = self.log2_samples_per_pixel.div_ceil(2).clamp(last_digit, self.base4_digits);
+        let d = self.dimension as usize;
+        if d >= self.pixel_digits.len() {
+            self.pixel_digits.resize(d + 1, (0, 0));
+        }
+        let pixel = match self.pixel_digits[d] {
+            (tag, bits) if tag == self.pixel_tag => bits,
+            _ => {
+                let bits = self.permuted_digits(pixel_from, self.base4_digits);
+                self.pixel_digits[d] = (self.pixel_tag, bits);
+                bits
+            }
+        };
+        // Permute every full base-4 digit, most significant first, each by the digits above.
+        let mut index = pixel | self.permuted_digits(last_digit, pixel_from);
         // An odd power of two leaves one base-2 digit: flip it or not.
         if odd_log2 {
             let digit = self.morton_index & 1;
@@ -248,6 +281,25 @@ impl ZSobolSampler {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The pixel's digits kept from earlier samples give the values a fresh sampler gives,
+    /// whatever order pixels and samples come in (odd and even powers of two).
+    #[test]
+    fn kept_pixel_digits_change_nothing() {
+        for spp in [8, 16] {
+            let mut kept = ZSobolSampler::new(spp, UVec2::new(64, 64), Randomization::FastOwen, 3);
+            let order = [(5, 7, 0), (5, 7, 1), (6, 7, 0), (5, 7, 2), (63, 0, 7), (6, 7, 1), (5, 7, 3)];
+            for (x, y, s) in order {
+                let mut fresh = ZSobolSampler::new(spp, UVec2::new(64, 64), Randomization::FastOwen, 3);
+                kept.start_pixel_sample(UVec2::new(x, y), s, 0);
+                fresh.start_pixel_sample(UVec2::new(x, y), s, 0);
+                for _ in 0..40 {
+                    assert_eq!(kept.get_1d(), fresh.get_1d());
+                    assert_eq!(kept.get_2d(), fresh.get_2d());
+                }
+            }
+        }
+    }
 
     #[test]
     fn closed_form_sobol_is_the_matrix_product() {

@@ -303,7 +303,8 @@ fn read_all(scene: &SceneDescription, errors: &mut Vec<Error>) -> Option<SceneCh
             name if name == scene.integrator.name => name.to_string(),
             name => format!("{name} (as \"{}\")", scene.integrator.name),
         },
-        integrator_params: scene.integrator.params.iter().map(describe_param).collect(),
+        // Only what the method reads: the rest is warned about as unused.
+        integrator_params: scene.integrator.params.iter().filter(|p| p.is_used()).map(describe_param).collect(),
         shapes,
         triangles,
         instances: scene.instances.len(),

@@ -257,7 +257,8 @@ struct Part {
 }
 
 /// Up to this many primitives are tested one by one, without the BVH: on the Disney cloud
-/// (a bounding sphere and the ground) traversing their BVH took as long as the tests.
+/// (a bounding sphere and the ground) traversing their BVH took as long as the tests. Not
+/// more: grid-cloud's 14 triangles tested one by one rendered 20–50 % slower.
 const DIRECT: usize = 4;
 
 /// Hits this close are ties (a coplanar pass-through surface and an opaque one).

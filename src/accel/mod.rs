@@ -496,6 +496,12 @@ impl Found {
     pub fn t(&self) -> f32 {
         self.c.t
     }
+
+    /// The primitive hit.
+    #[inline]
+    pub fn prim(&self) -> Primitive {
+        self.c.prim
+    }
 }
 
 /// A surface hit: geometry plus the primitive's attachments.

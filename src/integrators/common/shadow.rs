@@ -44,14 +44,15 @@ pub(super) fn transmittance<C: Channels>(
     let mut first = true;
     loop {
         stats.shadow += 1;
-        let hit = scene.surfaces.intersect(&ray, remaining);
-        if let Some(h) = &hit
-            && !scene.materials[h.prim.material as usize].is_interface()
+        // The hit's geometry is computed only if the ray gets through the medium to it.
+        let found = scene.surfaces.find(&ray, remaining);
+        if let Some(f) = &found
+            && !scene.materials[f.prim().material as usize].is_interface()
         {
             return None;
         }
         if medium != NONE {
-            let t_max = hit.as_ref().map_or(remaining, |h| h.surface.t);
+            let t_max = found.as_ref().map_or(remaining, |f| f.t());
             let m = &scene.media[medium as usize];
             // Only the first medium can take its coefficients from an entry point: such a
             // medium's boundary is its subsurface material's dielectric, never an interface.
@@ -64,7 +65,7 @@ pub(super) fn transmittance<C: Channels>(
                 return None;
             }
         }
-        let Some(h) = hit else { return Some(est) };
+        let Some(h) = found.map(|f| scene.surfaces.resolve(&f)) else { return Some(est) };
         first = false;
         medium = medium_after(scene, &h, ray.d, medium);
         let travelled = h.surface.t;

@@ -299,7 +299,7 @@ AttributeEnd"#
 /// homogeneous medium every pixel is then exactly e^{-σa d} times the light (pbrt-v4's
 /// estimator gets it right only on average), in a grid medium (ratio tracking against twice
 /// the majorant) it keeps the mean with far less spread, and with scattering it agrees with
-/// pbrt-v4's estimator.
+/// pbrt-v4's estimator in expectation.
 #[test]
 fn camera_line_estimates_lights_seen_through_media() {
     let config = |camera_line| VolPath::with_config(PathConfig { camera_line, ..PathConfig::volpath(8, false) });
@@ -362,5 +362,8 @@ fn camera_line_estimates_lights_seen_through_media() {
     let md = diff.iter().sum::<f64>() / n;
     let sd = (diff.iter().map(|d| (d - md) * (d - md)).sum::<f64>() / (n - 1.0) / n).sqrt();
     assert!(md.abs() < 4.0 * sd, "scattering fog: camera line - delta tracking = {md} ± {sd}");
-    assert!(spread(&a) < spread(&b), "variance {} against {}", spread(&a), spread(&b));
+    // No variance claim here: arriving at the wall excludes scattered light, so delta
+    // tracking's arrival anti-correlates with the rest of the path, Var(tracked) − Var(line) =
+    // Le T (1 − T) (Le − 2 E[scattered light | scattered]) per sample, which is near zero in this
+    // fog (seeds 1–7 at 8 spp, since residual ratio tracking: the line's 5 % above to 2 % below).
 }

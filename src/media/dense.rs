@@ -15,10 +15,15 @@ pub struct DenseGrid<T> {
 pub trait GridValue: Copy + Default + std::ops::Add<Output = Self> + std::ops::Mul<f32, Output = Self> {
     /// The largest component (for majorants).
     fn max_component(self) -> f32;
+    /// The smallest component (for minorants).
+    fn min_component(self) -> f32;
 }
 
 impl GridValue for f32 {
     fn max_component(self) -> f32 {
+        self
+    }
+    fn min_component(self) -> f32 {
         self
     }
 }
@@ -27,12 +32,19 @@ impl GridValue for Vec3 {
     fn max_component(self) -> f32 {
         self.max_element()
     }
+    fn min_component(self) -> f32 {
+        self.min_element()
+    }
 }
 
 impl GridValue for glam::Vec4 {
     /// The largest of the first three components (an RGB with a spare lane).
     fn max_component(self) -> f32 {
         self.truncate().max_element()
+    }
+    /// The smallest of the first three components.
+    fn min_component(self) -> f32 {
+        self.truncate().min_element()
     }
 }
 
@@ -167,6 +179,29 @@ impl<T: GridValue> DenseGrid<T> {
             }
         }
         if m == f32::NEG_INFINITY { 0.0 } else { m }
+    }
+
+    /// The smallest component of any sample that can influence lookups inside the box
+    /// [lo, hi] ⊂ [0, 1]³, zero where the box's lookups reach past the samples (they read
+    /// zero there): a lower bound on every lookup in the box, since trilinear interpolation
+    /// is a convex combination of the corners.
+    pub fn min_value(&self, lo: Vec3, hi: Vec3) -> f32 {
+        let n = self.n.as_vec3();
+        let p0 = (lo * n - Vec3::splat(0.5)).floor().as_ivec3();
+        let p1 = ((hi * n - Vec3::splat(0.5)).floor() + Vec3::ONE).as_ivec3();
+        let max_i = self.n.as_ivec3() - glam::IVec3::ONE;
+        if p0.cmplt(glam::IVec3::ZERO).any() || p1.cmpgt(max_i).any() {
+            return 0.0;
+        }
+        let mut m = f32::INFINITY;
+        for z in p0.z..=p1.z {
+            for y in p0.y..=p1.y {
+                for x in p0.x..=p1.x {
+                    m = m.min(self.at(x, y, z).min_component());
+                }
+            }
+        }
+        m
     }
 }
 

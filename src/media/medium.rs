@@ -209,7 +209,10 @@ impl<C: Channels> MediumView<'_, C> {
     #[inline]
     pub fn segments(&self, ray: &Ray, t_max: f32, lambda: &C::Lambda) -> Segments<'_, C> {
         match &self.entered {
-            Some(mp) => Segments::Single(Some(Segment { t_min: 0.0, t_max, sigma_maj: mp.sigma_a + mp.sigma_s })),
+            Some(mp) => {
+                let sigma_t = mp.sigma_a + mp.sigma_s;
+                Segments::Single(Some(Segment { t_min: 0.0, t_max, sigma_maj: sigma_t, sigma_c: sigma_t }))
+            }
             None => self.medium.segments(ray, t_max, lambda),
         }
     }
@@ -272,19 +275,30 @@ impl Medium {
         let majorant = match &density {
             Density::Field(Field::Dense(d)) => {
                 MajorantGrid::new(bounds, UVec3::splat(16), |lo, hi| d.max_value(lo, hi))
+                    .with_minorant(|lo, hi| d.min_value(lo, hi))
             }
             // pbrt-v4 uses 64³ for NanoVDB grids; each cell takes the maximum over the voxels
-            // whose trilinear footprint reaches it (one voxel of slop).
-            Density::Field(Field::Sparse(g)) => MajorantGrid::new(bounds, UVec3::splat(64), |lo, hi| {
+            // whose trilinear footprint reaches it (one voxel of slop), and the minimum over
+            // the same voxels, the background included where the footprint leaves the
+            // active voxels.
+            Density::Field(Field::Sparse(g)) => {
                 let size = bounds.max - bounds.min;
-                let cell =
-                    Bounds3::new(bounds.min + lo * size, bounds.min + hi * size).transformed(&g.index_from_world());
-                let i0 = (cell.min.floor() - Vec3::ONE).as_ivec3();
-                let i1 = (cell.max.ceil() + Vec3::ONE).as_ivec3();
+                let footprint = |lo: Vec3, hi: Vec3| {
+                    let cell =
+                        Bounds3::new(bounds.min + lo * size, bounds.min + hi * size).transformed(&g.index_from_world());
+                    ((cell.min.floor() - Vec3::ONE).as_ivec3(), (cell.max.ceil() + Vec3::ONE).as_ivec3())
+                };
                 let (b0, b1) = g.index_bounds();
-                let (i0, i1) = (i0.max(b0), i1.min(b1));
-                if i0.cmpgt(i1).any() { 0.0 } else { g.max_over(i0, i1) }
-            }),
+                MajorantGrid::new(bounds, UVec3::splat(64), |lo, hi| {
+                    let (i0, i1) = footprint(lo, hi);
+                    let (i0, i1) = (i0.max(b0), i1.min(b1));
+                    if i0.cmpgt(i1).any() { 0.0 } else { g.max_over(i0, i1) }
+                })
+                .with_minorant(|lo, hi| {
+                    let (i0, i1) = footprint(lo, hi);
+                    g.min_over(i0, i1)
+                })
+            }
             // The procedural cloud's density never exceeds 1.
             Density::Cloud(_) => MajorantGrid::new(bounds, UVec3::ONE, |_, _| 1.0),
         };
@@ -464,11 +478,11 @@ impl Medium {
     #[inline]
     pub fn segments<C: Channels>(&self, ray: &Ray, t_max: f32, lambda: &C::Lambda) -> Segments<'_, C> {
         match &self.kind {
-            MediumKind::Homogeneous { sigma_a, sigma_s, .. } => Segments::Single(Some(Segment {
-                t_min: 0.0,
-                t_max,
-                sigma_maj: C::eval(sigma_a, lambda) + C::eval(sigma_s, lambda),
-            })),
+            MediumKind::Homogeneous { sigma_a, sigma_s, .. } => {
+                // σt is its own majorant and minorant.
+                let sigma_t = C::eval(sigma_a, lambda) + C::eval(sigma_s, lambda);
+                Segments::Single(Some(Segment { t_min: 0.0, t_max, sigma_maj: sigma_t, sigma_c: sigma_t }))
+            }
             MediumKind::Grid(g) => grid_segments(
                 &g.medium_from_world,
                 &g.bounds,

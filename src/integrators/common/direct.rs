@@ -80,7 +80,7 @@ pub(super) fn extra_direct<C: Channels>(
 /// One light sample at a vertex at `p` (on the surface `hit`, or inside `medium` when there
 /// is none), MIS-weighted against BSDF/phase sampling when `mis` (pbrt-v4's SampleLd), by
 /// light sampling alone otherwise. The shadow ray crosses `interface` surfaces and
-/// accumulates ratio-tracking transmittance through media.
+/// accumulates residual-ratio-tracking transmittance through media.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn sample_direct<C: Channels, O: PathObserver<C>>(
     scene: &Scene,

@@ -1,7 +1,7 @@
 //! The path loop of pbrt-v4's VolPathIntegrator (Pharr et al., PBR 4th ed., §14.2), written
 //! once: delta tracking through media with majorant grids, emission with MIS, next-event
-//! estimation with MIS between light and BSDF/phase sampling and ratio-tracking shadow rays,
-//! Russian roulette, `interface` surfaces crossed without counting a bounce. MIS uses
+//! estimation with MIS between light and BSDF/phase sampling and residual-ratio-tracked
+//! shadow rays, Russian roulette, `interface` surfaces crossed without counting a bounce. MIS uses
 //! pbrt-v4's rescaled path probabilities: `r_u` (unidirectional) and `r_l` (light sampling)
 //! per channel, with the balance heuristic; in chromatic media the channels are pbrt-v4's
 //! wavelengths, one of them (`hero`, chosen per path, or per segment for path graphs)
@@ -10,7 +10,7 @@
 use glam::{Vec2, Vec3};
 
 use super::direct::{Scatterer, extra_direct, sample_direct};
-use super::media::{line_transmittance, sample_t_maj};
+use super::media::{Collision, Tracking, line_transmittance};
 use super::observer::{EmissionEvent, PathObserver, VertexEvent};
 use super::{MAX_SUBSURFACE_EVENTS, RayStats};
 use crate::accel::{Found, Hit, NONE};
@@ -338,76 +338,76 @@ impl<C: Channels, O: PathObserver<C>> Tracer<'_, C, O> {
         let (mut scattered, mut terminated) = (false, false);
         let mut scatter_p = Vec3::ZERO;
         let (st, depth, free, l, observer) = (&mut w.st, &mut w.depth, &mut w.free, &mut self.l, &mut *self.observer);
-        let t_maj = sample_t_maj::<C, _>(
-            view,
-            &w.ray,
-            t_max,
-            u,
-            &mut rng,
-            hero,
-            self.lambda,
-            |p, mp, sigma_maj, t_maj, rng| {
-                if st.beta.is_zero() {
-                    terminated = true;
-                    return false;
+        // The light technique samples null vertices as residual ratio tracking does
+        // (`media::ratio_tracking`): σr e^(−∫σr), σr = σmaj − σc, e^(−∫σr) = T_maj e^(∫σc); the
+        // e^(∫σc) is applied once, where the walk reaches its end (`r_l` is read only there).
+        let mut tau_l = C::ZERO;
+        let walk = Tracking { medium: view, ray: &w.ray, t_max, hero, lambda: self.lambda, residual: false };
+        let tail = walk.run(u, &mut rng, |c: &Collision<C>, rng| {
+            let (p, mp, sigma_maj, t_maj) = (c.p, &c.mp, c.sigma_maj, c.t_s);
+            if st.beta.is_zero() {
+                terminated = true;
+                return false;
+            }
+            // Medium emission, weighted by the chance of having reached it.
+            if *depth - *free < config.max_depth && !mp.le.is_zero() {
+                let pdf = sigma_maj[hero] * t_maj[hero];
+                let betap = st.beta * t_maj / pdf;
+                let r_e = st.r_u * sigma_maj * t_maj / pdf;
+                if !r_e.is_zero() {
+                    let c = betap * mp.sigma_a * mp.le / r_e.average();
+                    *l += c;
+                    observer.on_emission(&EmissionEvent { depth: *depth, contribution: c, pdf_light: 0.0 });
                 }
-                // Medium emission, weighted by the chance of having reached it.
-                if *depth - *free < config.max_depth && !mp.le.is_zero() {
-                    let pdf = sigma_maj[hero] * t_maj[hero];
-                    let betap = st.beta * t_maj / pdf;
-                    let r_e = st.r_u * sigma_maj * t_maj / pdf;
-                    if !r_e.is_zero() {
-                        let c = betap * mp.sigma_a * mp.le / r_e.average();
-                        *l += c;
-                        observer.on_emission(&EmissionEvent { depth: *depth, contribution: c, pdf_light: 0.0 });
-                    }
-                }
-                // Choose absorption, real scattering or null scattering with the hero channel's
-                // probabilities.
-                let p_absorb = mp.sigma_a[hero] / sigma_maj[hero];
-                let p_scatter = mp.sigma_s[hero] / sigma_maj[hero];
-                let um = rng.uniform();
-                if um < p_absorb {
-                    terminated = true;
-                    false
-                } else if um < p_absorb + p_scatter {
-                    if m.subsurface {
-                        if *free >= MAX_SUBSURFACE_EVENTS {
-                            terminated = true;
-                            return false;
-                        }
-                        *free += 1;
-                    } else if *depth - *free >= config.max_depth {
+            }
+            // Choose absorption, real scattering or null scattering with the hero channel's
+            // probabilities.
+            let p_absorb = mp.sigma_a[hero] / sigma_maj[hero];
+            let p_scatter = mp.sigma_s[hero] / sigma_maj[hero];
+            let um = rng.uniform();
+            if um < p_absorb {
+                terminated = true;
+                false
+            } else if um < p_absorb + p_scatter {
+                if m.subsurface {
+                    if *free >= MAX_SUBSURFACE_EVENTS {
                         terminated = true;
                         return false;
                     }
-                    *depth += 1;
-                    // In a gray medium these ratios are 1: only chromatic media pay for spectral
-                    // MIS.
-                    if m.chromatic {
-                        let pdf = t_maj[hero] * mp.sigma_s[hero];
-                        st.beta *= t_maj * mp.sigma_s / pdf;
-                        st.r_u *= t_maj * mp.sigma_s / pdf;
-                    }
-                    scattered = true;
-                    scatter_p = p;
-                    false
-                } else {
-                    let sigma_n = (sigma_maj - mp.sigma_a - mp.sigma_s).max(C::ZERO);
-                    let pdf = t_maj[hero] * sigma_n[hero];
-                    if pdf == 0.0 {
-                        st.beta = C::ZERO;
-                    } else if m.chromatic {
-                        st.beta *= t_maj * sigma_n / pdf;
-                        st.r_u *= t_maj * sigma_n / pdf;
-                        st.r_l *= t_maj * sigma_maj / pdf;
-                    } else {
-                        st.r_l *= sigma_maj[hero] / sigma_n[hero];
-                    }
-                    !st.beta.is_zero() && !st.r_u.is_zero()
+                    *free += 1;
+                } else if *depth - *free >= config.max_depth {
+                    terminated = true;
+                    return false;
                 }
-            },
-        );
+                *depth += 1;
+                // In a gray medium these ratios are 1: only chromatic media pay for spectral
+                // MIS.
+                if m.chromatic {
+                    let pdf = t_maj[hero] * mp.sigma_s[hero];
+                    st.beta *= t_maj * mp.sigma_s / pdf;
+                    st.r_u *= t_maj * mp.sigma_s / pdf;
+                }
+                scattered = true;
+                scatter_p = p;
+                false
+            } else {
+                let sigma_n = (sigma_maj - mp.sigma_a - mp.sigma_s).max(C::ZERO);
+                let sigma_r = (sigma_maj - c.sigma_c).max(C::ZERO);
+                tau_l += c.tau_c;
+                let pdf = t_maj[hero] * sigma_n[hero];
+                if pdf == 0.0 {
+                    st.beta = C::ZERO;
+                } else if m.chromatic {
+                    st.beta *= t_maj * sigma_n / pdf;
+                    st.r_u *= t_maj * sigma_n / pdf;
+                    st.r_l *= t_maj * sigma_r / pdf;
+                } else {
+                    st.r_l *= sigma_r[hero] / sigma_n[hero];
+                }
+                !st.beta.is_zero() && !st.r_u.is_zero()
+            }
+        });
+        let t_maj = tail.t_s;
         if terminated || w.st.beta.is_zero() || w.st.r_u.is_zero() {
             return Tracked::Ended;
         }
@@ -419,6 +419,11 @@ impl<C: Channels, O: PathObserver<C>> Tracer<'_, C, O> {
             w.st.beta *= t_maj / h;
             w.st.r_u *= t_maj / h;
             w.st.r_l *= t_maj / h;
+        }
+        tau_l += tail.tau_c;
+        if !tau_l.is_zero() {
+            // A path gets here with probability ≤ e^(−∫σc) (σc ≤ σt): the cap only keeps it finite.
+            w.st.r_l *= tau_l.map(|t| t.min(80.0).exp());
         }
         Tracked::Reached
     }

@@ -1,6 +1,6 @@
 //! The shadow ray of next-event estimation: opaque surfaces block it, `interface` surfaces
-//! let it through into the medium beyond, and media attenuate it by ratio tracking with
-//! pbrt-v4's rescaled probabilities.
+//! let it through into the medium beyond, and media attenuate it by residual ratio tracking
+//! with pbrt-v4's rescaled probabilities.
 
 use glam::Vec3;
 

@@ -49,6 +49,8 @@ pub struct SparseGrid {
     values: Vec<f32>,
     /// Largest value of each brick, so majorants need not visit voxels.
     brick_max: Vec<f32>,
+    /// Smallest value of each brick (for minorants).
+    brick_min_value: Vec<f32>,
     world_from_index: DAffine3,
     index_from_world: DAffine3,
     /// Single-precision copies: pbrt-v4 maps points with NanoVDB's float map
@@ -178,7 +180,7 @@ impl SparseGrid {
         std::mem::size_of::<SparseGrid>()
             + self.table.capacity() * std::mem::size_of::<u32>()
             + self.values.capacity() * std::mem::size_of::<f32>()
-            + self.brick_max.capacity() * std::mem::size_of::<f32>()
+            + (self.brick_max.capacity() + self.brick_min_value.capacity()) * std::mem::size_of::<f32>()
     }
 
     /// The table cell holding brick coordinate `b`, if inside the table.
@@ -281,6 +283,51 @@ impl SparseGrid {
                             for z in v_lo.z..=v_hi.z {
                                 let v = self.values[start + voxel_offset(IVec3::new(x, y, z))];
                                 best = best.max(v);
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        best
+    }
+
+    /// Smallest voxel value in the inclusive index box `min ..= max` (inactive voxels and the
+    /// background included where the box reaches them), as [`SparseGrid::max_over`] the
+    /// largest; the background for an empty box.
+    pub fn min_over(&self, min: IVec3, max: IVec3) -> f32 {
+        if min.cmpgt(max).any() {
+            return self.background;
+        }
+        let table_lo = self.brick_min << BRICK_LOG2;
+        let table_hi = ((self.brick_min + self.brick_dims.as_ivec3()) << BRICK_LOG2) - 1;
+        let lo = min.max(table_lo);
+        let hi = max.min(table_hi);
+        let mut best = if lo != min || hi != max { self.background } else { f32::INFINITY };
+        if lo.cmpgt(hi).any() {
+            return best;
+        }
+        for bx in (lo.x >> BRICK_LOG2)..=(hi.x >> BRICK_LOG2) {
+            for by in (lo.y >> BRICK_LOG2)..=(hi.y >> BRICK_LOG2) {
+                for bz in (lo.z >> BRICK_LOG2)..=(hi.z >> BRICK_LOG2) {
+                    let b = IVec3::new(bx, by, bz);
+                    let brick = self.table[self.cell(b).expect("brick inside the table")];
+                    let stored_min = self.brick_min_value[brick as usize];
+                    if stored_min >= best {
+                        continue;
+                    }
+                    let b_lo = b << BRICK_LOG2;
+                    let v_lo = lo.max(b_lo);
+                    let v_hi = hi.min(b_lo + (BRICK_DIM - 1));
+                    if v_lo == b_lo && v_hi == b_lo + (BRICK_DIM - 1) {
+                        best = stored_min;
+                        continue;
+                    }
+                    let start = brick as usize * BRICK_VOXELS;
+                    for x in v_lo.x..=v_hi.x {
+                        for y in v_lo.y..=v_hi.y {
+                            for z in v_lo.z..=v_hi.z {
+                                best = best.min(self.values[start + voxel_offset(IVec3::new(x, y, z))]);
                             }
                         }
                     }
@@ -420,6 +467,7 @@ impl SparseGridBuilder {
             table: vec![0; cells as usize],
             values: self.values,
             brick_max: Vec::new(),
+            brick_min_value: Vec::new(),
             world_from_index: DAffine3::IDENTITY,
             index_from_world: DAffine3::IDENTITY,
             world_from_index_f32: Affine3A::IDENTITY,
@@ -448,6 +496,11 @@ impl SparseGridBuilder {
             .values
             .chunks_exact(BRICK_VOXELS)
             .map(|brick| brick.iter().copied().fold(f32::NEG_INFINITY, f32::max))
+            .collect();
+        grid.brick_min_value = grid
+            .values
+            .chunks_exact(BRICK_VOXELS)
+            .map(|brick| brick.iter().copied().fold(f32::INFINITY, f32::min))
             .collect();
         grid.values.shrink_to_fit();
         grid.set_transform(DAffine3::IDENTITY);
@@ -555,24 +608,27 @@ mod tests {
     }
 
     #[test]
-    fn grid_max_over_matches_brute_force() {
+    fn grid_max_and_min_over_match_brute_force() {
         let (g, _, _) = dense(bumpy);
         let mut n = Numbers(11);
         for _ in 0..400 {
             let a = IVec3::new(n.int(-20, 15), n.int(-8, 10), n.int(0, 26));
             let b = a + IVec3::new(n.int(0, 20), n.int(0, 12), n.int(0, 14));
-            let mut expected = f32::NEG_INFINITY;
+            let (mut max, mut min) = (f32::NEG_INFINITY, f32::INFINITY);
             for x in a.x..=b.x {
                 for y in a.y..=b.y {
                     for z in a.z..=b.z {
-                        expected = expected.max(g.value(IVec3::new(x, y, z)));
+                        max = max.max(g.value(IVec3::new(x, y, z)));
+                        min = min.min(g.value(IVec3::new(x, y, z)));
                     }
                 }
             }
-            assert_eq!(g.max_over(a, b), expected, "{a} ..= {b}");
+            assert_eq!(g.max_over(a, b), max, "{a} ..= {b}");
+            assert_eq!(g.min_over(a, b), min, "{a} ..= {b}");
         }
         // Empty boxes give the background.
         assert_eq!(g.max_over(IVec3::ONE, IVec3::ZERO), 0.0);
+        assert_eq!(g.min_over(IVec3::ONE, IVec3::ZERO), 0.0);
     }
 
     #[test]

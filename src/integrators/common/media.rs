@@ -83,10 +83,29 @@ fn optical_depth<C: Channels>(sigma: C, dt: f32) -> C {
 }
 
 impl<C: Channels> Tracking<'_, '_, C> {
+    /// Walks the ray, handing each tentative collision to `callback` until it returns `false`.
     #[inline(always)]
-    pub fn run<F>(&self, mut u: f32, rng: &mut Pcg32, mut callback: F) -> Tail<C>
+    pub fn run<F>(&self, u: f32, rng: &mut Pcg32, callback: F) -> Tail<C>
     where
         F: FnMut(&Collision<C>, &mut Pcg32) -> bool,
+    {
+        self.run_with_segment_ends(u, rng, callback, |_, _| true)
+    }
+
+    /// [`Tracking::run`], also asking `segment_end(∫σc since the last collision, rng)` at the
+    /// end of each majorant segment whether to go on (`false` stops the walk, as a collision's
+    /// `false` does).
+    #[inline(always)]
+    pub fn run_with_segment_ends<F, E>(
+        &self,
+        mut u: f32,
+        rng: &mut Pcg32,
+        mut callback: F,
+        mut segment_end: E,
+    ) -> Tail<C>
+    where
+        F: FnMut(&Collision<C>, &mut Pcg32) -> bool,
+        E: FnMut(C, &mut Pcg32) -> bool,
     {
         let mut t_s = C::ONE;
         let mut tau_c = C::ZERO;
@@ -98,6 +117,9 @@ impl<C: Channels> Tracking<'_, '_, C> {
                 let dt = seg.t_max - seg.t_min;
                 t_s *= optical_depth(sigma_s, dt).exp_neg();
                 tau_c += optical_depth(seg.sigma_c, dt);
+                if !segment_end(tau_c, rng) {
+                    return Tail { t_s: C::ONE, tau_c: C::ZERO };
+                }
                 continue;
             }
             let mut t_min = seg.t_min;
@@ -133,6 +155,9 @@ impl<C: Channels> Tracking<'_, '_, C> {
                         (false, false) => (sigma_s * dt).exp_neg(),
                     };
                     tau_c += optical_depth(seg.sigma_c, dt);
+                    if !segment_end(tau_c, rng) {
+                        return Tail { t_s: C::ONE, tau_c: C::ZERO };
+                    }
                     break;
                 }
             }
@@ -186,25 +211,50 @@ pub fn ratio_tracking<C: Channels>(
     let walk = Tracking { medium, ray, t_max, hero, lambda, residual: true };
     // e^(−∫σc), 1 without evaluating the exponential where there is no control.
     let control = |tau_c: C| if tau_c.is_zero() { C::ONE } else { tau_c.exp_neg() };
-    let tail = walk.run(u, rng, |c: &Collision<C>, rr| {
-        let sigma_n = (c.sigma_maj - c.mp.sigma_a - c.mp.sigma_s).max(C::ZERO);
-        let sigma_r = (c.sigma_maj - c.sigma_c).max(C::ZERO);
-        let pdf = c.t_s[hero] * sigma_r[hero];
-        let t_ray = control(c.tau_c) * c.t_s * sigma_n / pdf;
-        est.t_ray *= t_ray;
-        est.r_l *= c.t_s * sigma_r / pdf;
-        est.r_u *= t_ray;
-        let tr = est.t_ray / (est.r_l + est.r_u).average();
-        if tr.max_element() < 0.05 {
-            let q = 0.75;
-            if rr.uniform() < q {
-                est.t_ray = C::ZERO;
+    // Russian roulette where the estimate's largest channel `tr` is below 0.05.
+    let roulette = |tr: f32, t_ray: &mut C, rr: &mut Pcg32| {
+        const Q: f32 = 0.75;
+        if tr < 0.05 {
+            if rr.uniform() < Q {
+                *t_ray = C::ZERO;
             } else {
-                est.t_ray /= 1.0 - q;
+                *t_ray /= 1.0 - Q;
             }
         }
-        !est.t_ray.is_zero()
-    });
+        !t_ray.is_zero()
+    };
+    let est = std::cell::RefCell::new(est);
+    let tail = walk.run_with_segment_ends(
+        u,
+        rng,
+        |c: &Collision<C>, rr| {
+            let mut guard = est.borrow_mut();
+            let est = &mut **guard;
+            let sigma_n = (c.sigma_maj - c.mp.sigma_a - c.mp.sigma_s).max(C::ZERO);
+            let sigma_r = (c.sigma_maj - c.sigma_c).max(C::ZERO);
+            let pdf = c.t_s[hero] * sigma_r[hero];
+            let t_ray = control(c.tau_c) * c.t_s * sigma_n / pdf;
+            est.t_ray *= t_ray;
+            est.r_l *= c.t_s * sigma_r / pdf;
+            est.r_u *= t_ray;
+            let tr = (est.t_ray / (est.r_l + est.r_u).average()).max_element();
+            roulette(tr, &mut est.t_ray, rr)
+        },
+        // Where the control alone has taken the estimate below 0.05 (e^-3), roulette at
+        // segment ends too: with few residual collisions, a shadow ray deep in a dense cloud
+        // otherwise walks every cell to the boundary for a negligible estimate.
+        |tau_c: C, rr| {
+            if tau_c.min_element() <= 3.0 {
+                return true;
+            }
+            let mut guard = est.borrow_mut();
+            let est = &mut **guard;
+            let c = tau_c.exp_neg();
+            let tr = (est.t_ray * c / (est.r_l + est.r_u * c).average()).max_element();
+            roulette(tr, &mut est.t_ray, rr)
+        },
+    );
+    let est = est.into_inner();
     let h = tail.t_s[hero];
     if h > 0.0 {
         let t_ray = control(tail.tau_c) * tail.t_s / h;

@@ -1,7 +1,7 @@
 //! Volume estimators shared by every integrator: majorant-based distance sampling
-//! (pbrt-v4's SampleT_maj, §14.2.1) and ratio-tracking transmittance for shadow rays with
-//! pbrt-v4's rescaled path probabilities, so chromatic media get spectral MIS over the RGB
-//! channels (the channel `hero` plays the role of pbrt-v4's first wavelength).
+//! (pbrt-v4's SampleT_maj, §14.2.1) and residual-ratio-tracking transmittance for shadow
+//! rays with pbrt-v4's rescaled path probabilities, so chromatic media get spectral MIS over
+//! the RGB channels (the channel `hero` plays the role of pbrt-v4's first wavelength).
 
 use glam::Vec3;
 
@@ -44,7 +44,7 @@ where
 /// A walk along a ray through a medium's majorant segments, sampling tentative collisions
 /// with the hero channel's density of a sampling majorant per segment: σmaj (delta tracking,
 /// pbrt-v4's SampleT_maj) or, `residual`, σmaj − σc, σc the segment's minorant (residual
-/// ratio tracking, Novák et al. 2014, Sec. 4: the control σc's share e^(−∫σc) is known in
+/// ratio tracking, Novák et al. 2014: the control σc's share e^(−∫σc) is known in
 /// closed form, and only the residual is tracked).
 pub(crate) struct Tracking<'a, 'r, C: Channels> {
     pub medium: MediumView<'a, C>,
@@ -189,7 +189,7 @@ impl<C: Channels> Default for ShadowEstimate<C> {
 ///
 /// Tentative collisions are sampled with the residual majorant σr = σmaj − σc of each
 /// segment (σc its minorant), and each weighs σn/σr = (σmaj − σt)/(σmaj − σc) instead of
-/// ratio tracking's σn/σmaj, times the control's e^(−σc Δt) (Novák et al. 2014, Eq. 10). In a
+/// ratio tracking's σn/σmaj, times the control's e^(−σc Δt) (Novák et al. 2014). In a
 /// null-scattering path space (Miller, Georgiev and Jarosz, "A Null-Scattering Path Integral
 /// Formulation of Light Transport", SIGGRAPH 2019) this only changes how the light-sampling
 /// technique samples its null vertices: with density σr e^(−∫σr) instead of σmaj e^(−∫σmaj).

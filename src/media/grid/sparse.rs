@@ -248,6 +248,25 @@ impl SparseGrid {
     /// Bricks inside the box answer from their stored maxima, so a majorant grid costs a
     /// visit per brick, not per voxel.
     pub fn max_over(&self, min: IVec3, max: IVec3) -> f32 {
+        self.extreme_over(min, max, &self.brick_max, f32::NEG_INFINITY, |a, b| a > b)
+    }
+
+    /// Smallest voxel value in the inclusive index box, as [`SparseGrid::max_over`] the
+    /// largest (from the bricks' stored minima).
+    pub fn min_over(&self, min: IVec3, max: IVec3) -> f32 {
+        self.extreme_over(min, max, &self.brick_min_value, f32::INFINITY, |a, b| a < b)
+    }
+
+    /// The voxel value in `min ..= max` that no other `beats`, starting from `none`; each
+    /// brick's own extreme is `per_brick[brick]`.
+    fn extreme_over(
+        &self,
+        min: IVec3,
+        max: IVec3,
+        per_brick: &[f32],
+        none: f32,
+        beats: impl Fn(f32, f32) -> bool,
+    ) -> f32 {
         if min.cmpgt(max).any() {
             return self.background;
         }
@@ -256,7 +275,7 @@ impl SparseGrid {
         let lo = min.max(table_lo);
         let hi = max.min(table_hi);
         // Voxels of the box outside the table hold the background.
-        let mut best = if lo != min || hi != max { self.background } else { f32::NEG_INFINITY };
+        let mut best = if lo != min || hi != max { self.background } else { none };
         if lo.cmpgt(hi).any() {
             return best;
         }
@@ -265,15 +284,15 @@ impl SparseGrid {
                 for bz in (lo.z >> BRICK_LOG2)..=(hi.z >> BRICK_LOG2) {
                     let b = IVec3::new(bx, by, bz);
                     let brick = self.table[self.cell(b).expect("brick inside the table")];
-                    let stored_max = self.brick_max[brick as usize];
-                    if stored_max <= best {
+                    let stored = per_brick[brick as usize];
+                    if !beats(stored, best) {
                         continue;
                     }
                     let b_lo = b << BRICK_LOG2;
                     let v_lo = lo.max(b_lo);
                     let v_hi = hi.min(b_lo + (BRICK_DIM - 1));
                     if v_lo == b_lo && v_hi == b_lo + (BRICK_DIM - 1) {
-                        best = stored_max;
+                        best = stored;
                         continue;
                     }
                     // A brick the box cuts: scan the voxels inside.
@@ -282,52 +301,9 @@ impl SparseGrid {
                         for y in v_lo.y..=v_hi.y {
                             for z in v_lo.z..=v_hi.z {
                                 let v = self.values[start + voxel_offset(IVec3::new(x, y, z))];
-                                best = best.max(v);
-                            }
-                        }
-                    }
-                }
-            }
-        }
-        best
-    }
-
-    /// Smallest voxel value in the inclusive index box `min ..= max` (inactive voxels and the
-    /// background included where the box reaches them), as [`SparseGrid::max_over`] the
-    /// largest; the background for an empty box.
-    pub fn min_over(&self, min: IVec3, max: IVec3) -> f32 {
-        if min.cmpgt(max).any() {
-            return self.background;
-        }
-        let table_lo = self.brick_min << BRICK_LOG2;
-        let table_hi = ((self.brick_min + self.brick_dims.as_ivec3()) << BRICK_LOG2) - 1;
-        let lo = min.max(table_lo);
-        let hi = max.min(table_hi);
-        let mut best = if lo != min || hi != max { self.background } else { f32::INFINITY };
-        if lo.cmpgt(hi).any() {
-            return best;
-        }
-        for bx in (lo.x >> BRICK_LOG2)..=(hi.x >> BRICK_LOG2) {
-            for by in (lo.y >> BRICK_LOG2)..=(hi.y >> BRICK_LOG2) {
-                for bz in (lo.z >> BRICK_LOG2)..=(hi.z >> BRICK_LOG2) {
-                    let b = IVec3::new(bx, by, bz);
-                    let brick = self.table[self.cell(b).expect("brick inside the table")];
-                    let stored_min = self.brick_min_value[brick as usize];
-                    if stored_min >= best {
-                        continue;
-                    }
-                    let b_lo = b << BRICK_LOG2;
-                    let v_lo = lo.max(b_lo);
-                    let v_hi = hi.min(b_lo + (BRICK_DIM - 1));
-                    if v_lo == b_lo && v_hi == b_lo + (BRICK_DIM - 1) {
-                        best = stored_min;
-                        continue;
-                    }
-                    let start = brick as usize * BRICK_VOXELS;
-                    for x in v_lo.x..=v_hi.x {
-                        for y in v_lo.y..=v_hi.y {
-                            for z in v_lo.z..=v_hi.z {
-                                best = best.min(self.values[start + voxel_offset(IVec3::new(x, y, z))]);
+                                if beats(v, best) {
+                                    best = v;
+                                }
                             }
                         }
                     }

@@ -12,8 +12,8 @@ use nimbus::media::MediumKind;
 use nimbus::spectra::{RgbRole, Sampled};
 
 use crate::common::{
-    assert_channels, film_rgb, grid_values, load_scene, media_header, medium_cube, reference_scenes_dir, render_scene,
-    render_with, transport,
+    assert_channels, film_rgb, grid_values, load_scene, mean_difference, media_header, medium_cube,
+    reference_scenes_dir, render_scene, render_with, transport,
 };
 
 fn scene(text: &str) -> Setup {
@@ -180,11 +180,7 @@ AttributeEnd
         grid_values(2, "0.5")
     ));
     let (a, b) = (render_scene(&scene(&homogeneous)), render_scene(&scene(&grid)));
-    let diff: Vec<f64> =
-        a.pixels.iter().zip(&b.pixels).map(|(x, y)| ((*x - *y).x + (*x - *y).y + (*x - *y).z) as f64 / 3.0).collect();
-    let n = diff.len() as f64;
-    let md = diff.iter().sum::<f64>() / n;
-    let sd = (diff.iter().map(|d| (d - md) * (d - md)).sum::<f64>() / (n - 1.0) / n).sqrt();
+    let (md, sd) = mean_difference(&a, &b);
     assert!(md.abs() < 4.0 * sd, "homogeneous vs grid: {md} ± {sd}");
 }
 
@@ -241,16 +237,8 @@ AttributeEnd
             &s.scene,
             &VolPath::with_config(PathConfig { next_event: false, ..PathConfig::volpath(8, false) }),
         );
-        let diff: Vec<f64> = mis
-            .pixels
-            .iter()
-            .zip(&alone.pixels)
-            .map(|(a, b)| ((*a - *b).x + (*a - *b).y + (*a - *b).z) as f64 / 3.0)
-            .collect();
-        let n = diff.len() as f64;
-        let md = diff.iter().sum::<f64>() / n;
-        let sd = (diff.iter().map(|d| (d - md) * (d - md)).sum::<f64>() / (n - 1.0) / n).sqrt();
-        let mean = mis.pixels.iter().map(|p| (p.x + p.y + p.z) as f64 / 3.0).sum::<f64>() / n;
+        let (md, sd) = mean_difference(&mis, &alone);
+        let mean = mis.pixels.iter().map(|p| (p.x + p.y + p.z) as f64 / 3.0).sum::<f64>() / mis.pixels.len() as f64;
         assert!(md.abs() < 4.0 * sd, "{medium}: MIS − phase sampling only = {md} ± {sd} (image mean {mean})");
         assert!(mean > 0.02, "the medium is lit: {mean}");
     }

@@ -12,8 +12,8 @@ use nimbus::materials::Material;
 use nimbus::textures::Tex;
 
 use crate::common::{
-    assert_channels, film_rgb, load_scene, reference_scenes_dir, render_scene, render_with, reversed_sphere_images,
-    transport,
+    assert_channels, film_rgb, load_scene, mean_difference, reference_scenes_dir, render_scene, render_with,
+    reversed_sphere_images, transport,
 };
 
 fn scene(text: &str, opts: &BuildOptions) -> Setup {
@@ -113,15 +113,7 @@ Shape "sphere" "float radius" 0.4"#;
     let (m2, e2) = mean_and_stderr(&bsdf);
     // Pixels differ in expectation here, so the per-pixel spread overstates the noise of the
     // mean; compare the per-pixel differences instead, whose expectation is zero everywhere.
-    let diff: Vec<f64> = mis
-        .pixels
-        .iter()
-        .zip(&bsdf.pixels)
-        .map(|(a, b)| ((*a - *b).x + (*a - *b).y + (*a - *b).z) as f64 / 3.0)
-        .collect();
-    let n = diff.len() as f64;
-    let md = diff.iter().sum::<f64>() / n;
-    let sd = (diff.iter().map(|d| (d - md) * (d - md)).sum::<f64>() / (n - 1.0) / n).sqrt();
+    let (md, sd) = mean_difference(&mis, &bsdf);
     assert!(md.abs() < 4.0 * sd, "MIS {m1} ± {e1}, BSDF-only {m2} ± {e2}: difference {md} ± {sd}");
     assert!(m1 > 0.05, "the scene is lit: {m1}");
 }
@@ -244,11 +236,7 @@ Shape "trianglemesh" "integer indices" [0 1 2 0 2 3] "point3 P" [-5 -1 -5  5 -1 
         &BuildOptions::default(),
     );
     let (a, b) = (render_scene(&uniform), render_scene(&image));
-    let diff: Vec<f64> =
-        a.pixels.iter().zip(&b.pixels).map(|(x, y)| ((*x - *y).x + (*x - *y).y + (*x - *y).z) as f64 / 3.0).collect();
-    let n = diff.len() as f64;
-    let md = diff.iter().sum::<f64>() / n;
-    let sd = (diff.iter().map(|d| (d - md) * (d - md)).sum::<f64>() / (n - 1.0) / n).sqrt();
+    let (md, sd) = mean_difference(&a, &b);
     assert!(md.abs() < 4.0 * sd + 1e-4, "difference {md} ± {sd}");
 }
 
@@ -356,11 +344,7 @@ fn camera_line_estimates_lights_seen_through_media() {
         &opts,
     );
     let (a, b) = (render_with(&fog, &config(true)), render_with(&fog, &config(false)));
-    let diff: Vec<f64> =
-        a.pixels.iter().zip(&b.pixels).map(|(p, q)| f64::from((*p - *q).element_sum() / 3.0)).collect();
-    let n = diff.len() as f64;
-    let md = diff.iter().sum::<f64>() / n;
-    let sd = (diff.iter().map(|d| (d - md) * (d - md)).sum::<f64>() / (n - 1.0) / n).sqrt();
+    let (md, sd) = mean_difference(&a, &b);
     assert!(md.abs() < 4.0 * sd, "scattering fog: camera line - delta tracking = {md} ± {sd}");
     // No variance claim here: arriving at the wall excludes scattered light, so delta
     // tracking's arrival anti-correlates with the rest of the path, Var(tracked) − Var(line) =

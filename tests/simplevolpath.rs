@@ -8,8 +8,8 @@ use nimbus::scene::{BuildOptions, Scene};
 use nimbus::setup::Setup;
 
 use crate::common::{
-    Estimate, assert_agree, assert_channels, channel_stats, grid_values, load_scene, media_header, medium_cube,
-    reference_scenes, render_scene, render_with, reversed_sphere_images, scratch_dir,
+    Estimate, assert_agree, assert_channels, channel_stats, grid_values, load_scene, mean_difference, media_header,
+    medium_cube, reference_scenes, render_scene, render_with, reversed_sphere_images, scratch_dir,
 };
 
 fn scene(text: &str) -> Setup {
@@ -25,18 +25,6 @@ fn render_both(s: &Scene, max_depth: u32) -> (Image, Image) {
         light_sampler: nimbus::integrators::volpath::LightSamplerKind::Bvh,
     });
     (render_with(s, &simple), render_with(s, &volpath))
-}
-
-/// The per-pixel difference a − b: its mean over pixels and channels and the standard error
-/// of that mean. Both images estimate the same pixels, so the mean difference is 0 in
-/// expectation and the spread of the differences is its noise.
-fn mean_difference(a: &Image, b: &Image) -> (f64, f64) {
-    let diff: Vec<f64> =
-        a.pixels.iter().zip(&b.pixels).map(|(x, y)| ((*x - *y).x + (*x - *y).y + (*x - *y).z) as f64 / 3.0).collect();
-    let n = diff.len() as f64;
-    let md = diff.iter().sum::<f64>() / n;
-    let sd = (diff.iter().map(|d| (d - md) * (d - md)).sum::<f64>() / (n - 1.0) / n).sqrt();
-    (md, sd)
 }
 
 /// pbrt-v4's analytic test: an emitting sphere (Le = 0.5) of albedo 0.5 seen from inside has

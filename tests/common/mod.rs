@@ -270,3 +270,15 @@ Shape "sphere" "float radius" 1"#
         })
         .collect()
 }
+
+/// The per-pixel difference a − b: its mean over pixels and channels and the standard error
+/// of that mean. Both images estimate the same pixels, so the mean difference is 0 in
+/// expectation and the spread of the differences is its noise.
+pub fn mean_difference(a: &Image, b: &Image) -> (f64, f64) {
+    let diff: Vec<f64> =
+        a.pixels.iter().zip(&b.pixels).map(|(x, y)| ((*x - *y).x + (*x - *y).y + (*x - *y).z) as f64 / 3.0).collect();
+    let n = diff.len() as f64;
+    let md = diff.iter().sum::<f64>() / n;
+    let sd = (diff.iter().map(|d| (d - md) * (d - md)).sum::<f64>() / (n - 1.0) / n).sqrt();
+    (md, sd)
+}

@@ -2,6 +2,9 @@
 //! primitives, with object instances as BVHs of their own.
 
 mod build;
+mod hull;
+
+pub use hull::{Hulls, gather_hulls};
 
 use glam::{Affine3A, Vec2, Vec3, Vec3A};
 use obvhs::cwbvh::CwBvh;
@@ -44,6 +47,9 @@ pub enum Geometry {
     },
     /// An object instance (only in the top-level BVH).
     Instance(u32),
+    /// A closed convex mesh's triangles, as one primitive of the top-level BVH ([`Hull`]);
+    /// hits name the triangle.
+    Hull(u32),
 }
 
 /// A piece of geometry with what is attached to it.
@@ -127,7 +133,7 @@ impl ShapeStore {
                 let (u, v) = m.param(patch, &Ray::new(from, d.normalize_or_zero()))?;
                 m.hit(patch, 0.0, u, v).uv
             }
-            Geometry::Curve(_) | Geometry::Instance(_) => return None,
+            Geometry::Curve(_) | Geometry::Instance(_) | Geometry::Hull(_) => return None,
         })
     }
 
@@ -161,7 +167,7 @@ impl ShapeStore {
             }
             Geometry::Curve(i) => self.curve_hit(i, ray, t_max),
             Geometry::Bilinear { mesh, patch } => self.patch_hit(mesh, patch, ray, t_max),
-            Geometry::Instance(_) => None,
+            Geometry::Instance(_) | Geometry::Hull(_) => None,
         }
     }
 
@@ -177,7 +183,7 @@ impl ShapeStore {
                 c.bounds(&self.curve_segments[c.common as usize])
             }
             Geometry::Bilinear { mesh, patch } => self.bilinear_meshes[mesh as usize].bounds(patch),
-            Geometry::Instance(_) => Bounds3::EMPTY,
+            Geometry::Instance(_) | Geometry::Hull(_) => Bounds3::EMPTY,
         }
     }
 }
@@ -192,6 +198,9 @@ enum Detail {
     Curve,
     /// Bilinear patch parameters (u, v).
     Patch(f32, f32),
+    /// The face (of the hull the primitive is) through which a ray from inside leaves; its
+    /// triangle is found only if the hit is resolved.
+    HullExit(u32),
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -327,7 +336,7 @@ impl Accel {
     #[inline(always)]
     fn test_closest(
         &self,
-        prim: Primitive,
+        mut prim: Primitive,
         scene: &Surfaces,
         ray: &Ray,
         t_max: f32,
@@ -360,6 +369,10 @@ impl Accel {
                     _ => f32::INFINITY,
                 };
             }
+            Geometry::Hull(k) => scene.hulls.all[k as usize].closest(ray, t_max).map(|(tri, t, b1, b2)| {
+                prim = tri;
+                (t, Detail::Barycentric(b1, b2))
+            }),
         };
         // Coplanar pass-through (`interface`) and opaque surfaces — a medium's box sitting on
         // a ground plane — tie. pbrt-v4 resolves such ties by floating-point rounding, which
@@ -432,6 +445,7 @@ impl Accel {
                 let local = inst.local_ray(ray);
                 scene.blas[inst.accel as usize].any(scene, &local, t_max, k)
             }
+            Geometry::Hull(k) => scene.hulls.all[k as usize].closest(ray, t_max).is_some(),
         }
     }
 }
@@ -542,6 +556,8 @@ pub struct Surfaces {
     pub alphas: Vec<Tex>,
     /// The scene's textures, for the alpha test.
     pub textures: Textures,
+    /// Closed convex meshes the top-level BVH holds as one primitive each.
+    pub hulls: Hulls,
 }
 
 impl Surfaces {
@@ -568,6 +584,9 @@ impl Surfaces {
     /// The closest surface the ray hits before `t_max`, its geometry not computed yet.
     pub fn find(&self, ray: &Ray, t_max: f32) -> Option<Found> {
         let top = self.top.as_ref()?;
+        if let Some(c) = self.hulls.exit(ray) {
+            return (c.t < t_max).then_some(Found { c, ray: *ray });
+        }
         let mut best = None;
         top.closest(self, ray, t_max, NONE, &mut best);
         best.map(|c| Found { c, ray: *ray })
@@ -575,7 +594,7 @@ impl Surfaces {
 
     /// The hit `found` with its geometry.
     pub fn resolve(&self, found: &Found) -> Hit {
-        let (c, ray) = (&found.c, &found.ray);
+        let (c, ray) = (&self.hulls.resolve(&found.c, &found.ray), &found.ray);
         Hit { surface: self.surface(c, ray, false), prim: c.prim, instance: c.instance, time: ray.time }
     }
 
@@ -613,6 +632,7 @@ impl Surfaces {
             }
             // Across a curve, ∂p/∂v spans its width (its p_error, as pbrt-v4 bounds it); it does
             // not bend.
+            Geometry::Hull(_) => unreachable!("hits name the hull's triangle"),
             Geometry::Curve(_) | Geometry::Instance(_) => SurfaceDerivatives {
                 dpdu: local.dpdu,
                 dpdv: local.ns.cross(local.dpdu).normalize_or_zero() * local.p_error,
@@ -649,6 +669,7 @@ impl Surfaces {
                 Geometry::Cylinder(i) => self.shapes.cylinders[i as usize].hit(c.t, p),
                 _ => unreachable!("object points come from quadrics"),
             },
+            Detail::HullExit(_) => unreachable!("resolved to its triangle first"),
             Detail::Curve => {
                 let Geometry::Curve(i) = c.prim.geometry else { unreachable!("only curves leave Detail::Curve") };
                 let local_ray = if c.instance == NONE || ray_is_local {

@@ -258,7 +258,7 @@ impl Light {
                     Geometry::Bilinear { mesh, patch } => {
                         shapes.bilinear_meshes[mesh as usize].sample_area(patch, u)?
                     }
-                    Geometry::Curve(_) | Geometry::Instance(_) => return None,
+                    Geometry::Curve(_) | Geometry::Instance(_) | Geometry::Hull(_) => return None,
                 };
                 let to = s.p - ctx.p;
                 let d2 = to.length_squared();

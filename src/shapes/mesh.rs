@@ -91,28 +91,34 @@ impl Mesh {
     /// vertices 1 and 2.
     #[inline]
     pub fn intersect(&self, i: u32, ray: &Ray, t_max: f32) -> Option<(f32, f32, f32)> {
-        let [p0, p1, p2] = self.vertices(i);
-        let e1 = p1 - p0;
-        let e2 = p2 - p0;
-        let pv = ray.d.cross(e2);
-        let det = e1.dot(pv);
-        if det == 0.0 || !det.is_finite() {
-            return None;
-        }
-        let inv = 1.0 / det;
-        let tv = ray.o - p0;
-        let b1 = tv.dot(pv) * inv;
-        if !(0.0..=1.0).contains(&b1) {
-            return None;
-        }
-        let qv = tv.cross(e1);
-        let b2 = ray.d.dot(qv) * inv;
-        if b2 < 0.0 || b1 + b2 > 1.0 {
-            return None;
-        }
-        let t = e2.dot(qv) * inv;
-        (t > 0.0 && t < t_max).then_some((t, b1, b2))
+        intersect_triangle(self.vertices(i), ray, t_max)
     }
+}
+
+/// Ray-triangle intersection (Möller-Trumbore) with the triangle's corners: distance and
+/// barycentrics (b1, b2) of corners 1 and 2.
+#[inline]
+pub fn intersect_triangle([p0, p1, p2]: [Vec3; 3], ray: &Ray, t_max: f32) -> Option<(f32, f32, f32)> {
+    let e1 = p1 - p0;
+    let e2 = p2 - p0;
+    let pv = ray.d.cross(e2);
+    let det = e1.dot(pv);
+    if det == 0.0 || !det.is_finite() {
+        return None;
+    }
+    let inv = 1.0 / det;
+    let tv = ray.o - p0;
+    let b1 = tv.dot(pv) * inv;
+    if !(0.0..=1.0).contains(&b1) {
+        return None;
+    }
+    let qv = tv.cross(e1);
+    let b2 = ray.d.dot(qv) * inv;
+    if b2 < 0.0 || b1 + b2 > 1.0 {
+        return None;
+    }
+    let t = e2.dot(qv) * inv;
+    (t > 0.0 && t < t_max).then_some((t, b1, b2))
 }
 
 /// Surface details of a hit on triangle `i` of `mesh` with barycentrics (b1, b2).

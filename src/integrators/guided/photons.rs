@@ -181,7 +181,7 @@ impl Emitter {
                     Geometry::Bilinear { mesh, patch } => {
                         shapes.bilinear_meshes[mesh as usize].sample_area(patch, u)?
                     }
-                    Geometry::Curve(_) | Geometry::Instance(_) => return None,
+                    Geometry::Curve(_) | Geometry::Instance(_) | Geometry::Hull(_) => return None,
                 };
                 // pbrt-v4's `SampleLe` checks the point against the alpha texture.
                 let uv = if *alpha != NONE || image.is_some() {

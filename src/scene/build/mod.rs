@@ -21,7 +21,7 @@ use super::shapes::{ShapeKind, ShapeSettings};
 use super::spectra::SpectrumResolver;
 use super::textures::{Mapping, TexInput, TextureKind, TextureSettings};
 use super::transport::{SpectralMode, Transport, TransportChoice};
-use crate::accel::{Accel, Geometry, Instance, NONE, Primitive, ShapeStore, Surfaces};
+use crate::accel::{Accel, Geometry, Hulls, Instance, NONE, Primitive, ShapeStore, Surfaces, gather_hulls};
 use crate::camera::Camera;
 use crate::camera::settings::CameraSettings;
 use crate::channels::pack_voxel;
@@ -208,7 +208,7 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions, needs: &SceneNe
         mesh_bytes: 0,
         rgb_transport: transport.transport == Transport::Rgb,
     };
-    let Placed { top, blas, instances, primitives } = sb.place_all(desc)?;
+    let Placed { top, blas, instances, primitives, hulls } = sb.place_all(desc)?;
     let triangles = sb.triangles;
     let mesh_bytes = sb.mesh_bytes;
     let mut lights = std::mem::take(&mut sb.lights);
@@ -220,6 +220,7 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions, needs: &SceneNe
         pass_through: materials.iter().map(Material::is_interface).collect(),
         alphas: std::mem::take(&mut sb.alphas),
         textures: tb.textures.clone(),
+        hulls,
     };
     let interfaces = interfaces.into_inner();
     let has_chromatic_media = media.iter().any(|m| m.chromatic);

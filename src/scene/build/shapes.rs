@@ -155,7 +155,7 @@ impl ShapeBuilder<'_> {
                         .world_area()
                         .ok_or_else(|| err(&e.loc, "an emitting cylinder must not be scaled non-uniformly"))?,
                     Geometry::Bilinear { mesh, patch } => self.store.bilinear_meshes[mesh as usize].area(patch),
-                    Geometry::Curve(_) | Geometry::Instance(_) => continue,
+                    Geometry::Curve(_) | Geometry::Instance(_) | Geometry::Hull(_) => continue,
                 };
                 let l = area_light_radiance(&settings, image.as_deref(), al_entity, area, &self.spectra)?;
                 prim.area_light = self.lights.len() as u32;
@@ -244,6 +244,8 @@ pub(super) struct Placed {
     pub(super) blas: Vec<Accel>,
     pub(super) instances: Vec<Instance>,
     pub(super) primitives: usize,
+    /// The closed convex meshes among the top-level shapes, each one primitive of `top`.
+    pub(super) hulls: Hulls,
 }
 
 impl ShapeBuilder<'_> {
@@ -315,6 +317,7 @@ impl ShapeBuilder<'_> {
             prims.push(Primitive::instance(instances.len() as u32 - 1));
         }
         let primitives = prims.len();
-        Ok(Placed { top: Accel::build(prims, bounds), blas, instances, primitives })
+        let hulls = gather_hulls(&mut prims, &mut bounds, &self.store.meshes);
+        Ok(Placed { top: Accel::build(prims, bounds), blas, instances, primitives, hulls })
     }
 }

@@ -48,7 +48,7 @@ pub struct Hull {
 impl Hull {
     /// Where a ray that starts strictly inside the hull leaves it: the distance to the
     /// exit face's plane and that face (for [`Hull::hit_on_face`]); `None` from elsewhere.
-    /// Four dot products per face and no triangle test: inside a dense medium most
+    /// Two dot products per face and no triangle test: inside a dense medium most
     /// segments end in a collision long before the boundary, whose triangle is then never
     /// needed.
     #[inline]

@@ -43,6 +43,9 @@ pub struct Hull {
     scale: f32,
     /// The primitive standing for the hull in the BVH.
     pub(super) prim: Primitive,
+    /// Faces (bits by plane) with another primitive just beyond them (a ground plane under a
+    /// box), which a ray leaving through them may meet at the same distance.
+    touched: u32,
 }
 
 impl Hull {
@@ -64,7 +67,9 @@ impl Hull {
                 (t_out, face) = (inside / c, i as u32);
             }
         }
-        (face != u32::MAX).then_some((t_out, face))
+        // Through a touched face the BVH decides: its tie rule picks between the face and the
+        // surface beyond it.
+        (face != u32::MAX && self.touched >> face & 1 == 0).then_some((t_out, face))
     }
 
     /// The triangle of face `face` that a ray from inside leaves through (see [`Hull::exit`]):
@@ -165,8 +170,9 @@ impl Hull {
 pub struct Hulls {
     /// Indexed by [`Geometry::Hull`].
     pub all: Vec<Hull>,
-    /// Hulls whose bounds no other primitive's bounds reach into: a ray from inside meets
-    /// nothing before their boundary. At most [`MAX_ALONE`] (every query tests each).
+    /// Hulls into which no other primitive's bounds reach (they may touch a face from
+    /// outside): a ray from inside meets nothing before their boundary. At most
+    /// [`MAX_ALONE`] (every query tests each).
     pub alone: Vec<u32>,
 }
 
@@ -241,21 +247,36 @@ pub fn gather_hulls(prims: &mut Vec<Primitive>, bounds: &mut Vec<Bounds3>, meshe
         prims.push(p);
         bounds.push(b);
     }
-    // A primitive touching the hull's bounds (a ground plane under a box) may tie with its
-    // faces: such hulls are left to the BVH and its tie rule.
-    let mut alone: Vec<u32> = (0..hulls.len() as u32)
-        .filter(|&k| {
-            let own = prims.iter().position(|p| p.geometry == Geometry::Hull(k)).expect("added");
-            let hb = bounds[own];
-            let pad = 1e-4 * (hb.max - hb.min).max_element();
-            let reaches_in = |b: &Bounds3| (b.min - pad).cmple(hb.max).all() && (b.max + pad).cmpge(hb.min).all();
-            bounds.iter().enumerate().all(|(i, b)| i == own || !reaches_in(b))
-        })
-        .collect();
+    // The hulls' own primitives are the last ones, in order.
+    let first = bounds.len() - hulls.len();
+    let mut alone: Vec<u32> =
+        (0..hulls.len()).filter(|&k| alone_with_touches(&mut hulls[k], bounds, first + k)).map(|k| k as u32).collect();
     if alone.len() > MAX_ALONE {
         alone.clear();
     }
     Hulls { all: hulls, alone }
+}
+
+/// Whether no primitive but the hull's own reaches into its interior, going by their bounds;
+/// marks the faces that one lies just beyond (all its bounds' corners on the outer side of
+/// the face's plane, up to rounding: a ground plane under a box).
+fn alone_with_touches(hull: &mut Hull, bounds: &[Bounds3], own: usize) -> bool {
+    let hb = bounds[own];
+    let pad = 1e-4 * (hb.max - hb.min).max_element();
+    let eps = 1e-5 * hull.scale;
+    for (i, b) in bounds.iter().enumerate() {
+        let reaches_in = (b.min - pad).cmple(hb.max).all() && (b.max + pad).cmpge(hb.min).all();
+        if i == own || !reaches_in {
+            continue;
+        }
+        let corners = (0..8).map(|c| Vec3::select(glam::BVec3::new(c & 1 != 0, c & 2 != 0, c & 4 != 0), b.max, b.min));
+        let beyond = |p: &Plane| corners.clone().all(|c| p.n.dot(c) >= p.d - eps);
+        match hull.planes.iter().position(beyond) {
+            Some(face) => hull.touched |= 1 << face,
+            None => return false,
+        }
+    }
+    true
 }
 
 /// The hull of mesh `m` from its triangles `tris`, if they close a convex polyhedron with
@@ -327,7 +348,7 @@ fn hull_of(tris: impl Iterator<Item = Primitive>, m: &Mesh, prim: Primitive) -> 
         grouped.extend(tris.iter().zip(&plane_of).filter(|(_, p)| **p == i).map(|(t, _)| *t));
         faces.push((start, grouped.len() as u32));
     }
-    Some(Hull { planes, faces, tris: grouped, scale, prim })
+    Some(Hull { planes, faces, tris: grouped, scale, prim, touched: 0 })
 }
 
 #[cfg(test)]
@@ -443,9 +464,9 @@ mod tests {
     }
 
     #[test]
-    fn a_hull_something_touches_is_not_alone() {
+    fn a_ground_under_a_box_touches_its_bottom_face_and_one_through_it_reaches_in() {
         let box_mesh = Mesh::new(&Affine3A::IDENTITY, false, &CORNERS, &[], &[], BOX.to_vec());
-        for (ground_y, alone) in [(-0.001, true), (0.0, false), (0.5, false)] {
+        for (ground_y, alone, touched) in [(-0.001, true, false), (0.0, true, true), (0.5, false, false)] {
             let g = ground_y;
             let ground = Mesh::new(
                 &Affine3A::IDENTITY,
@@ -462,6 +483,13 @@ mod tests {
             let hulls = gather_hulls(&mut prims, &mut bounds, &[box_mesh.clone(), ground]);
             assert_eq!((hulls.all.len(), prims.len()), (1, 3));
             assert_eq!(hulls.alone.len() == 1, alone, "ground at y = {ground_y}");
+            // From inside, a ray leaving through the bottom is left to the BVH where the ground
+            // touches it; one leaving through the top never is.
+            let hull = &hulls.all[0];
+            let down = Ray::new(Vec3::splat(0.5), Vec3::new(0.1, -1.0, 0.2));
+            let up = Ray::new(Vec3::splat(0.5), Vec3::new(0.1, 1.0, 0.2));
+            assert_eq!(hull.exit(&down).is_none(), touched, "ground at y = {ground_y}");
+            assert!(hull.exit(&up).is_some());
         }
     }
 }

@@ -6,13 +6,15 @@
 //! per face plane; only that face's triangles are then tested, with the mesh's own triangle
 //! test, so the hit is the one the BVH would have found. The BVH holds the hull in place of
 //! its triangles (grid-cloud's 14 triangles become three primitives, tested without a BVH).
+//! A full sphere (homogeneous-sphere's, the Disney cloud's bound) that nothing else reaches
+//! into is likewise answered by its own test alone for rays from inside.
 
 use glam::Vec3;
 use std::collections::HashMap;
 
 use super::{Candidate, Detail, Geometry, NONE, Primitive};
 use crate::geometry::{Bounds3, Ray};
-use crate::shapes::{Mesh, intersect_triangle};
+use crate::shapes::{Mesh, Sphere, intersect_triangle};
 
 /// Face planes per hull: beyond this the planes cost more than the BVH over the triangles.
 const MAX_PLANES: usize = 16;
@@ -174,6 +176,9 @@ pub struct Hulls {
     /// outside): a ray from inside meets nothing before their boundary. At most
     /// [`MAX_ALONE`] (every query tests each).
     pub alone: Vec<u32>,
+    /// Full spheres no other primitive's bounds reach into ([`lone_spheres`]): from inside
+    /// one, its own test is the only one to run. At most [`MAX_ALONE`].
+    pub spheres: Vec<Primitive>,
 }
 
 /// Hulls a ray is tested to start inside before the BVH is asked.
@@ -237,7 +242,7 @@ pub fn gather_hulls(prims: &mut Vec<Primitive>, bounds: &mut Vec<Bounds3>, meshe
         }
     }
     if hulls.is_empty() {
-        return Hulls { all: hulls, alone: Vec::new() };
+        return Hulls { all: hulls, ..Hulls::default() };
     }
     let mut k = 0;
     prims.retain(|_| (!gathered[k], k += 1).0);
@@ -254,7 +259,27 @@ pub fn gather_hulls(prims: &mut Vec<Primitive>, bounds: &mut Vec<Bounds3>, meshe
     if alone.len() > MAX_ALONE {
         alone.clear();
     }
-    Hulls { all: hulls, alone }
+    Hulls { all: hulls, alone, spheres: Vec::new() }
+}
+
+/// The full spheres among `prims` (bounds `bounds`) whose bounding ball no other primitive's
+/// bounds reach into (a ground plane may touch it): at most [`MAX_ALONE`], none if more.
+pub fn lone_spheres(prims: &[Primitive], bounds: &[Bounds3], spheres: &[Sphere]) -> Vec<Primitive> {
+    let mut lone: Vec<Primitive> = prims
+        .iter()
+        .enumerate()
+        .filter(|(k, p)| {
+            let Geometry::Sphere(i) = p.geometry else { return false };
+            let Some((center, radius)) = spheres[i as usize].ball() else { return false };
+            let apart = |b: &Bounds3| center.clamp(b.min, b.max).distance_squared(center) >= radius * radius;
+            p.alpha == NONE && bounds.iter().enumerate().all(|(j, b)| j == *k || apart(b))
+        })
+        .map(|(_, p)| *p)
+        .collect();
+    if lone.len() > MAX_ALONE {
+        lone.clear();
+    }
+    lone
 }
 
 /// Whether no primitive but the hull's own reaches into its interior, going by their bounds;
@@ -490,6 +515,56 @@ mod tests {
             let up = Ray::new(Vec3::splat(0.5), Vec3::new(0.1, 1.0, 0.2));
             assert_eq!(hull.exit(&down).is_none(), touched, "ground at y = {ground_y}");
             assert!(hull.exit(&up).is_some());
+        }
+    }
+
+    #[test]
+    fn from_inside_a_lone_sphere_its_own_test_finds_what_the_bvh_finds() {
+        use crate::accel::{Accel, Surfaces};
+        // An ellipsoid (scaled 2x in y) whose bottom, at y = -1.5, a ground quad touches.
+        let world =
+            Affine3A::from_translation(Vec3::new(0.0, 0.5, 0.0)) * Affine3A::from_scale(Vec3::new(1.0, 2.0, 1.0));
+        for (ground_y, lone) in [(-1.5, true), (-1.0, false)] {
+            let mut s = Surfaces::default();
+            s.shapes.spheres.push(Sphere::new(world, false, 1.0, -1.0, 1.0, 360.0));
+            let g = ground_y;
+            s.shapes.meshes.push(Mesh::new(
+                &Affine3A::IDENTITY,
+                false,
+                &[[-9., g, -9.], [9., g, -9.], [9., g, 9.], [-9., g, 9.]],
+                &[],
+                &[],
+                vec![0, 1, 2, 0, 2, 3],
+            ));
+            let sphere = Primitive {
+                geometry: Geometry::Sphere(0),
+                material: 1,
+                area_light: NONE,
+                interface: NONE,
+                alpha: NONE,
+            };
+            let (mut prims, mut bounds) = tris(0, &s.shapes.meshes[0]);
+            prims.push(sphere);
+            bounds.push(s.shapes.spheres[0].bounds());
+            let found = lone_spheres(&prims, &bounds, &s.shapes.spheres);
+            assert_eq!(found.len() == 1, lone, "ground at y = {ground_y}");
+            s.top = Accel::build(prims, bounds);
+            let mut rng = crate::sampling::rng::Pcg32::new(3, 5);
+            let mut inside = 0;
+            for _ in 0..5000 {
+                let u = Vec3::new(rng.uniform(), rng.uniform(), rng.uniform());
+                let o = Vec3::new(-1.0, -1.5, -1.0) + u * Vec3::new(2.0, 4.0, 2.0);
+                let d = crate::sampling::warp::uniform_sphere(Vec2::new(rng.uniform(), rng.uniform()));
+                let ray = Ray::new(o, d);
+                let t_max = if rng.uniform() < 0.5 { f32::INFINITY } else { 3.0 * rng.uniform() };
+                s.hulls.spheres.clear();
+                let by_bvh = s.find(&ray, t_max).map(|f| (f.t(), f.prim()));
+                s.hulls.spheres = found.clone();
+                let by_sphere = s.find(&ray, t_max).map(|f| (f.t(), f.prim()));
+                assert_eq!(by_sphere, by_bvh, "ray {ray:?}");
+                inside += s.shapes.spheres[0].contains(o) as u32;
+            }
+            assert!(inside > 1000, "{inside} rays from inside");
         }
     }
 }

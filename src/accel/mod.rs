@@ -4,7 +4,7 @@
 mod build;
 mod hull;
 
-pub use hull::{Hulls, gather_hulls};
+pub use hull::{Hulls, gather_hulls, lone_spheres};
 
 use glam::{Affine3A, Vec2, Vec3, Vec3A};
 use obvhs::cwbvh::CwBvh;
@@ -586,6 +586,15 @@ impl Surfaces {
         let top = self.top.as_ref()?;
         if let Some(c) = self.hulls.exit(ray) {
             return (c.t < t_max).then_some(Found { c, ray: *ray });
+        }
+        for &prim in &self.hulls.spheres {
+            let Geometry::Sphere(i) = prim.geometry else { continue };
+            let sphere = &self.shapes.spheres[i as usize];
+            if sphere.contains(ray.o) {
+                let (t, p) = sphere.intersect(ray, t_max)?;
+                let c = Candidate { t, prim, instance: NONE, detail: Detail::ObjectPoint(p) };
+                return Some(Found { c, ray: *ray });
+            }
         }
         let mut best = None;
         top.closest(self, ray, t_max, NONE, &mut best);

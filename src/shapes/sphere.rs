@@ -57,6 +57,19 @@ impl Sphere {
             .transformed(&self.world_from_object)
     }
 
+    /// For a full sphere, a world-space ball that holds it: centre and radius.
+    pub fn ball(&self) -> Option<(Vec3, f32)> {
+        let m = &self.world_from_object.matrix3;
+        let stretch = m.x_axis.length().max(m.y_axis.length()).max(m.z_axis.length());
+        self.is_full().then(|| (self.world_from_object.translation.into(), self.radius * stretch))
+    }
+
+    /// Whether world point `p` lies strictly inside the (full) sphere.
+    #[inline]
+    pub fn contains(&self, p: Vec3) -> bool {
+        self.object_from_world.transform_point3(p).length_squared() < self.radius * self.radius
+    }
+
     fn is_full(&self) -> bool {
         self.z_min <= -self.radius && self.z_max >= self.radius && self.phi_max >= 2.0 * PI
     }

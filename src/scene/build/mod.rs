@@ -21,7 +21,9 @@ use super::shapes::{ShapeKind, ShapeSettings};
 use super::spectra::SpectrumResolver;
 use super::textures::{Mapping, TexInput, TextureKind, TextureSettings};
 use super::transport::{SpectralMode, Transport, TransportChoice};
-use crate::accel::{Accel, Geometry, Hulls, Instance, NONE, Primitive, ShapeStore, Surfaces, gather_hulls};
+use crate::accel::{
+    Accel, Geometry, Hulls, Instance, NONE, Primitive, ShapeStore, Surfaces, gather_hulls, lone_spheres,
+};
 use crate::camera::Camera;
 use crate::camera::settings::CameraSettings;
 use crate::channels::pack_voxel;

@@ -317,7 +317,8 @@ impl ShapeBuilder<'_> {
             prims.push(Primitive::instance(instances.len() as u32 - 1));
         }
         let primitives = prims.len();
-        let hulls = gather_hulls(&mut prims, &mut bounds, &self.store.meshes);
+        let mut hulls = gather_hulls(&mut prims, &mut bounds, &self.store.meshes);
+        hulls.spheres = lone_spheres(&prims, &bounds, &self.store.spheres);
         Ok(Placed { top: Accel::build(prims, bounds), blas, instances, primitives, hulls })
     }
 }

@@ -14,7 +14,7 @@ use std::collections::HashMap;
 
 use super::{Candidate, Detail, Geometry, NONE, Primitive};
 use crate::geometry::{Bounds3, Ray};
-use crate::shapes::{Mesh, Sphere, intersect_triangle};
+use crate::shapes::{Mesh, Sphere, barycentrics, intersect_triangle};
 
 /// Face planes per hull: beyond this the planes cost more than the BVH over the triangles.
 const MAX_PLANES: usize = 16;
@@ -92,13 +92,10 @@ impl Hull {
         // plane's point in the face's first triangle, its barycentrics clamped.
         let p = &self.planes[face as usize];
         let t = (p.d - p.n.dot(ray.o)) / p.n.dot(ray.d);
-        let [a, b, c] = tris[0].corners;
-        let (e1, e2, w) = (b - a, c - a, ray.o + ray.d * t - a);
-        let (d00, d01, d11, d20, d21) = (e1.dot(e1), e1.dot(e2), e2.dot(e2), w.dot(e1), w.dot(e2));
-        let det = d00 * d11 - d01 * d01;
-        let b1 = ((d11 * d20 - d01 * d21) / det).clamp(0.0, 1.0);
-        let b2 = ((d00 * d21 - d01 * d20) / det).clamp(0.0, 1.0 - b1);
-        (tris[0].prim, t, b1, b2)
+        // (Hull triangles have area; should rounding still call one degenerate, its corner 0.)
+        let (b1, b2) = barycentrics(tris[0].corners, ray.o + ray.d * t).unwrap_or((0.0, 0.0));
+        let b1 = b1.clamp(0.0, 1.0);
+        (tris[0].prim, t, b1, b2.clamp(0.0, 1.0 - b1))
     }
 
     /// The closest of the hull's triangles the ray hits before `t_max`: the primitive, the

@@ -12,8 +12,8 @@ use obvhs::ray::{Ray as BvhRay, RayHit};
 
 use crate::geometry::{Bounds3, MotionTransform, Ray};
 use crate::shapes::{
-    BilinearMesh, Curve, CurveCommon, Cylinder, Disk, Mesh, Sphere, SurfaceDerivatives, SurfaceHit, transform_normal,
-    triangle_derivatives, triangle_hit,
+    BilinearMesh, Curve, CurveCommon, Cylinder, Disk, Mesh, Sphere, SurfaceDerivatives, SurfaceHit, barycentrics,
+    transform_normal, triangle_derivatives, triangle_hit,
 };
 use crate::textures::{Tex, TexContext, Textures};
 
@@ -115,16 +115,7 @@ impl ShapeStore {
             Geometry::Cylinder(i) => self.cylinders[i as usize].uv_at(p),
             Geometry::Triangle { mesh, tri } => {
                 let m = &self.meshes[mesh as usize];
-                let [v0, v1, v2] = m.vertices(tri);
-                let (e1, e2, w) = (v1 - v0, v2 - v0, p - v0);
-                let (d00, d01, d11) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
-                let (d20, d21) = (w.dot(e1), w.dot(e2));
-                let det = d00 * d11 - d01 * d01;
-                if det == 0.0 {
-                    return None;
-                }
-                let b1 = (d11 * d20 - d01 * d21) / det;
-                let b2 = (d00 * d21 - d01 * d20) / det;
+                let (b1, b2) = barycentrics(m.vertices(tri), p)?;
                 triangle_hit(m, tri, 0.0, b1, b2).uv
             }
             Geometry::Bilinear { mesh, patch } => {

@@ -121,6 +121,16 @@ pub fn intersect_triangle([p0, p1, p2]: [Vec3; 3], ray: &Ray, t_max: f32) -> Opt
     (t > 0.0 && t < t_max).then_some((t, b1, b2))
 }
 
+/// Barycentrics (b1, b2) of corners 1 and 2 of the point of the triangle's plane nearest `p`;
+/// `None` for a degenerate triangle.
+pub fn barycentrics([v0, v1, v2]: [Vec3; 3], p: Vec3) -> Option<(f32, f32)> {
+    let (e1, e2, w) = (v1 - v0, v2 - v0, p - v0);
+    let (d00, d01, d11) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
+    let (d20, d21) = (w.dot(e1), w.dot(e2));
+    let det = d00 * d11 - d01 * d01;
+    (det != 0.0).then(|| ((d11 * d20 - d01 * d21) / det, (d00 * d21 - d01 * d20) / det))
+}
+
 /// Surface details of a hit on triangle `i` of `mesh` with barycentrics (b1, b2).
 pub fn triangle_hit(mesh: &Mesh, i: u32, t: f32, b1: f32, b2: f32) -> SurfaceHit {
     let k = 3 * i as usize;

@@ -406,6 +406,12 @@ mod tests {
             .unzip()
     }
 
+    /// A ground quad at height `y`.
+    fn ground(y: f32) -> Mesh {
+        let corners = [[-9., y, -9.], [9., y, -9.], [9., y, 9.], [-9., y, 9.]];
+        Mesh::new(&Affine3A::IDENTITY, false, &corners, &[], &[], vec![0, 1, 2, 0, 2, 3])
+    }
+
     /// A rotated, non-uniformly scaled box.
     fn cube(indices: &[u32]) -> Mesh {
         let world = Affine3A::from_rotation_y(0.3) * Affine3A::from_scale(Vec3::new(2.0, 1.5, 1.0));
@@ -489,15 +495,7 @@ mod tests {
     fn a_ground_under_a_box_touches_its_bottom_face_and_one_through_it_reaches_in() {
         let box_mesh = Mesh::new(&Affine3A::IDENTITY, false, &CORNERS, &[], &[], BOX.to_vec());
         for (ground_y, alone, touched) in [(-0.001, true, false), (0.0, true, true), (0.5, false, false)] {
-            let g = ground_y;
-            let ground = Mesh::new(
-                &Affine3A::IDENTITY,
-                false,
-                &[[-9., g, -9.], [9., g, -9.], [9., g, 9.], [-9., g, 9.]],
-                &[],
-                &[],
-                vec![0, 1, 2, 0, 2, 3],
-            );
+            let ground = ground(ground_y);
             let (mut prims, mut bounds) = tris(0, &box_mesh);
             let (p, b) = tris(1, &ground);
             prims.extend(p);
@@ -524,15 +522,7 @@ mod tests {
         for (ground_y, lone) in [(-1.5, true), (-1.0, false)] {
             let mut s = Surfaces::default();
             s.shapes.spheres.push(Sphere::new(world, false, 1.0, -1.0, 1.0, 360.0));
-            let g = ground_y;
-            s.shapes.meshes.push(Mesh::new(
-                &Affine3A::IDENTITY,
-                false,
-                &[[-9., g, -9.], [9., g, -9.], [9., g, 9.], [-9., g, 9.]],
-                &[],
-                &[],
-                vec![0, 1, 2, 0, 2, 3],
-            ));
+            s.shapes.meshes.push(ground(ground_y));
             let sphere = Primitive {
                 geometry: Geometry::Sphere(0),
                 material: 1,

@@ -47,7 +47,7 @@ pub enum Geometry {
     },
     /// An object instance (only in the top-level BVH).
     Instance(u32),
-    /// A closed convex mesh's triangles, as one primitive of the top-level BVH ([`Hull`]);
+    /// A closed convex mesh's triangles, as one primitive of the top-level BVH (`hull.rs`);
     /// hits name the triangle.
     Hull(u32),
 }
@@ -547,7 +547,8 @@ pub struct Surfaces {
     pub alphas: Vec<Tex>,
     /// The scene's textures, for the alpha test.
     pub textures: Textures,
-    /// Closed convex meshes the top-level BVH holds as one primitive each.
+    /// Closed convex meshes the top-level BVH holds as one primitive each, and the convex
+    /// shapes (hulls, full spheres) a ray from inside meets nothing before leaving.
     pub hulls: Hulls,
 }
 

@@ -68,8 +68,9 @@ pub(super) fn extra_direct<C: Channels>(
     let mut sum = C::ZERO;
     for _ in 0..config.extra_direct {
         let u = (rng.uniform(), Vec2::new(rng.uniform(), rng.uniform()));
+        let stream = (u64::from(rng.next_u32()) << 32 | u64::from(rng.next_u32())) | 1;
         if let Some(c) =
-            sample_direct(scene, p, hit, medium, scatterer, u, st, lambda, 0, &mut NoObserver, stats, false)
+            sample_direct(scene, p, hit, medium, scatterer, u, st, lambda, 0, &mut NoObserver, stats, Some(stream))
         {
             sum += c;
         }
@@ -78,8 +79,11 @@ pub(super) fn extra_direct<C: Channels>(
 }
 
 /// One light sample at a vertex at `p` (on the surface `hit`, or inside `medium` when there
-/// is none), MIS-weighted against BSDF/phase sampling when `mis` (pbrt-v4's SampleLd), by
-/// light sampling alone otherwise. The shadow ray crosses `interface` surfaces and
+/// is none): the path's own sample (`extra` None), MIS-weighted against BSDF/phase sampling
+/// (pbrt-v4's SampleLd); or one of the extra samples (`Some(stream)`), by light sampling
+/// alone, its shadow ray's random numbers drawn from the stream `stream` (pbrt-v4 seeds them
+/// by the ray alone, so a delta light's extra samples would repeat one transmittance
+/// estimate: their mean would be no better than one of them). The shadow ray crosses `interface` surfaces and
 /// accumulates residual-ratio-tracking transmittance through media.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn sample_direct<C: Channels, O: PathObserver<C>>(
@@ -94,7 +98,7 @@ pub(super) fn sample_direct<C: Channels, O: PathObserver<C>>(
     depth: u32,
     observer: &mut O,
     stats: &mut RayStats,
-    mis: bool,
+    extra: Option<u64>,
 ) -> Option<C> {
     let n_ctx = hit.map_or(Vec3::ZERO, |h| h.surface.ns);
     let (index, pmf) = scene.light_sampler.sample(p, n_ctx, u_pick)?;
@@ -125,8 +129,16 @@ pub(super) fn sample_direct<C: Channels, O: PathObserver<C>>(
         }
         _ => st.entered,
     };
-    let ShadowEstimate { t_ray, r_u, r_l } =
-        transmittance(scene, p, n, (shadow_medium, entered), &ls, (st.hero, st.time), lambda, stats)?;
+    let ShadowEstimate { t_ray, r_u, r_l } = transmittance(
+        scene,
+        p,
+        n,
+        (shadow_medium, entered),
+        &ls,
+        (st.hero, st.time, extra.unwrap_or(0)),
+        lambda,
+        stats,
+    )?;
     // Where the path is guided, the scattering technique MIS weighs against is the guide's
     // (looked up only for unoccluded samples: inside a dielectric most are blocked).
     let pdf_scatter = match scatterer {
@@ -138,7 +150,7 @@ pub(super) fn sample_direct<C: Channels, O: PathObserver<C>>(
     let pdf_light = pmf * ls.pdf;
     let r_l = r_l * st.r_u * pdf_light;
     let r_u = r_u * st.r_u * pdf_scatter;
-    let contribution = if ls.delta || !mis {
+    let contribution = if ls.delta || extra.is_some() {
         st.beta * f * t_ray * ls.l / r_l.average()
     } else {
         st.beta * f * t_ray * ls.l / (r_l + r_u).average()

@@ -437,7 +437,7 @@ impl<C: Channels, O: PathObserver<C>> Tracer<'_, C, O> {
         let u = (self.sampler.get_1d(), self.sampler.get_2d());
         let (st, depth) = (&w.st, w.depth - 1);
         if let Some(c) =
-            sample_direct(scene, p, hit, medium, sc, u, st, self.lambda, depth, self.observer, self.stats, true)
+            sample_direct(scene, p, hit, medium, sc, u, st, self.lambda, depth, self.observer, self.stats, None)
         {
             self.l += if prob < 1.0 { c / prob } else { c };
         }

@@ -27,7 +27,7 @@ pub(super) fn transmittance<C: Channels>(
     (n, p_error): (Vec3, f32),
     (mut medium, entered): (u32, Option<MediumPoint<C>>),
     ls: &LightSample<C>,
-    (hero, time): (usize, f32),
+    (hero, time, stream): (usize, f32, u64),
     lambda: &C::Lambda,
     stats: &mut RayStats,
 ) -> Option<ShadowEstimate<C>> {
@@ -40,7 +40,9 @@ pub(super) fn transmittance<C: Channels>(
         stats.shadow += 1;
         return (!scene.surfaces.occluded(&ray, remaining)).then_some(est);
     }
-    let mut rng = Pcg32::new(crate::sampling::rng::hash_vec3(ray.o), crate::sampling::rng::hash_vec3(ray.d));
+    // pbrt-v4 seeds the tracking by the ray (stream 0); other streams decorrelate repeated
+    // samples along one ray.
+    let mut rng = Pcg32::new(crate::sampling::rng::hash_vec3(ray.o) ^ stream, crate::sampling::rng::hash_vec3(ray.d));
     let mut first = true;
     loop {
         stats.shadow += 1;

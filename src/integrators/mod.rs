@@ -158,6 +158,11 @@ pub struct PixelValue {
     pub weight: f32,
     /// RGB radiance.
     pub l: Rgb,
+    /// An unbiased estimate of the same pixel from the same sample, for a method whose `l`
+    /// is biased (a graph's aggregate): the film then combines the two per pixel, trusting
+    /// `l` as far as its measured disagreement with this estimate allows, so that the image
+    /// converges whatever `l`'s bias (`render/combine.rs`). None: `l` is the estimate.
+    pub unbiased: Option<Rgb>,
 }
 
 /// A method that estimates radiance one camera ray at a time, written once for every

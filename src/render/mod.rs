@@ -2,6 +2,7 @@
 //! fixed order so the image is the same at any thread count, progressive passes for a time
 //! budget.
 
+mod combine;
 mod gbuffer;
 
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -64,21 +65,33 @@ struct PixelSum {
     nonfinite: u32,
 }
 
+/// A sample as the film takes it: clamped to the film's `max` component value, or None when
+/// it is NaN or infinite (it would poison the pixel; pbrt-v4 logs it and adds zero).
+#[inline]
+fn admit(mut l: Rgb, max: f32) -> Option<Rgb> {
+    if !l.is_finite() {
+        return None;
+    }
+    let m = l.max_element();
+    if m > max {
+        l *= max / m;
+    }
+    Some(l)
+}
+
 impl PixelSum {
     /// Adds one sample with filter weight `w`, clamped to the film's `max` component value;
     /// the variance sums count it when `counted` (for a G-buffer, when the camera ray sees a
     /// surface, as pbrt-v4 counts).
     #[inline]
-    fn add(&mut self, mut l: Rgb, w: f32, max: f32, counted: bool) {
-        if !l.is_finite() {
-            // A NaN or infinite sample would poison the pixel; pbrt-v4 logs and zeroes it.
-            l = Rgb::ZERO;
-            self.nonfinite += 1;
-        }
-        let m = l.max_element();
-        if m > max {
-            l *= max / m;
-        }
+    fn add(&mut self, l: Rgb, w: f32, max: f32, counted: bool) {
+        let l = match admit(l, max) {
+            Some(l) => l,
+            None => {
+                self.nonfinite += 1;
+                Rgb::ZERO
+            }
+        };
         let w = w as f64;
         for c in 0..3 {
             self.rgb[c] += w * l[c] as f64;
@@ -139,8 +152,8 @@ fn image_sample(
     // One sampler to replay the camera samples with (not a clone per pixel).
     let mut replay = sampler.clone();
     let (origin, width) = (acc.origin, acc.width);
-    let pixels = &mut acc.pixels;
-    method.sample_image(scene, &pass, &mut |PixelValue { index, weight, l }| {
+    let (pixels, pairs) = (&mut acc.pixels, &mut acc.pairs);
+    method.sample_image(scene, &pass, &mut |PixelValue { index, weight, l, unbiased }| {
         // The variance channels count samples whose camera ray (recomputed) sees a surface.
         let counted = !gbuffer || {
             let pixel = origin + UVec2::new(index % width, index / width);
@@ -148,6 +161,14 @@ fn image_sample(
             ray.is_some_and(|c| gbuffer::sees_surface(scene, c.ray))
         };
         pixels[index as usize].add(l, weight, max, counted);
+        if let Some(u) = unbiased {
+            if pairs.is_empty() {
+                pairs.resize(pixels.len(), combine::PairSums::default());
+            }
+            // A non-finite value counts as zero in both, as the film counts it in L.
+            let zero = |x: Rgb| admit(x, max).unwrap_or(Rgb::ZERO);
+            pairs[index as usize].add(zero(l), zero(u), weight, sample);
+        }
     })
 }
 
@@ -163,6 +184,9 @@ pub struct Accumulator {
     pixels: Vec<PixelSum>,
     /// The spectral film's bands: per pixel, Σ w·L of each band and then Σ w of each band.
     bands: Vec<f64>,
+    /// Per pixel, the sums of the unbiased estimates a method hands over beside its own
+    /// ([`PixelValue::unbiased`]); empty when it hands none.
+    pairs: Vec<combine::PairSums>,
 }
 
 impl Accumulator {
@@ -174,6 +198,7 @@ impl Accumulator {
             origin: UVec2::new(bounds[0], bounds[1]),
             pixels: vec![PixelSum::default(); (w * h) as usize],
             bands: vec![0.0; (w * h) as usize * 2 * bands],
+            pairs: Vec::new(),
         }
     }
 
@@ -195,12 +220,18 @@ impl Accumulator {
     }
 
     /// The image: each pixel's weighted mean, through `output` (the film's conversion to the
-    /// output color space).
+    /// output color space). Where the method handed unbiased estimates beside its own, the
+    /// pixel is their combination ([`combine`]).
     fn image(&self, output: glam::DMat3) -> Image {
         let mut img = Image::new(self.width as usize, self.height as usize);
-        for (o, p) in img.pixels.iter_mut().zip(&self.pixels) {
+        let combined = (!self.pairs.is_empty())
+            .then(|| combine::combine(self.width as usize, self.pixels.iter().map(|p| (p.rgb, p.weight)), &self.pairs));
+        for (i, (o, p)) in img.pixels.iter_mut().zip(&self.pixels).enumerate() {
             if p.weight != 0.0 {
-                let mean = glam::DVec3::from_array(p.rgb) / p.weight;
+                let mean = match &combined {
+                    Some(c) => glam::DVec3::from_array(c[i]),
+                    None => glam::DVec3::from_array(p.rgb) / p.weight,
+                };
                 *o = (output * mean).as_vec3();
             }
         }

@@ -348,7 +348,17 @@ impl ImageIntegrator for PathGraph {
             + 4 * clusters.offsets.len();
 
         let direct = std::mem::take(&mut v.direct_scatter);
-        let solver = solve::Solver::new(v, &clusters.offsets, earliest, std::mem::take(&mut spare.f), direct);
+        let mut direct_light = std::mem::take(&mut v.direct_light);
+        let solver =
+            solve::Solver::new(v, &direct_light, &clusters.offsets, earliest, std::mem::take(&mut spare.f), direct);
+        // Only the first pass reads the light-sampled direct light: its array now holds, at each
+        // path's first vertex f, the path-traced indirect light there (w ∘ L⁺ before any
+        // iteration), from which the path's own unbiased estimate is made at the end.
+        if self.settings.combine {
+            for &f in paths.first.iter().filter(|&&f| f != NONE) {
+                direct_light[f as usize] = v.w[f as usize] * l_plus[f as usize];
+            }
+        }
         let mut scattered = std::mem::take(&mut spare.v3);
         scattered.clear();
         scattered.resize(v.len(), Rgb::ZERO);
@@ -356,21 +366,30 @@ impl ImageIntegrator for PathGraph {
             solver.aggregate(&l_plus, &mut scattered);
             solver.propagate(&scattered, &mut l_plus);
         }
-        // Each pixel's value replaces its path's unrefined radiance (no image-sized list).
+        // Each pixel's value replaces its path's unrefined radiance (no image-sized list), and
+        // the throughput, whose work is then done, the path-traced estimate's difference from
+        // it (V − G: the refined indirect light swapped for the path's own).
+        let combine = self.settings.combine;
         let Paths { before, first, beta, .. } = &mut *paths;
-        before.par_iter_mut().zip(first.par_iter().zip(beta.par_iter())).with_min_len(1024).for_each(
-            |(l, (&f, &beta))| {
-                if f != NONE {
-                    *l += beta * solver.indirect_at(f as usize, &l_plus);
+        before.par_iter_mut().zip(first.par_iter().zip(beta.par_iter_mut())).with_min_len(1024).for_each(
+            |(l, (&f, beta))| {
+                if f == NONE {
+                    *beta = Rgb::ZERO;
+                    return;
+                }
+                let indirect = solver.indirect_at(f as usize, &l_plus);
+                *l += *beta * indirect;
+                if combine {
+                    *beta *= direct_light[f as usize] - indirect;
                 }
             },
         );
-        for ((&index, &weight), &l) in paths.pixel.iter().zip(&paths.weight).zip(&paths.before) {
-            out(PixelValue { index, weight, l });
+        for (((&index, &weight), &l), &d) in paths.pixel.iter().zip(&paths.weight).zip(&paths.before).zip(&paths.beta) {
+            out(PixelValue { index, weight, l, unbiased: combine.then_some(l + d) });
         }
         let solved = Instant::now();
         drop(scattered);
-        (v.direct_scatter, v.p) = (solver.into_direct(), l_plus);
+        (v.direct_scatter, v.p, v.direct_light) = (solver.into_direct(), l_plus, direct_light);
         let (vertices, npaths, clusters) = (v.len(), paths.len(), clusters.len());
         *lock(&self.stores) = stores;
         if let Ok(mut r) = self.report.lock() {

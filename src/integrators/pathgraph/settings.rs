@@ -1,6 +1,7 @@
 //! `pathgraph` parameters: the path loop's `maxdepth` and `regularize` (shared with
 //! `volpath`, so switching a volpath scene to pathgraph keeps its paths) and the graph's
-//! cluster size, iteration count and extra first-vertex light samples.
+//! cluster size, iteration count and extra first-vertex light samples, and whether pixels
+//! combine the graph's estimate with their paths' unbiased one.
 
 use nimbus_parser::{Entity, Error};
 
@@ -23,11 +24,23 @@ pub struct PathGraphSettings {
     /// Extra light samples at each path's first vertex, used for the pixel's direct light
     /// instead of the path's own (`integer extradirect`, Sec. 4; 0 = the path's own).
     pub extra_direct: u32,
+    /// Combine each pixel's graph estimate with the unbiased path-traced estimate its own
+    /// paths carry, trusting the graph as far as the two agree (`bool combine`, default true;
+    /// README: consistency). False: the graph's estimate alone, as in the paper, whose bias
+    /// does not fall with the sample count.
+    pub combine: bool,
 }
 
 impl Default for PathGraphSettings {
     fn default() -> Self {
-        PathGraphSettings { max_depth: 5, regularize: false, cluster_size: 16, iterations: 2, extra_direct: 0 }
+        PathGraphSettings {
+            max_depth: 5,
+            regularize: false,
+            cluster_size: 16,
+            iterations: 2,
+            extra_direct: 0,
+            combine: true,
+        }
     }
 }
 
@@ -52,6 +65,7 @@ impl PathGraphSettings {
             cluster_size: count("clustersize", d.cluster_size, 1, 4096)?,
             iterations: count("iterations", d.iterations, 0, 1000)?,
             extra_direct: count("extradirect", d.extra_direct, 0, 4096)?,
+            combine: p.get_one_bool("combine", d.combine)?,
         })
     }
 }

@@ -47,9 +47,11 @@ impl<'a> Solver<'a> {
     /// contents do not matter); `direct` comes in as the vertices' `direct_scatter` (which
     /// `v` no longer holds: no later pass needs it) and is replaced by the aggregated direct
     /// light A⁰L⁰, so the graph needs no array of its own for it. [`Solver::into_direct`]
-    /// gives that array back.
+    /// gives that array back. `direct_light` is the vertices' light-sampled direct light,
+    /// which only this pass reads (so the caller may hold it apart from `v` and reuse it).
     pub fn new(
         v: &'a Vertices,
+        direct_light: &[Rgb],
         offsets: &'a [u32],
         earliest: Vec<u32>,
         mut marginal: Vec<f32>,
@@ -70,7 +72,15 @@ impl<'a> Solver<'a> {
                 for c in range.0..range.1 {
                     let r = offsets[c] as usize..offsets[c + 1] as usize;
                     let local = r.start - base..r.end - base;
-                    first_pass(v, &earliest, r, &mut marginal[local.clone()], &mut direct[local], &mut scratch);
+                    first_pass(
+                        v,
+                        direct_light,
+                        &earliest,
+                        r,
+                        &mut marginal[local.clone()],
+                        &mut direct[local],
+                        &mut scratch,
+                    );
                 }
             });
         }
@@ -237,6 +247,7 @@ struct Scratch {
 /// `direct` holds the cluster's `direct_scatter` on the way in).
 fn first_pass(
     v: &Vertices,
+    direct_light: &[Rgb],
     earliest: &[u32],
     r: std::ops::Range<usize>,
     marginal: &mut [f32],
@@ -246,11 +257,11 @@ fn first_pass(
     let i0 = r.start;
     if v.g[i0].is_nan() {
         if v.n[i0] != Vec3::ZERO {
-            return lambertian_first_pass(v, earliest, r, marginal, direct, &mut s.light_marginal, &mut s.scatter);
+            return lambertian_first_pass(v, direct_light, earliest, r, marginal, direct, s);
         }
         for (k, i) in r.enumerate() {
             marginal[k] = f32::NAN;
-            direct[k] += v.direct_light[i];
+            direct[k] += direct_light[i];
         }
         return;
     }
@@ -285,13 +296,13 @@ fn first_pass(
         s.scatter.push(scatter);
         // Light-sampled directions (Eq. 22's first sum); a delta light (phase density 0) can
         // only be found by light sampling.
-        let (light, light_marginal) = if v.direct_light[j] == Rgb::ZERO {
+        let (light, light_marginal) = if direct_light[j] == Rgb::ZERO {
             (Rgb::ZERO, 0.0)
         } else {
             let w = v.light_wi[j];
             let f = own.eval(w);
             let (pl, ps) = (v.light_pdf[j], v.light_pdf_scatter[j]);
-            (v.direct_light[j] * ((ps + pl) / f), if ps == 0.0 { f32::NAN } else { s.phases.sum(w) })
+            (direct_light[j] * ((ps + pl) / f), if ps == 0.0 { f32::NAN } else { s.phases.sum(w) })
         };
         s.light.push(light);
         s.light_marginal.push(light_marginal);
@@ -395,13 +406,14 @@ fn lambertian_indirect(
 /// `direct` holds the cluster's `direct_scatter` on the way in.
 fn lambertian_first_pass(
     v: &Vertices,
+    direct_light: &[Rgb],
     earliest: &[u32],
     r: std::ops::Range<usize>,
     marginal: &mut [f32],
     direct: &mut [Rgb],
-    light_marginal: &mut Vec<f32>,
-    scatter: &mut Vec<Rgb>,
+    s: &mut Scratch,
 ) {
+    let (light_marginal, scatter) = (&mut s.light_marginal, &mut s.scatter);
     // The direct light each phase sample found, per unit of its own R and p (zero where it
     // found none), before `direct` is overwritten.
     scatter.clear();
@@ -431,11 +443,11 @@ fn lambertian_first_pass(
                 continue;
             }
             let swap = |w: Vec3, p_i: f32| if e == i { 0.0 } else { p_i - cosine_pdf(v.n[e], w) };
-            if v.direct_light[j] != Rgb::ZERO {
+            if direct_light[j] != Rgb::ZERO {
                 let w = v.light_wi[j];
                 let (pl, ps) = (v.light_pdf[j], v.light_pdf_scatter[j]);
                 let own = cosine_pdf(v.n[j], w);
-                let l0 = div(v.direct_light[j] * ((ps + pl) / own), v.w[j]);
+                let l0 = div(direct_light[j] * ((ps + pl) / own), v.w[j]);
                 let p_i = cosine_pdf(v.n[i], w);
                 let p_m = if ps == 0.0 { count * pl } else { light_marginal[m] + swap(w, p_i) + count * pl };
                 if p_i > 0.0 && p_m > 0.0 && own > 0.0 {
@@ -516,7 +528,8 @@ mod tests {
         let mut out = vec![Rgb::ZERO; v.len()];
         // Every vertex is its own path.
         let earliest = (0..v.len() as u32).collect();
-        Solver::new(v, &offsets, earliest, Vec::new(), v.direct_scatter.clone()).aggregate(l_plus, &mut out);
+        Solver::new(v, &v.direct_light, &offsets, earliest, Vec::new(), v.direct_scatter.clone())
+            .aggregate(l_plus, &mut out);
         out
     }
 

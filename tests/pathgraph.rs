@@ -367,8 +367,8 @@ fn backlit_cloud(integrator: &str, params: &str) -> String {
 
 /// The combination converges where the graph alone does not (README: consistency): on the
 /// back-lit cloud at 256 spp the graph alone's mean is off by more than four standard errors
-/// plus the 1 % the README allows (−4.5 %), and the combined image's mean agrees with
-/// volpath's within them (−1.2 %).
+/// plus the 1 % the README allows (−4.6 %), and the combined image's mean agrees with
+/// volpath's within them (−1.0 %).
 #[test]
 fn the_combination_removes_the_graphs_bias() {
     let render = |integrator: &str, params: &str, spp, seed| {

@@ -53,16 +53,28 @@ pub struct RenderResult {
     pub nonfinite_samples: u64,
 }
 
-/// Per-pixel accumulation: Σ w·L and Σ w (pbrt-v4's RGBFilm), and Σ L, Σ L² and the count
-/// of the unweighted samples for the G-buffer's variance channels.
+/// Per-pixel accumulation: Σ w·L and Σ w (pbrt-v4's RGBFilm).
 #[derive(Clone, Copy, Debug, Default)]
-struct PixelSum {
+struct FilmSum {
     rgb: [f64; 3],
     weight: f64,
+    nonfinite: u32,
+}
+
+/// Σ L, Σ L² and the count of a pixel's unweighted samples, for the G-buffer's variance
+/// channels (kept only for a G-buffer film: 52 bytes a pixel that other films never read).
+#[derive(Clone, Copy, Debug, Default)]
+struct Spread {
     sum: [f64; 3],
     sum_sq: [f64; 3],
     count: u32,
-    nonfinite: u32,
+}
+
+/// A pixel's sums over some of its samples (one tile's pass).
+#[derive(Clone, Copy, Debug, Default)]
+struct PixelSum {
+    film: FilmSum,
+    spread: Spread,
 }
 
 /// A sample as the film takes it: clamped to the film's `max` component value, or None when
@@ -79,12 +91,11 @@ fn admit(mut l: Rgb, max: f32) -> Option<Rgb> {
     Some(l)
 }
 
-impl PixelSum {
+impl FilmSum {
     /// Adds one sample with filter weight `w`, clamped to the film's `max` component value;
-    /// the variance sums count it when `counted` (for a G-buffer, when the camera ray sees a
-    /// surface, as pbrt-v4 counts).
+    /// returns it as added (zero when it was not finite).
     #[inline]
-    fn add(&mut self, l: Rgb, w: f32, max: f32, counted: bool) {
+    fn add(&mut self, l: Rgb, w: f32, max: f32) -> Rgb {
         let l = match admit(l, max) {
             Some(l) => l,
             None => {
@@ -97,27 +108,52 @@ impl PixelSum {
             self.rgb[c] += w * l[c] as f64;
         }
         self.weight += w;
-        if counted {
-            for c in 0..3 {
-                let v = l[c] as f64;
-                self.sum[c] += v;
-                self.sum_sq[c] += v * v;
-            }
-            self.count += 1;
-        }
+        l
     }
 
     /// Adds another pixel's sums (a later pass of the same pixel).
     #[inline]
-    fn merge(&mut self, o: &PixelSum) {
+    fn merge(&mut self, o: &FilmSum) {
         for c in 0..3 {
             self.rgb[c] += o.rgb[c];
+        }
+        self.weight += o.weight;
+        self.nonfinite += o.nonfinite;
+    }
+}
+
+impl Spread {
+    /// Counts one sample `l` (as the film added it).
+    #[inline]
+    fn add(&mut self, l: Rgb) {
+        for c in 0..3 {
+            let v = l[c] as f64;
+            self.sum[c] += v;
+            self.sum_sq[c] += v * v;
+        }
+        self.count += 1;
+    }
+
+    #[inline]
+    fn merge(&mut self, o: &Spread) {
+        for c in 0..3 {
             self.sum[c] += o.sum[c];
             self.sum_sq[c] += o.sum_sq[c];
         }
-        self.weight += o.weight;
         self.count += o.count;
-        self.nonfinite += o.nonfinite;
+    }
+}
+
+impl PixelSum {
+    /// Adds one sample with filter weight `w`, clamped to the film's `max` component value;
+    /// the variance sums count it when `counted` (for a G-buffer, when the camera ray sees a
+    /// surface, as pbrt-v4 counts).
+    #[inline]
+    fn add(&mut self, l: Rgb, w: f32, max: f32, counted: bool) {
+        let l = self.film.add(l, w, max);
+        if counted {
+            self.spread.add(l);
+        }
     }
 }
 
@@ -152,15 +188,17 @@ fn image_sample(
     // One sampler to replay the camera samples with (not a clone per pixel).
     let mut replay = sampler.clone();
     let (origin, width) = (acc.origin, acc.width);
-    let (pixels, pairs) = (&mut acc.pixels, &mut acc.pairs);
+    let (pixels, spread, pairs) = (&mut acc.pixels, &mut acc.spread, &mut acc.pairs);
     method.sample_image(scene, &pass, &mut |PixelValue { index, weight, l, unbiased }| {
+        let added = pixels[index as usize].add(l, weight, max);
         // The variance channels count samples whose camera ray (recomputed) sees a surface.
-        let counted = !gbuffer || {
+        if gbuffer {
             let pixel = origin + UVec2::new(index % width, index / width);
             let (ray, _, _) = camera_ray::<Rgb>(scene, &mut replay, pixel, sample);
-            ray.is_some_and(|c| gbuffer::sees_surface(scene, c.ray))
-        };
-        pixels[index as usize].add(l, weight, max, counted);
+            if ray.is_some_and(|c| gbuffer::sees_surface(scene, c.ray)) {
+                spread[index as usize].add(added);
+            }
+        }
         if let Some(u) = unbiased {
             if pairs.is_empty() {
                 pairs.resize(pixels.len(), combine::PairSums::default());
@@ -181,7 +219,9 @@ pub struct Accumulator {
     width: u32,
     height: u32,
     origin: UVec2,
-    pixels: Vec<PixelSum>,
+    pixels: Vec<FilmSum>,
+    /// Per pixel, the G-buffer's variance sums; empty for other films.
+    spread: Vec<Spread>,
     /// The spectral film's bands: per pixel, Σ w·L of each band and then Σ w of each band.
     bands: Vec<f64>,
     /// Per pixel, the sums of the unbiased estimates a method hands over beside its own
@@ -190,13 +230,15 @@ pub struct Accumulator {
 }
 
 impl Accumulator {
-    fn new(bounds: [u32; 4], bands: usize) -> Accumulator {
+    fn new(bounds: [u32; 4], bands: usize, gbuffer: bool) -> Accumulator {
         let (w, h) = (bounds[2] - bounds[0], bounds[3] - bounds[1]);
+        let n = (w * h) as usize;
         Accumulator {
             width: w,
             height: h,
             origin: UVec2::new(bounds[0], bounds[1]),
-            pixels: vec![PixelSum::default(); (w * h) as usize],
+            pixels: vec![FilmSum::default(); n],
+            spread: if gbuffer { vec![Spread::default(); n] } else { Vec::new() },
             bands: vec![0.0; (w * h) as usize * 2 * bands],
             pairs: Vec::new(),
         }
@@ -252,9 +294,9 @@ impl Accumulator {
         let mut out: Vec<(String, Vec<f32>)> = ["Variance.R", "Variance.G", "Variance.B"]
             .iter()
             .chain(&["RelativeVariance.R", "RelativeVariance.G", "RelativeVariance.B"])
-            .map(|n| (n.to_string(), Vec::with_capacity(self.pixels.len())))
+            .map(|n| (n.to_string(), Vec::with_capacity(self.spread.len())))
             .collect();
-        for p in &self.pixels {
+        for p in &self.spread {
             let n = p.count as f64;
             for c in 0..3 {
                 let mean = if n > 0.0 { k * p.sum[c] / n } else { 0.0 };
@@ -370,7 +412,8 @@ pub fn render_with_passes(
     let mut paused = std::time::Duration::ZERO;
     let bounds = scene.pixel_bounds;
     let bands = spectral_bands(scene);
-    let mut acc = Accumulator::new(bounds, bands.map_or(0, |b| b.0));
+    let gbuffer = matches!(scene.film.kind, FilmKind::GBuffer { .. });
+    let mut acc = Accumulator::new(bounds, bands.map_or(0, |b| b.0), gbuffer);
     let tiles = tiles(bounds);
     let full = UVec2::new(scene.film.resolution[0], scene.film.resolution[1]);
     let base_sampler = match options.time_budget {
@@ -476,7 +519,10 @@ pub fn render_with_passes(
         for (out, band_sums, stats) in &results {
             total_stats.add(stats);
             for (i, s) in out {
-                acc.pixels[*i as usize].merge(s);
+                acc.pixels[*i as usize].merge(&s.film);
+                if let Some(spread) = acc.spread.get_mut(*i as usize) {
+                    spread.merge(&s.spread);
+                }
             }
             // Each pixel of the tile, in order, has 2n band sums.
             if let Some((n, ..)) = bands {

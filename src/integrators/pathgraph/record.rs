@@ -41,7 +41,9 @@ pub struct Vertices {
     pub n: Vec<Vec3>,
     /// f/p of the continuation direction.
     pub w: Vec<Rgb>,
-    /// Light-sampled direct light, MIS-weighted, per unit of β.
+    /// Light-sampled direct light, MIS-weighted, per unit of β. Only the first pass reads it:
+    /// the solve then keeps in this array, at each path's first vertex, the path-traced
+    /// indirect light there (for the pixel's unbiased estimate).
     pub direct_light: Vec<Rgb>,
     /// Direction of the light sample.
     pub light_wi: Vec<Vec3>,
@@ -191,7 +193,9 @@ pub struct Paths {
     pub before: Vec<Rgb>,
     /// The first graph vertex, or NONE.
     pub first: Vec<u32>,
-    /// Throughput arriving at the first graph vertex.
+    /// Throughput arriving at the first graph vertex. The solve ends by replacing it with
+    /// the path-traced estimate's difference from the pixel's value (U − G), when pixels are
+    /// combined with it.
     pub beta: Vec<Rgb>,
 }
 

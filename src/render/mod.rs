@@ -62,7 +62,8 @@ struct FilmSum {
 }
 
 /// Σ L, Σ L² and the count of a pixel's unweighted samples, for the G-buffer's variance
-/// channels (kept only for a G-buffer film: 52 bytes a pixel that other films never read).
+/// channels (kept only for a G-buffer film: 48 of the 88 bytes a pixel took when every film
+/// kept them).
 #[derive(Clone, Copy, Debug, Default)]
 struct Spread {
     sum: [f64; 3],
@@ -203,9 +204,8 @@ fn image_sample(
             if pairs.is_empty() {
                 pairs.resize(pixels.len(), combine::PairSums::default());
             }
-            // A non-finite value counts as zero in both, as the film counts it in L.
-            let zero = |x: Rgb| admit(x, max).unwrap_or(Rgb::ZERO);
-            pairs[index as usize].add(zero(l), zero(u), weight, sample);
+            // U is taken as the film took L: clamped, and zero when not finite.
+            pairs[index as usize].add(added, admit(u, max).unwrap_or(Rgb::ZERO), weight, sample);
         }
     })
 }

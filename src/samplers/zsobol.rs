@@ -145,11 +145,13 @@ pub struct ZSobolSampler {
     base4_digits: u32,
     morton_index: u64,
     dimension: u32,
-    /// Per dimension, the permuted digits above the sample index's (they depend on the pixel
-    /// and the dimension only, so a pixel's samples share them: on grid-cloud at 64 spp the
-    /// permutation was a fifth of the render) and the pixel they are for (`pixel_tag`).
-    pixel_digits: Vec<(u64, u64)>,
-    pixel_tag: u64,
+    /// Per dimension, the last index permuted and its result. Digits whose bits and higher
+    /// bits did not change since are kept: a pixel's own digits over its samples, and the
+    /// upper sample digits over consecutive samples (on grid-cloud at 64 spp the permutation
+    /// was a fifth of the render when every digit was hashed on every call).
+    last: Vec<(u64, u64)>,
+    /// Per dimension, the scramble seed bits (a hash of the dimension and the seed only).
+    scramble: Vec<u64>,
 }
 
 impl ZSobolSampler {
@@ -171,8 +173,8 @@ impl ZSobolSampler {
             base4_digits: res.ilog2() + log4_spp,
             morton_index: 0,
             dimension: 0,
-            pixel_digits: Vec::new(),
-            pixel_tag: 0,
+            last: Vec::new(),
+            scramble: Vec::new(),
         }
     }
 
@@ -187,8 +189,6 @@ impl ZSobolSampler {
         self.dimension = dimension;
         let morton = encode_morton2(pixel.x, pixel.y);
         self.morton_index = (morton << self.log2_samples_per_pixel) | sample_index as u64;
-        // Tags are the pixel's Morton code plus one: zero marks an entry never filled.
-        self.pixel_tag = morton + 1;
     }
 
     /// Hash that picks a digit permutation from the digits above it, as pbrt-v4 computes it:
@@ -217,29 +217,30 @@ impl ZSobolSampler {
 
     /// Index into the global Sobol' sequence of the current pixel sample and dimension.
     fn sample_index(&mut self) -> u64 {
-        let odd_log2 = self.log2_samples_per_pixel & 1 == 1;
-        let last_digit = odd_log2 as u32;
-        // Digits from `pixel_from` up lie above the sample index's bits: the pixel's own.
-        let pixel_from = self.log2_samples_per_pixel.div_ceil(2).clamp(last_digit, self.base4_digits);
+        let odd = self.log2_samples_per_pixel & 1;
         let d = self.dimension as usize;
-        if d >= self.pixel_digits.len() {
-            self.pixel_digits.resize(d + 1, (0, 0));
+        if d >= self.last.len() {
+            // An index no sampler makes (bits above every digit set): nothing is kept.
+            self.last.resize(d + 1, (u64::MAX, 0));
         }
-        let pixel = match self.pixel_digits[d] {
-            (tag, bits) if tag == self.pixel_tag => bits,
-            _ => {
-                let bits = self.permuted_digits(pixel_from, self.base4_digits);
-                self.pixel_digits[d] = (self.pixel_tag, bits);
-                bits
-            }
-        };
-        // Permute every full base-4 digit, most significant first, each by the digits above.
-        let mut index = pixel | self.permuted_digits(last_digit, pixel_from);
+        let (last_index, last_result) = self.last[d];
+        if last_index == self.morton_index {
+            return last_result;
+        }
+        // Bits from `changed` up are as last time. Digit i (bits 2i − odd and up) and every
+        // digit above it keep their permuted value when 2i − odd ≥ changed.
+        let changed = 64 - (self.morton_index ^ last_index).leading_zeros();
+        let top = (changed + odd).div_ceil(2).min(self.base4_digits);
+        let kept = last_result & (!0u64).checked_shl(2 * top - odd).unwrap_or(0);
+        // Permute every full base-4 digit below, most significant first, each by the digits
+        // above it.
+        let mut index = kept | self.permuted_digits(odd, top);
         // An odd power of two leaves one base-2 digit: flip it or not.
-        if odd_log2 {
+        if odd == 1 {
             let digit = self.morton_index & 1;
             index |= digit ^ (self.digit_hash(self.morton_index >> 1) & 1);
         }
+        self.last[d] = (self.morton_index, index);
         index
     }
 
@@ -255,10 +256,15 @@ impl ZSobolSampler {
     }
 
     /// Scramble seed bits for the current dimension (pbrt widens `dimension ^ seed`, a signed
-    /// int, to 64 bits).
+    /// int, to 64 bits), hashed once per dimension.
     #[inline]
-    fn scramble_bits(&self) -> u64 {
-        mix_bits(((self.dimension as i32) ^ self.seed) as i64 as u64)
+    fn scramble_bits(&mut self) -> u64 {
+        let d = self.dimension as usize;
+        while self.scramble.len() <= d {
+            let dimension = self.scramble.len() as i32;
+            self.scramble.push(mix_bits((dimension ^ self.seed) as i64 as u64));
+        }
+        self.scramble[d]
     }
 
     /// The next value.
@@ -266,7 +272,8 @@ impl ZSobolSampler {
         let a = self.sample_index();
         // pbrt advances the dimension before hashing it.
         self.dimension += 1;
-        self.sobol_sample(a, 0, self.scramble_bits() as u32)
+        let bits = self.scramble_bits();
+        self.sobol_sample(a, 0, bits as u32)
     }
 
     /// The next two values.
@@ -282,20 +289,26 @@ impl ZSobolSampler {
 mod tests {
     use super::*;
 
-    /// The pixel's digits kept from earlier samples give the values a fresh sampler gives,
-    /// whatever order pixels and samples come in (odd and even powers of two).
+    /// Digits kept from earlier samples give the values a fresh sampler gives, whatever order
+    /// pixels, samples and dimensions come in (odd and even powers of two).
     #[test]
-    fn kept_pixel_digits_change_nothing() {
-        for spp in [8, 16] {
-            let mut kept = ZSobolSampler::new(spp, UVec2::new(64, 64), Randomization::FastOwen, 3);
-            let order = [(5, 7, 0), (5, 7, 1), (6, 7, 0), (5, 7, 2), (63, 0, 7), (6, 7, 1), (5, 7, 3)];
-            for (x, y, s) in order {
-                let mut fresh = ZSobolSampler::new(spp, UVec2::new(64, 64), Randomization::FastOwen, 3);
-                kept.start_pixel_sample(UVec2::new(x, y), s, 0);
-                fresh.start_pixel_sample(UVec2::new(x, y), s, 0);
-                for _ in 0..40 {
-                    assert_eq!(kept.get_1d(), fresh.get_1d());
-                    assert_eq!(kept.get_2d(), fresh.get_2d());
+    fn kept_digits_change_nothing() {
+        for spp in [1, 2, 8, 16, 64] {
+            let res = UVec2::new(64, 48);
+            let mut kept = ZSobolSampler::new(spp, res, Randomization::FastOwen, 3);
+            let mut h = 0x9e37_79b9_7f4a_7c15u64;
+            for step in 0..400u64 {
+                h = mix_bits(h ^ step);
+                // Mostly the next sample of a pixel (as renders go), sometimes anywhere.
+                let (x, y) = if step % 7 == 0 { ((h % 64) as u32, ((h >> 8) % 48) as u32) } else { (5, 7) };
+                let s = (step as u32 + (h >> 16) as u32 % 3) % spp;
+                let start = if step % 5 == 0 { ((h >> 24) % 9) as u32 } else { 0 };
+                let mut fresh = ZSobolSampler::new(spp, res, Randomization::FastOwen, 3);
+                kept.start_pixel_sample(UVec2::new(x, y), s, start);
+                fresh.start_pixel_sample(UVec2::new(x, y), s, start);
+                for _ in 0..20 {
+                    assert_eq!(kept.get_1d(), fresh.get_1d(), "spp {spp}, step {step}");
+                    assert_eq!(kept.get_2d(), fresh.get_2d(), "spp {spp}, step {step}");
                 }
             }
         }

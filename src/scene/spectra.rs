@@ -53,9 +53,7 @@ impl SpectrumResolver<'_> {
     pub fn albedo(&self, spec: &SpectrumSpec, cs: ColorSpace) -> Result<SpectrumValue, SpectrumError> {
         let rgb = reflectance_rgb(spec, cs, self.film)?;
         let sampled = match resolve(spec)? {
-            ResolvedSpectrum::Rgb(c) => {
-                Sampled::Sigmoid { poly: fit_sigmoid(cs, c.clamp(Rgb::ZERO, Rgb::ONE).to_array()), scale: 1.0 }
-            }
+            ResolvedSpectrum::Rgb(c) => Sampled::sigmoid(fit_sigmoid(cs, c.clamp(Rgb::ZERO, Rgb::ONE).to_array()), 1.0),
             ResolvedSpectrum::Spectral(s) => dense(&s, 1.0),
         };
         Ok(SpectrumValue { rgb, sampled })
@@ -71,7 +69,7 @@ impl SpectrumResolver<'_> {
         Ok(match resolve(spec)? {
             ResolvedSpectrum::Rgb(c) => {
                 let (scale, poly) = unbounded_rgb(c, cs);
-                Sampled::Sigmoid { poly, scale }
+                Sampled::sigmoid(poly, scale)
             }
             ResolvedSpectrum::Spectral(s) => dense(&s, 1.0),
         })

@@ -110,6 +110,17 @@ pub enum Sampled {
 }
 
 impl Sampled {
+    /// `scale` × `poly`'s spectrum: a constant when the polynomial is one (a gray RGB has
+    /// c₀ = c₁ = 0), holding exactly the value [`Sampled::sample`] gives at every wavelength,
+    /// so a gray medium's coefficients cost no sigmoid per lookup.
+    pub fn sigmoid(poly: SigmoidPolynomial, scale: f32) -> Sampled {
+        if poly.c0 == 0.0 && poly.c1 == 0.0 {
+            Sampled::Constant(poly.eval4(Vec4::splat(550.0)).x * scale)
+        } else {
+            Sampled::Sigmoid { poly, scale }
+        }
+    }
+
     /// pbrt-v4's peak-normalised blackbody at `t` K (zero for non-positive temperatures).
     pub fn blackbody(t: f32) -> Sampled {
         let peak = planck(2.8977721e-3 / f64::from(t) * 1e9, f64::from(t));
@@ -249,4 +260,28 @@ pub enum RgbRole {
     Unbounded,
     /// Emitted radiance (pbrt-v4's `RGBIlluminantSpectrum`).
     Illuminant,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::spectra::sigmoid::fit_sigmoid;
+    use nimbus_parser::ColorSpace;
+
+    /// A gray RGB's spectrum becomes a constant with, at every wavelength, the very value the
+    /// sigmoid gives; a colored one stays a sigmoid.
+    #[test]
+    fn gray_sigmoids_are_constants_with_the_same_values() {
+        let lambda = SampledWavelengths { lambda: Vec4::new(360.0, 471.3, 612.9, 830.0), pdf: Vec4::ONE };
+        for v in [0.0, 0.18, 0.5, 0.73, 1.0] {
+            for scale in [1.0, 0.4, 24.0] {
+                let poly = fit_sigmoid(ColorSpace::Srgb, [v; 3]);
+                let s = Sampled::sigmoid(poly, scale);
+                assert!(matches!(s, Sampled::Constant(_)), "{v}");
+                assert_eq!(s.sample(&lambda), Sampled::Sigmoid { poly, scale }.sample(&lambda), "{v} × {scale}");
+            }
+        }
+        let poly = fit_sigmoid(ColorSpace::Srgb, [0.2, 0.5, 0.7]);
+        assert!(matches!(Sampled::sigmoid(poly, 2.0), Sampled::Sigmoid { .. }));
+    }
 }

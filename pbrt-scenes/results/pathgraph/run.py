@@ -177,8 +177,9 @@ def main():
         results["fig6"] = {"command": c.command, "series": series, "time_to_equal_error": equal}
         last = series["pathgraph"][-1]
         md += ["## Where path tracing catches up (paper Fig. 6)", "",
-               f"Cloud, 60 s each, one seed (`{c.command}`). pathgraph's relMSE stops falling at its bias "
-               f"(last: {last[2]:.2e} at {last[0]} spp); volpath reaches that error after {cross_time:.0f} s"
+               f"Cloud, 60 s each, one seed (`{c.command}`). pathgraph's relMSE at its last checkpoint: "
+               f"{last[2]:.2e} at {last[0]} spp (it keeps falling as the film's combination trusts the graph less); "
+               f"volpath reaches that error after {cross_time:.0f} s"
                + (" (extrapolated from its 60-s curve at the unbiased 1/t rate)" if equal["extrapolated"] else "")
                if cross_time else "Cloud, 60 s each: no time to equal error.", ""]
         md.append("![relMSE against spp and time](fig6-error-vs-spp-and-time.png)")

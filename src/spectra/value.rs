@@ -114,7 +114,7 @@ impl Sampled {
     /// c₀ = c₁ = 0), holding exactly the value [`Sampled::sample`] gives at every wavelength,
     /// so a gray medium's coefficients cost no sigmoid per lookup.
     pub fn sigmoid(poly: SigmoidPolynomial, scale: f32) -> Sampled {
-        if poly.c0 == 0.0 && poly.c1 == 0.0 {
+        if poly.is_constant() {
             Sampled::Constant(poly.eval4(Vec4::splat(550.0)).x * scale)
         } else {
             Sampled::Sigmoid { poly, scale }

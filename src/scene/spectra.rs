@@ -45,7 +45,7 @@ fn unbounded_rgb(rgb: Rgb, cs: ColorSpace) -> (f32, crate::spectra::SigmoidPolyn
 
 /// The spectrum of a non-RGB input, tabulated.
 fn dense(s: &crate::spectra::Spectrum, scale: f64) -> Sampled {
-    Sampled::Dense { table: DenseSpectrum::intern(|l| s.eval(l)), scale: scale as f32 }
+    Sampled::dense(DenseSpectrum::intern(|l| s.eval(l)), scale as f32)
 }
 
 impl SpectrumResolver<'_> {

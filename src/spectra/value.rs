@@ -121,6 +121,13 @@ impl Sampled {
         }
     }
 
+    /// `scale` × `table`: a [`Sampled::Constant`] when the table holds one value (a spectrum
+    /// given as `[200 1 900 1]`, as the published Disney cloud gives its σs), so that a lookup
+    /// costs no interpolation at four wavelengths.
+    pub fn dense(table: &'static DenseSpectrum, scale: f32) -> Sampled {
+        if table.is_constant() { Sampled::Constant(table.values[0] * scale) } else { Sampled::Dense { table, scale } }
+    }
+
     /// pbrt-v4's peak-normalised blackbody at `t` K (zero for non-positive temperatures).
     pub fn blackbody(t: f32) -> Sampled {
         let peak = planck(2.8977721e-3 / f64::from(t) * 1e9, f64::from(t));
@@ -283,5 +290,22 @@ mod tests {
         }
         let poly = fit_sigmoid(ColorSpace::Srgb, [0.2, 0.5, 0.7]);
         assert!(matches!(Sampled::sigmoid(poly, 2.0), Sampled::Sigmoid { .. }));
+    }
+
+    /// A flat tabulated spectrum becomes a constant equal, within an ulp of interpolation, to
+    /// the table's value at every wavelength; a sloped one stays a table.
+    #[test]
+    fn flat_tables_are_constants() {
+        let lambda = SampledWavelengths { lambda: Vec4::new(360.0, 471.3, 612.9, 830.0), pdf: Vec4::ONE };
+        for v in [0.0, 0.2, 1.0, 7.5] {
+            let table = DenseSpectrum::intern(|_| v);
+            let s = Sampled::dense(table, 4.0);
+            assert_eq!(s, Sampled::Constant(v as f32 * 4.0));
+            let tabled = Sampled::Dense { table, scale: 4.0 }.sample(&lambda);
+            for (a, b) in s.sample(&lambda).to_array().into_iter().zip(tabled.to_array()) {
+                assert!((a - b).abs() <= f32::EPSILON * b.abs(), "{a} {b}");
+            }
+        }
+        assert!(matches!(Sampled::dense(DenseSpectrum::intern(|l| l / 830.0), 1.0), Sampled::Dense { .. }));
     }
 }

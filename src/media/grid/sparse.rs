@@ -8,6 +8,15 @@
 //! and one value read — no tree walk as in NanoVDB. Brick 0 is a brick of background values, so
 //! the table's empty cells need no branch; bricks of one constant value (VDB tiles, uniform
 //! leaves) are stored once and shared.
+//!
+//! Each brick is stored with an apron: 9³ values, its own 8³ and the first voxels of the
+//! bricks above it in x, y and z. A trilinear lookup's eight corners then always sit in one
+//! stored brick. Without the apron, the third of lookups whose corners straddle a brick
+//! boundary ((7/8)³ do not) read each corner through the table: on the Disney cloud they
+//! took 15 % of all instructions, against 12 % for every other lookup together. The apron
+//! costs 1.42× the values of a non-constant brick, and the bricks just below the data, whose
+//! aprons hold data, are stored too (the table reaches one brick lower on each axis for
+//! them).
 
 use std::collections::HashMap;
 
@@ -25,10 +34,22 @@ pub const BRICK_VOXELS: usize = 1 << (3 * BRICK_LOG2);
 /// any real cloud, but it stops a corrupt bounding box from asking for the whole machine.
 const MAX_TABLE_CELLS: u64 = 1 << 30;
 
-/// Offset of voxel `ijk` inside its brick, in VDB leaf order (z fastest, then y, then x).
+/// Values stored per brick: 9³, the brick and its apron.
+const PADDED_VOXELS: usize = 9 * 9 * 9;
+/// Offsets, in a stored brick, of the voxels one step up in x, y and z.
+const STEP_X: usize = 81;
+const STEP_Y: usize = 9;
+
+/// Offset of voxel `ijk` inside a VDB leaf (z fastest, then y, then x): the readers' order.
 #[inline(always)]
 fn voxel_offset(ijk: IVec3) -> usize {
     (((ijk.x & 7) << 6) | ((ijk.y & 7) << 3) | (ijk.z & 7)) as usize
+}
+
+/// Offset of voxel `ijk` inside its stored (padded) brick, in the same order.
+#[inline(always)]
+fn padded_offset(ijk: IVec3) -> usize {
+    (ijk.x & 7) as usize * STEP_X + (ijk.y & 7) as usize * STEP_Y + (ijk.z & 7) as usize
 }
 
 /// A float voxel grid with a background value, stored as 8³ bricks, and the affine transform
@@ -39,17 +60,19 @@ pub struct SparseGrid {
     /// Active voxels' bounding box, inclusive.
     index_min: IVec3,
     index_max: IVec3,
-    /// The table's first brick (brick coordinates are index coordinates >> 3).
+    /// The table's first brick (brick coordinates are index coordinates >> 3): one below the
+    /// active box's on each axis, for the bricks whose aprons reach into it.
     brick_min: IVec3,
     /// The table's extent in bricks.
     brick_dims: UVec3,
     /// Brick number per table cell, z fastest; 0 is the background brick.
     table: Vec<u32>,
-    /// `BRICK_VOXELS` values per brick.
+    /// `PADDED_VOXELS` values per brick.
     values: Vec<f32>,
-    /// Largest value of each brick, so majorants need not visit voxels.
+    /// Largest value of each brick (its own 8³, not the apron), so majorants need not visit
+    /// voxels.
     brick_max: Vec<f32>,
-    /// Smallest value of each brick (for minorants).
+    /// Smallest value of each brick's own 8³ (for minorants).
     brick_min_value: Vec<f32>,
     world_from_index: DAffine3,
     index_from_world: DAffine3,
@@ -202,7 +225,7 @@ impl SparseGrid {
     #[inline(always)]
     fn brick_start(&self, ijk: IVec3) -> usize {
         match self.cell(ijk >> BRICK_LOG2) {
-            Some(c) => self.table[c] as usize * BRICK_VOXELS,
+            Some(c) => self.table[c] as usize * PADDED_VOXELS,
             None => 0,
         }
     }
@@ -210,7 +233,7 @@ impl SparseGrid {
     /// The value of voxel `ijk`, active or not.
     #[inline]
     pub fn value(&self, ijk: IVec3) -> f32 {
-        self.values[self.brick_start(ijk) + voxel_offset(ijk)]
+        self.values[self.brick_start(ijk) + padded_offset(ijk)]
     }
 
     /// Trilinear interpolation at index-space point `p`, voxel centres at integer coordinates:
@@ -222,19 +245,13 @@ impl SparseGrid {
     pub fn sample(&self, p: Vec3) -> f32 {
         let i = crate::math::floor_ivec3(p);
         let w = p - i.as_vec3();
-        // v[x][y][z] as [x * 4 + y * 2 + z].
-        let v: [f32; 8] = if (i & 7).cmplt(IVec3::splat(7)).all() {
-            // All eight corners in one brick: one table lookup.
-            let o = self.brick_start(i) + voxel_offset(i);
-            let s = &self.values[o..o + 74];
-            [s[0], s[1], s[8], s[9], s[64], s[65], s[72], s[73]]
-        } else {
-            // Wrapping: a point beyond i32 range must read background, not overflow.
-            std::array::from_fn(|c| {
-                let o = IVec3::new((c >> 2) as i32, ((c >> 1) & 1) as i32, (c & 1) as i32);
-                self.value(i.wrapping_add(o))
-            })
-        };
+        // v[x][y][z] as [x * 4 + y * 2 + z]; the apron holds the upper corners, so all
+        // eight are in the stored brick of `i` (the background brick beyond the table, where
+        // no corner can reach data: the table reaches one brick below it).
+        let o = self.brick_start(i) + padded_offset(i);
+        let s = &self.values[o..o + STEP_X + STEP_Y + 2];
+        let (x, y) = (STEP_X, STEP_Y);
+        let v = [s[0], s[1], s[y], s[y + 1], s[x], s[x + 1], s[x + y], s[x + y + 1]];
         let lerp = |a: f32, b: f32, t: f32| a + t * (b - a);
         lerp(
             lerp(lerp(v[0], v[1], w.z), lerp(v[2], v[3], w.z), w.y),
@@ -296,11 +313,11 @@ impl SparseGrid {
                         continue;
                     }
                     // A brick the box cuts: scan the voxels inside.
-                    let start = brick as usize * BRICK_VOXELS;
+                    let start = brick as usize * PADDED_VOXELS;
                     for x in v_lo.x..=v_hi.x {
                         for y in v_lo.y..=v_hi.y {
                             for z in v_lo.z..=v_hi.z {
-                                let v = self.values[start + voxel_offset(IVec3::new(x, y, z))];
+                                let v = self.values[start + padded_offset(IVec3::new(x, y, z))];
                                 if beats(v, best) {
                                     best = v;
                                 }
@@ -426,9 +443,11 @@ impl SparseGridBuilder {
         if self.active_min.cmpgt(self.active_max).any() {
             return Err(BuildIssue::NoActiveVoxels);
         }
-        let brick_min = self.active_min >> BRICK_LOG2;
-        let brick_max_c = self.active_max >> BRICK_LOG2;
-        let dims = (brick_max_c.as_i64vec3() - brick_min.as_i64vec3() + 1).as_u64vec3();
+        let active_lo = self.active_min >> BRICK_LOG2;
+        let active_hi = self.active_max >> BRICK_LOG2;
+        // One brick below the active box on each axis: those bricks' aprons reach into it.
+        let brick_min = active_lo - 1;
+        let dims = (active_hi.as_i64vec3() - brick_min.as_i64vec3() + 1).as_u64vec3();
         let cells = dims.x * dims.y * dims.z;
         if cells > MAX_TABLE_CELLS {
             return Err(BuildIssue::TooLarge { cells });
@@ -441,7 +460,7 @@ impl SparseGridBuilder {
             brick_min,
             brick_dims,
             table: vec![0; cells as usize],
-            values: self.values,
+            values: Vec::new(),
             brick_max: Vec::new(),
             brick_min_value: Vec::new(),
             world_from_index: DAffine3::IDENTITY,
@@ -450,9 +469,11 @@ impl SparseGridBuilder {
             index_from_world_f32: Affine3A::IDENTITY,
             world_bounds: Bounds3::EMPTY,
         };
+        // First each cell's leaf brick in the builder's pool (8³, leaf order), over the
+        // active box only: voxels beyond it read as background.
         for &(first, last, brick) in &self.tiles {
-            let lo = first.max(brick_min);
-            let hi = last.min(brick_max_c);
+            let lo = first.max(active_lo);
+            let hi = last.min(active_hi);
             for bx in lo.x..=hi.x {
                 for by in lo.y..=hi.y {
                     for bz in lo.z..=hi.z {
@@ -462,25 +483,68 @@ impl SparseGridBuilder {
                 }
             }
         }
-        // Leaves outside the table hold only inactive voxels; they read as background.
         for &(b, brick) in &self.leaves {
-            if let Some(c) = grid.cell(b) {
+            if b.cmpge(active_lo).all() && b.cmple(active_hi).all() {
+                let c = grid.cell(b).expect("inside the active box");
                 grid.table[c] = brick;
             }
         }
-        grid.brick_max = grid
-            .values
-            .chunks_exact(BRICK_VOXELS)
-            .map(|brick| brick.iter().copied().fold(f32::NEG_INFINITY, f32::max))
-            .collect();
-        grid.brick_min_value = grid
-            .values
-            .chunks_exact(BRICK_VOXELS)
-            .map(|brick| brick.iter().copied().fold(f32::INFINITY, f32::min))
-            .collect();
-        grid.values.shrink_to_fit();
+        let leaf_of = std::mem::take(&mut grid.table);
+        grid.table = vec![0; cells as usize];
+        self.pad(&mut grid, &leaf_of);
         grid.set_transform(DAffine3::IDENTITY);
         Ok(grid)
+    }
+
+    /// Fills `grid`'s table and values with padded bricks made from `leaf_of`, each cell's
+    /// pool brick in the 8³ layout. Only the cells whose 9³ block can hold anything but the
+    /// background are visited (a brick with data and the seven below it), and bricks of
+    /// equal values, constant ones included, are stored once.
+    fn pad(&self, grid: &mut SparseGrid, leaf_of: &[u32]) {
+        let background = self.background;
+        let pool = &self.values;
+        let mut table = std::mem::take(&mut grid.table);
+        let dims = grid.brick_dims.as_ivec3();
+        let coords = |c: usize| {
+            let c = c as i32;
+            IVec3::new(c / (dims.y * dims.z), (c / dims.z) % dims.y, c % dims.z)
+        };
+        let mut todo = vec![false; leaf_of.len()];
+        for (c, _) in leaf_of.iter().enumerate().filter(|(_, b)| **b != 0) {
+            let b = coords(c) + grid.brick_min;
+            for d in 0..8 {
+                if let Some(k) = grid.cell(b - IVec3::new(d >> 2, (d >> 1) & 1, d & 1)) {
+                    todo[k] = true;
+                }
+            }
+        }
+        let leaf_value = |ijk: IVec3| match grid.cell(ijk >> BRICK_LOG2) {
+            Some(c) => pool[leaf_of[c] as usize * BRICK_VOXELS + voxel_offset(ijk)],
+            None => background,
+        };
+        let mut values = vec![background; PADDED_VOXELS];
+        let (mut brick_max, mut brick_min) = (vec![background], vec![background]);
+        let mut stored: HashMap<Vec<u32>, u32> = HashMap::new();
+        stored.insert(vec![background.to_bits(); PADDED_VOXELS], 0);
+        let mut brick = [0.0f32; PADDED_VOXELS];
+        for (c, entry) in table.iter_mut().enumerate().filter(|(c, _)| todo[*c]) {
+            let origin = (coords(c) + grid.brick_min) << BRICK_LOG2;
+            for (n, v) in brick.iter_mut().enumerate() {
+                let d = IVec3::new((n / STEP_X) as i32, ((n / STEP_Y) % 9) as i32, (n % 9) as i32);
+                *v = leaf_value(origin + d);
+            }
+            let key: Vec<u32> = brick.iter().map(|v| v.to_bits()).collect();
+            *entry = *stored.entry(key).or_insert_with(|| {
+                let core = (0..BRICK_VOXELS)
+                    .map(|n| brick[padded_offset(IVec3::new((n >> 6) as i32, (n >> 3) as i32, n as i32))]);
+                brick_max.push(core.clone().fold(f32::NEG_INFINITY, f32::max));
+                brick_min.push(core.fold(f32::INFINITY, f32::min));
+                values.extend_from_slice(&brick);
+                (brick_max.len() - 1) as u32
+            });
+        }
+        values.shrink_to_fit();
+        (grid.table, grid.values, grid.brick_max, grid.brick_min_value) = (table, values, brick_max, brick_min);
     }
 }
 
@@ -636,8 +700,17 @@ mod tests {
         // An inactive tile of background adds nothing; an active one extends the bounds.
         b.add_tile(IVec3::new(-128, 0, 0), 128, 0.0, true);
         let g = b.build().unwrap();
-        // Background brick + one shared brick of ones.
-        assert_eq!(g.brick_count(), 2);
+        // Ones over x 0..24, y and z 0..8, three bricks in a row. Stored with aprons, a brick is
+        // known by its place along x (below the row, its first two bricks, its last) and along
+        // y and z (below the row or in it), 3 × 2 × 2 kinds, plus the background brick; the
+        // row's first two bricks, and the background everywhere else, are shared.
+        assert_eq!(g.brick_count(), 13);
+        let mut n = Numbers(3);
+        for _ in 0..2000 {
+            let p = Vec3::new(-12.0 + 40.0 * n.float(), -4.0 + 16.0 * n.float(), -4.0 + 16.0 * n.float());
+            let (s, r) = (g.sample(p), reference_sample(&g, p));
+            assert!((s - r).abs() <= 1e-6, "{p}: {s} vs {r}");
+        }
         assert_eq!(g.index_bounds(), (IVec3::new(-128, 0, 0), IVec3::new(23, 127, 127)));
         assert_eq!(g.value(IVec3::new(20, 3, 3)), 1.0);
         assert_eq!(g.value(IVec3::new(-5, 3, 3)), 0.0);

@@ -391,3 +391,46 @@ fn a_graph_too_large_for_memory_is_refused_by_name() {
     let (graph, report) = build(usize::MAX).unwrap();
     assert!(graph.len() > 1000 && report.peak.0 + report.peak.1 > 64 << 10);
 }
+
+/// Without a config the graph is sized from a pilot of light paths: the free path it measures
+/// is the medium's (1/σt in a cube 40 free paths across, less the flights that leave it near
+/// its lit face: 0.89/σt), the pixel footprint is the camera's
+/// (half as large at twice the resolution), and the radius is the largest of a fifth of the
+/// free path, the footprint and the node budget's radius, named as such.
+#[test]
+fn a_config_less_graph_is_sized_from_the_medium_and_the_camera() {
+    use radiancegraph::sizing::{self, NODE_BUDGET, VERTEX_BUDGET};
+    let sized_to = |sigma_s: f32, resolution: u32, max_depth: Option<u32>| {
+        let text = cube_text(sigma_s, "volpath", "").replace(
+            "xresolution\" 32 \"integer yresolution\" 32",
+            &format!("xresolution\" {resolution} \"integer yresolution\" {resolution}"),
+        );
+        let desc = nimbus::parser::load_str(&text, "cube.pbrt").unwrap();
+        let scene = nimbus::setup::build(&desc, &BuildOptions::default()).unwrap();
+        sizing::size(&Volume::new(&scene).unwrap(), 7, max_depth)
+    };
+    let sized = |sigma_s, resolution| sized_to(sigma_s, resolution, Some(10));
+    // Bounces: a path of the scene's depth has depth − 1; without one, the thesis's 9.
+    assert_eq!(sized_to(2.0, 32, Some(12)).config.lighting_calculator.bounces, [11]);
+    assert_eq!(sized_to(2.0, 32, None).config.lighting_calculator.bounces, [9]);
+    let thick = sized(20.0, 32);
+    assert!((0.8..1.0).contains(&(thick.free_path * 20.0)), "{thick:?}");
+    let fine = sized(20.0, 64);
+    assert!((fine.footprint * 2.0 / thick.footprint - 1.0).abs() < 0.01, "{} {}", fine.footprint, thick.footprint);
+    // Part of the cube's 8 units³: ten events from the lit face reach only so deep.
+    assert!((2.0..8.0).contains(&thick.occupied_volume), "{thick:?}");
+    for s in [&thick, &fine, &sized(2.0, 32), &sized(20.0, 1024)] {
+        let budget = (f64::from(s.occupied_volume) / NODE_BUDGET).cbrt() as f32;
+        let candidates = [(s.free_path / 5.0, "free path"), (s.footprint, "pixel footprint"), (budget, "node budget")];
+        let largest = candidates.iter().copied().fold((0.0, ""), |a, c| if c.0 > a.0 { c } else { a });
+        assert_eq!((s.radius, s.radius_from), largest, "{s:?}");
+        assert!(s.expected_nodes() <= NODE_BUDGET * 1.0001, "{s:?}");
+        // The paths make the budget's points, within the rounding of paths per grid ray.
+        let per_ray = f64::from(s.config.graph_builder.iterations_per_step);
+        let points = s.light_paths * f64::from(s.points_per_path);
+        assert!((points / VERTEX_BUDGET - 1.0).abs() <= 0.5 / per_ray + 1e-6, "{s:?}");
+    }
+    // At 32² the pixel is coarser than a fifth of the free path; at 1024² the node budget binds.
+    assert_eq!(thick.radius_from, "pixel footprint");
+    assert_eq!(sized(20.0, 1024).radius_from, "node budget");
+}

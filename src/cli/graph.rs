@@ -31,7 +31,8 @@ enum GraphCommand {
 struct BuildArgs {
     /// Scene file.
     scene: PathBuf,
-    /// Config file (default: the scene's name with `.json`; the thesis's defaults if absent).
+    /// Config file (default: the scene's name with `.json`; if absent, a graph sized for the
+    /// medium and the camera from a pilot of light paths).
     #[arg(long)]
     config: Option<PathBuf>,
     /// Absolute node radius, overriding the config's.
@@ -83,20 +84,6 @@ fn build(args: &BuildArgs) -> Result<ExitCode> {
     // graph_maker: the config defaults to the scene's name with `.json`; outputs are named
     // after the config.
     let config_path = args.config.clone().unwrap_or_else(|| args.scene.with_extension("json"));
-    let config = if config_path.exists() || args.config.is_some() {
-        match GraphConfig::from_file(&config_path) {
-            Ok(c) => c,
-            Err(e) => {
-                eprintln!("error: {e}");
-                return Ok(ExitCode::FAILURE);
-            }
-        }
-    } else {
-        if !args.quiet {
-            println!("{}: no config, using the defaults", config_path.display());
-        }
-        GraphConfig::default()
-    };
     if let Some(r) = args.node_radius
         && !(r > 0.0 && r.is_finite())
     {
@@ -107,7 +94,28 @@ fn build(args: &BuildArgs) -> Result<ExitCode> {
         Err(e) => return fail(&args.scene, e),
     };
     let seed = scene.sampler.seed as u64;
-    let (graphs, stats) = match radiancegraph::build(&scene, &config, args.node_radius, seed) {
+    let (config, sizing) = if config_path.exists() || args.config.is_some() {
+        match GraphConfig::from_file(&config_path) {
+            Ok(c) => (c, None),
+            Err(e) => {
+                eprintln!("error: {e}");
+                return Ok(ExitCode::FAILURE);
+            }
+        }
+    } else {
+        // No config: a graph sized for this medium and camera, not the thesis's one size.
+        let max_depth = match radiancegraph::scene_max_depth(&desc.integrator) {
+            Ok(d) => d,
+            Err(e) => return fail(&args.scene, e.message),
+        };
+        let sizing = radiancegraph::sizing::size(&volume, seed, max_depth);
+        if !args.quiet {
+            println!("{}: {}", config_path.display(), sizing.explain());
+        }
+        (sizing.config.clone(), Some(sizing))
+    };
+    let node_radius = args.node_radius.or(sizing.as_ref().map(|s| s.radius));
+    let (graphs, stats) = match radiancegraph::build(&scene, &config, node_radius, seed) {
         Ok(g) => g,
         Err(e) => return fail(&args.scene, e),
     };
@@ -158,6 +166,17 @@ fn build(args: &BuildArgs) -> Result<ExitCode> {
             "build_peak_bytes_per_edge": stats.build_peak_bytes_per_edge(),
         },
     });
+    if let Some(s) = &sizing {
+        doc["nimbus"]["sizing"] = json!({
+            "radius_from": s.radius_from,
+            "free_path": s.free_path,
+            "pixel_footprint": s.footprint,
+            "occupied_volume": s.occupied_volume,
+            "points_per_path": s.points_per_path,
+            "iterations_per_step": s.config.graph_builder.iterations_per_step,
+            "expected_nodes": s.expected_nodes(),
+        });
+    }
     if let Some((avg, std)) = stats.render_search_range {
         doc["render_search_range"] = json!({ "avg": avg, "std": std });
     }

@@ -19,9 +19,9 @@ use crate::sampling::warp;
 /// number of points and whether its last segment was sampled. One per parallel chunk, so
 /// tracing allocates per chunk, not per path.
 #[derive(Default)]
-struct Traced {
-    points: Vec<Vec3>,
-    paths: Vec<(Option<u32>, u32, bool)>,
+pub(super) struct Traced {
+    pub(super) points: Vec<Vec3>,
+    pub(super) paths: Vec<(Option<u32>, u32, bool)>,
 }
 
 impl Traced {
@@ -40,7 +40,7 @@ const CHUNK: usize = 256;
 
 /// Where a batch of paths starts.
 #[derive(Clone, Copy)]
-struct Start {
+pub(super) struct Start {
     ray: Ray,
     /// Distance to the medium's boundary along `ray` (its origin is inside).
     t_max: f32,
@@ -180,7 +180,7 @@ pub fn build_graph(
 /// `BuildGraph`); for a uniform infinite light as many rays with uniformly random
 /// directions through uniformly random points of the volume's bounding disk (the
 /// distribution of lines a constant radiance field sends through the volume).
-fn light_starts(volume: &Volume, config: &Config, seed: u64) -> Vec<Start> {
+pub(super) fn light_starts(volume: &Volume, config: &Config, seed: u64) -> Vec<Start> {
     let r = volume.radius;
     let c = volume.center();
     let n = config.dimension_steps;
@@ -220,7 +220,7 @@ fn light_starts(volume: &Volume, config: &Config, seed: u64) -> Vec<Start> {
 /// Traces one path from `start` (thesis `TracePath`): delta tracking to the next event,
 /// isotropic scattering, at most `max_depth` vertices counting a reinforcement path's node.
 /// Appends it to `out`.
-fn trace(volume: &Volume, start: &Start, max_depth: usize, rng: &mut Pcg32, out: &mut Traced) {
+pub(super) fn trace(volume: &Volume, start: &Start, max_depth: usize, rng: &mut Pcg32, out: &mut Traced) {
     let max_points = max_depth - usize::from(start.node.is_some());
     let first = out.points.len();
     let done = |out: &mut Traced, last_sampled: bool| {

@@ -13,6 +13,7 @@ pub mod graph;
 pub mod lighting;
 pub mod render;
 pub mod search_range;
+pub mod sizing;
 pub mod transport;
 pub mod volume;
 
@@ -97,6 +98,9 @@ pub struct RadianceGraphSettings {
     pub config: Option<std::path::PathBuf>,
     /// How camera rays integrate through the medium (`"string estimator"`).
     pub estimator: render::Estimator,
+    /// The scene's `"integer maxdepth"`, when it gives one: a graph sized without a config
+    /// transports as many bounces as a path of that depth has (`maxdepth − 1`).
+    pub max_depth: Option<u32>,
 }
 
 impl RadianceGraphSettings {
@@ -114,8 +118,16 @@ impl RadianceGraphSettings {
                 ));
             }
         };
-        Ok(RadianceGraphSettings { estimator, ..Default::default() })
+        Ok(RadianceGraphSettings { estimator, max_depth: scene_max_depth(e)?, ..Default::default() })
     }
+}
+
+/// The `"integer maxdepth"` of the scene's `Integrator`, if it gives one.
+pub fn scene_max_depth(e: &nimbus_parser::Entity) -> Result<Option<u32>, nimbus_parser::Error> {
+    if e.params.loc("maxdepth").is_none() {
+        return Ok(None);
+    }
+    Ok(Some(e.params.get_one_int("maxdepth", 5)?.max(1) as u32))
 }
 
 /// The integrator for `scene`: from the graph file when it exists (`--precomputed`, the
@@ -137,11 +149,15 @@ pub fn create(settings: &RadianceGraphSettings, scene: &Scene) -> crate::Result<
         Ok(f)
     };
     let prepare = || {
-        let config = match &settings.config {
-            Some(path) => GraphConfig::from_file(path).map_err(|e| crate::Error::Invalid(e.to_string()))?,
-            None => GraphConfig::default(),
+        let seed = scene.sampler.seed as u64;
+        let (config, radius) = match &settings.config {
+            Some(path) => (GraphConfig::from_file(path).map_err(|e| crate::Error::Invalid(e.to_string()))?, None),
+            None => {
+                let s = sizing::size(&volume, seed, settings.max_depth);
+                (s.config, Some(s.radius))
+            }
         };
-        let (graphs, stats) = build(scene, &config, None, scene.sampler.seed as u64)?;
+        let (graphs, stats) = build(scene, &config, radius, seed)?;
         build_peak = stats.stages.iter().map(|s| s.peak_bytes).max().unwrap_or(0);
         let largest = (0..graphs.graphs.len()).max_by_key(|&i| graphs.graphs[i].bounces).expect("bounces has an entry");
         Ok(graphs.file(largest, scene_hash, file::config_hash(&config), stats.node_radius))

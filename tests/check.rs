@@ -240,12 +240,12 @@ fn check_reports_every_error_and_the_first_one_render_stops_at() {
             ),
             3,
         ),
-        // Readers pass; the radiance graph's constraints do not (an anisotropic medium).
+        // Readers pass; the radiance graph's constraints do not (a medium too anisotropic).
         (
             "constraints.pbrt",
             format!(
                 "{head}Integrator \"radiancegraph\"\nWorldBegin\nLightSource \"distant\" \"rgb L\" [1 1 1]\n\
-                 MakeNamedMedium \"m\" \"string type\" \"homogeneous\" \"float g\" 0.5\n\
+                 MakeNamedMedium \"m\" \"string type\" \"homogeneous\" \"float g\" 0.9\n\
                  AttributeBegin\nMediumInterface \"m\" \"\"\nMaterial \"interface\"\nShape \"sphere\"\nAttributeEnd\n"
             ),
             1,

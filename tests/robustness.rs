@@ -11,7 +11,7 @@ const NO_MEDIUM: &str = "one medium (the scene has none)";
 const ONLY_BOUNDARY: &str = "surfaces only as the medium's boundary";
 const GRAPH_LIGHTS: &str = "distant and uniform infinite lights only";
 const NO_LIGHT: &str = "at least one light (the scene has none)";
-const ISOTROPIC: &str = "an isotropic phase function";
+const MILD_PHASE: &str = "a phase function with |g| ≤ 0.75";
 const GRAY: &str = "gray coefficients";
 const NON_EMISSIVE: &str = "a non-emissive medium";
 const EMPTY_GRAPH: &str = "no light path scattered in the medium: the graph is empty";
@@ -158,8 +158,8 @@ fn stress_conditions_render_finite_or_refuse() {
     let conditions: [(&str, String, &[&str]); 13] = [
         ("albedo 0.5", base("2 2 2", s, 0.0, "", sun_sky, iface), &[]),
         ("albedo 0.999", base("0.002 0.002 0.002", s, 0.0, "", sun_sky, iface), &[]),
-        ("g -0.5", base(a, s, -0.5, "", sun_sky, iface), &[ISOTROPIC]),
-        ("g 0.95", base(a, s, 0.95, "", sun_sky, iface), &[ISOTROPIC]),
+        ("g -0.5", base(a, s, -0.5, "", sun_sky, iface), &[]),
+        ("g 0.95", base(a, s, 0.95, "", sun_sky, iface), &[MILD_PHASE]),
         ("optically thin", base(a, "0.1 0.1 0.1", 0.0, "", sun_sky, iface), &[]),
         ("optically thick", base("0.1 0.1 0.1", "100 100 100", 0.0, "", sun_sky, iface), &[]),
         ("small light", base(a, s, 0.0, "", small, iface), &[GRAPH_LIGHTS]),

@@ -2,9 +2,11 @@
 //!
 //! Layout (little-endian): magic `NIMBUSRG`; format version u32; scene hash u64 (the medium
 //! and the lights, see [`scene_hash`]); config hash u64; bounces asked and reached u32 ×2;
-//! node radius f32; light count u32; node count u64; then positions (3 × f32 per node),
-//! render search ranges (f32 per node) and per light the transported radiance (f32 per
-//! node). 20 bytes per node for one light; the thesis's text file holds the same in ≈ 60.
+//! node radius f32; light count u32; values per node and light u32 (1, or the directional
+//! coefficients of an anisotropic medium); node count u64; then positions (3 × f32 per node),
+//! render search ranges (f32 per node) and per light the transported radiance (that many f32
+//! per node). 20 bytes per node for one light in an isotropic medium; the thesis's text file
+//! holds the same in ≈ 60.
 
 use crate::math::fnv::Fnv;
 use std::path::Path;
@@ -20,7 +22,7 @@ use crate::error::{Error, Result};
 /// The graph file's kind: its header is every prepared file's ([`super::super::prepared`]).
 pub const KIND: FileKind = FileKind {
     magic: b"NIMBUSRG",
-    version: 1,
+    version: 2,
     what: "graph",
     remedy: "rebuild it with `nimbus graph build`",
     settings: "graph config",
@@ -39,6 +41,8 @@ pub struct GraphFile {
     pub bounces_done: u32,
     /// Node radius.
     pub node_radius: f32,
+    /// Values per node and light: 1, or [`super::sh::COEFFS`] in an anisotropic medium.
+    pub coefficients: u32,
     /// Node positions.
     pub positions: Vec<Vec3>,
     /// Render search ranges.
@@ -49,7 +53,7 @@ pub struct GraphFile {
 
 /// A hash of what the graph depends on in the scene: the medium, probed at 16³ points of its
 /// bounds (σa and σs, so equal media hash equally whatever file they come from), the
-/// bounds, and each light's kind, direction and radiance.
+/// bounds, the phase function's g, and each light's kind, direction and radiance.
 pub fn scene_hash(volume: &Volume) -> u64 {
     let mut h = Fnv::new();
     let b = volume.bounds;
@@ -68,6 +72,9 @@ pub fn scene_hash(volume: &Volume) -> u64 {
             }
         }
     }
+    // The phase function: an isotropic graph's scalars mean nothing in an anisotropic medium,
+    // nor one g's coefficients at another.
+    h.f32(volume.medium.g);
     for light in &volume.lights {
         h.bytes(format!("{light:?}").as_bytes());
     }
@@ -91,6 +98,7 @@ impl GraphFile {
         out.extend_from_slice(&self.bounces_done.to_le_bytes());
         out.extend_from_slice(&self.node_radius.to_le_bytes());
         out.extend_from_slice(&(self.radiance.len() as u32).to_le_bytes());
+        out.extend_from_slice(&self.coefficients.to_le_bytes());
         out.extend_from_slice(&(n as u64).to_le_bytes());
         for p in &self.positions {
             p.to_array().iter().for_each(|x| out.extend_from_slice(&x.to_le_bytes()));
@@ -120,10 +128,15 @@ impl GraphFile {
         let (header, body) = KIND.read_header(&bytes, path, expected_scene, None)?;
         let (scene_hash, config_hash) = (header.scene_hash, header.settings_hash);
         let mut r = Reader { b: body, at: 0 };
-        let fields = (|| Some((r.u32()?, r.u32()?, r.f32()?, r.u32()?, r.u64()?)))();
-        let (bounces, bounces_done, node_radius, lights, n) = fields.ok_or_else(|| bad("truncated header"))?;
+        let fields = (|| Some((r.u32()?, r.u32()?, r.f32()?, r.u32()?, r.u32()?, r.u64()?)))();
+        let (bounces, bounces_done, node_radius, lights, coefficients, n) =
+            fields.ok_or_else(|| bad("truncated header"))?;
+        if coefficients != 1 && coefficients as usize != super::sh::COEFFS {
+            return Err(bad(&format!("{coefficients} values per node")));
+        }
         let n = usize::try_from(n).map_err(|_| bad("node count"))?;
-        let need = n.checked_mul(16 + 4 * lights as usize).ok_or_else(|| bad("node count"))?;
+        let per_node = 16 + 4 * lights as usize * coefficients as usize;
+        let need = n.checked_mul(per_node).ok_or_else(|| bad("node count"))?;
         if body.len() - r.at != need {
             return Err(bad(&format!("{} bytes of node data, {n} nodes need {need}", body.len() - r.at)));
         }
@@ -131,12 +144,22 @@ impl GraphFile {
         let p = floats(3 * n);
         let positions = p.chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect();
         let ranges = floats(n);
-        let radiance = (0..lights).map(|_| floats(n)).collect::<Vec<_>>();
+        let radiance = (0..lights).map(|_| floats(n * coefficients as usize)).collect::<Vec<_>>();
         let all_finite = ranges.iter().chain(radiance.iter().flatten()).chain(p.iter()).all(|v| v.is_finite());
         if !all_finite {
             return Err(bad("NaN or infinite values"));
         }
-        Ok(GraphFile { scene_hash, config_hash, bounces, bounces_done, node_radius, positions, ranges, radiance })
+        Ok(GraphFile {
+            scene_hash,
+            config_hash,
+            bounces,
+            bounces_done,
+            node_radius,
+            coefficients,
+            positions,
+            ranges,
+            radiance,
+        })
     }
 }
 
@@ -173,10 +196,32 @@ mod tests {
             bounces: 9,
             bounces_done: 9,
             node_radius: 0.5,
+            coefficients: 1,
             positions: vec![Vec3::ZERO, Vec3::new(1.0, 2.0, 3.0)],
             ranges: vec![0.6, 0.7],
             radiance: vec![vec![0.1, 0.2]],
         }
+    }
+
+    /// Directional coefficients round-trip; a count that is neither 1 nor theirs is refused.
+    #[test]
+    fn directional_radiance_round_trips() {
+        let dir = std::env::temp_dir().join(format!("nimbus-graphfile-sh-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let f = dir.join("g.graph");
+        let k = crate::integrators::radiancegraph::sh::COEFFS;
+        let sh = GraphFile {
+            coefficients: k as u32,
+            radiance: vec![(0..2 * k).map(|i| i as f32).collect(), vec![0.5; 2 * k]],
+            ..sample()
+        };
+        sh.write(&f).unwrap();
+        let back = GraphFile::read(&f, None);
+        GraphFile { coefficients: 3, radiance: vec![vec![0.0; 6]], ..sample() }.write(&f).unwrap();
+        let odd = GraphFile::read(&f, None);
+        std::fs::remove_dir_all(&dir).unwrap();
+        assert_eq!(back.unwrap(), sh);
+        assert!(odd.unwrap_err().to_string().contains("3 values per node"));
     }
 
     #[test]
@@ -205,7 +250,7 @@ mod tests {
         std::fs::remove_dir_all(&dir).unwrap();
         assert_eq!(back.unwrap(), sample());
         assert!(other.unwrap_err().to_string().contains("built for another scene"));
-        assert!(version.unwrap_err().to_string().contains("graph format version 99, this nimbus reads version 1"));
+        assert!(version.unwrap_err().to_string().contains("graph format version 99, this nimbus reads version 2"));
         assert!(text.unwrap_err().to_string().contains("a text graph file"));
         assert!(short.unwrap_err().to_string().contains("not a nimbus graph file"));
     }

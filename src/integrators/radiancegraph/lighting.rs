@@ -7,6 +7,7 @@ use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
 use super::config::LightingCalculator;
+use super::sh;
 use super::volume::{GraphLight, Volume};
 use crate::geometry::Ray;
 use crate::math::Frame;
@@ -35,7 +36,11 @@ pub fn disk_points(radius: f32, n: u32) -> Vec<Vec2> {
 }
 
 /// Direct light scalars of every node for every light: `result[light][node]`, the value of
-/// Eq. 4.22 without L_e (each light's radiance multiplies its scalars when rendering).
+/// Eq. 4.22 without L_e (each light's radiance multiplies its scalars when rendering). In an
+/// anisotropic medium a uniform light's are, per node, the [`sh::COEFFS`] coefficients of
+/// the light it scatters toward each direction (`result[light][node * COEFFS + k]`): light
+/// from every direction is not scattered isotropically when the transmittance toward the
+/// sky differs by direction.
 pub fn direct_light(
     volume: &Volume,
     positions: &[Vec3],
@@ -51,22 +56,34 @@ pub fn direct_light(
         .iter()
         .enumerate()
         .map(|(li, light)| {
-            let per_node = |scratch: &mut Scratch, a: usize| {
+            let per_node = |scratch: &mut Scratch, a: usize, sh_out: &mut [f32; sh::COEFFS]| {
                 let mut rng = Pcg32::new(li as u64 * n + a as u64, seed ^ 0x006c_6967_6874);
                 match light {
                     GraphLight::Distant { dir, .. } => {
                         let iterations = config.light_iterations;
                         distant(volume, positions[a], radius, *dir, &disk, iterations, &mut rng, scratch) * INV_4PI
                     }
-                    GraphLight::Uniform { .. } => uniform(volume, positions[a], radius, estimates, &mut rng, scratch),
+                    GraphLight::Uniform { .. } => {
+                        uniform(volume, positions[a], radius, estimates, &mut rng, scratch, sh_out)
+                    }
                 }
             };
-            if config.run_in_parallel {
+            let k = if matches!(light, GraphLight::Uniform { .. }) && volume.medium.g != 0.0 { sh::COEFFS } else { 1 };
+            let per_node = |scratch: &mut Scratch, a: usize| -> [f32; sh::COEFFS] {
+                let mut c = [0.0; sh::COEFFS];
+                let v = per_node(scratch, a, &mut c);
+                if k == 1 {
+                    c[0] = v;
+                }
+                c
+            };
+            let values: Vec<[f32; sh::COEFFS]> = if config.run_in_parallel {
                 (0..positions.len()).into_par_iter().map_init(Scratch::default, per_node).collect()
             } else {
                 let mut scratch = Scratch::default();
                 (0..positions.len()).map(|a| per_node(&mut scratch, a)).collect()
-            }
+            };
+            values.iter().flat_map(|c| c[..k].iter().copied()).collect()
         })
         .collect()
 }
@@ -128,9 +145,23 @@ fn distant(
 }
 
 /// ∫ p T_r dω for a uniform light: the mean over uniform directions of the transmittance from
-/// uniform points of the node's medium part to the boundary.
-fn uniform(volume: &Volume, c: Vec3, radius: f32, estimates: usize, rng: &mut Pcg32, scratch: &mut Scratch) -> f32 {
+/// uniform points of the node's medium part to the boundary. In an anisotropic medium (HG,
+/// asymmetry g ≠ 0) also, into `sh_out`, the coefficients of ∫ 4π p T_r dω/4π as a function of
+/// the scattered direction: light arriving from direction d travels along −d, so it adds
+/// T_r · 4π g^l Y_lm(−d) (see `sh`).
+fn uniform(
+    volume: &Volume,
+    c: Vec3,
+    radius: f32,
+    estimates: usize,
+    rng: &mut Pcg32,
+    scratch: &mut Scratch,
+    sh_out: &mut [f32; sh::COEFFS],
+) -> f32 {
     let back = 2.0 * volume.radius + radius;
+    let g = volume.medium.g;
+    let bands = sh::bands(g);
+    let mut coeffs = [0.0f64; sh::COEFFS];
     let mut sum = 0.0f64;
     for _ in 0..estimates {
         let d = warp::uniform_sphere(Vec2::new(rng.uniform(), rng.uniform()));
@@ -156,9 +187,19 @@ fn uniform(volume: &Volume, c: Vec3, radius: f32, estimates: usize, rng: &mut Pc
             volume.intervals(&ray, f32::INFINITY, intervals);
             ray
         });
-        sum += f64::from(volume.transmittance_between(&ray, intervals, back, f32::INFINITY, rng));
+        let t = volume.transmittance_between(&ray, intervals, back, f32::INFINITY, rng);
+        sum += f64::from(t);
+        if g != 0.0 && t > 0.0 {
+            for ((c, b), y) in coeffs.iter_mut().zip(bands).zip(sh::basis(-d)) {
+                *c += f64::from(t * b * y);
+            }
+        }
     }
-    (sum / estimates.max(1) as f64) as f32
+    let n = estimates.max(1) as f64;
+    for (o, c) in sh_out.iter_mut().zip(coeffs) {
+        *o = (c / n) as f32;
+    }
+    (sum / n) as f32
 }
 
 #[cfg(test)]

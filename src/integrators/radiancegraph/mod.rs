@@ -13,6 +13,7 @@ pub mod graph;
 pub mod lighting;
 pub mod render;
 pub mod search_range;
+pub mod sh;
 pub mod sizing;
 pub mod transport;
 pub mod volume;
@@ -163,8 +164,21 @@ pub fn create(settings: &RadianceGraphSettings, scene: &Scene) -> crate::Result<
         Ok(graphs.file(largest, scene_hash, file::config_hash(&config), stats.node_radius))
     };
     let (f, _) = load_or_prepare(settings.graph_data.as_deref(), load, prepare, |path, f| f.write(path))?;
+    if f.coefficients as usize != coefficients(&volume) {
+        let path = settings.graph_data.as_deref().unwrap_or(Path::new(""));
+        return Err(crate::Error::mismatch(
+            path,
+            "the graph's radiance is not directional as the medium's phase function needs",
+        ));
+    }
     let cache = RadianceCache::new(f.positions, f.ranges, f.radiance);
     Ok(render_integrator(&volume, cache).with_estimator(settings.estimator).with_build_peak(build_peak))
+}
+
+/// Radiance values per node and light: 1 in an isotropic medium (the thesis's scalar), the
+/// directional coefficients ([`sh::COEFFS`]) otherwise.
+pub fn coefficients(volume: &Volume) -> usize {
+    if volume.medium.g == 0.0 { 1 } else { sh::COEFFS }
 }
 
 /// The integrator over `cache` for `volume`'s lights.
@@ -176,7 +190,19 @@ pub fn render_integrator(volume: &Volume, cache: RadianceCache) -> render::Radia
         .filter(|l| matches!(l, volume::GraphLight::Uniform { .. }))
         .map(|l| *l.radiance())
         .collect();
-    render::RadianceGraphIntegrator::new(cache, lights, sky)
+    let integrator = render::RadianceGraphIntegrator::new(cache, lights, sky);
+    if volume.medium.g == 0.0 {
+        return integrator;
+    }
+    integrator.with_phase(volume.medium.g, volume.lights.iter().map(source).collect())
+}
+
+/// Where a light's direct radiance comes from, for directional transport.
+fn source(light: &volume::GraphLight) -> transport::Source {
+    match light {
+        volume::GraphLight::Distant { dir, .. } => transport::Source::Along(*dir),
+        volume::GraphLight::Uniform { .. } => transport::Source::Everywhere,
+    }
 }
 
 /// Time and memory of one stage of the build.
@@ -221,7 +247,9 @@ pub struct BuiltGraph {
     pub bounces: u32,
     /// Bounces reached (fewer at the numerical limit).
     pub bounces_done: u32,
-    /// Per light, per node: transported radiance scalars (L'_n of Eq. 4.23).
+    /// Per light, per node: transported radiance scalars (L'_n of Eq. 4.23), or in an
+    /// anisotropic medium the directional coefficients of its bounces after the first
+    /// ([`transport::Transport::neumann_directional`]), node-major.
     pub radiance: Vec<Vec<f32>>,
 }
 
@@ -233,6 +261,8 @@ pub struct Graphs {
     pub ranges: Vec<f32>,
     /// One per entry of `lightingCalculator.bounces`, in its order.
     pub graphs: Vec<BuiltGraph>,
+    /// Values per node and light ([`coefficients`]).
+    pub coefficients: usize,
 }
 
 impl Graphs {
@@ -250,6 +280,7 @@ impl Graphs {
             bounces: g.bounces,
             bounces_done: g.bounces_done,
             node_radius,
+            coefficients: self.coefficients as u32,
             positions: self.positions.clone(),
             ranges: self.ranges.clone(),
             radiance: g.radiance.clone(),
@@ -308,11 +339,23 @@ pub fn build(
     });
     let t = Instant::now();
     let bounces = &config.lighting_calculator.bounces;
-    let per_light: Vec<Vec<transport::Transported>> = direct.iter().map(|d| transport.neumann(d, bounces)).collect();
+    let g = volume.medium.g;
+    let per_light: Vec<Vec<transport::Transported>> = direct
+        .iter()
+        .zip(&volume.lights)
+        .map(|(d, light)| {
+            if g == 0.0 {
+                transport.neumann(d, bounces)
+            } else {
+                transport.neumann_directional(&positions, d, source(light), g, bounces)
+            }
+        })
+        .collect();
     stages.push(Stage {
         name: "transport",
         seconds: t.elapsed().as_secs_f64(),
-        peak_bytes: transport.memory_bytes() + per_light.len() * bounces.len() * positions.len() * 4,
+        peak_bytes: transport.memory_bytes()
+            + per_light.len() * bounces.len() * positions.len() * coefficients(&volume) * 4,
     });
     let stats = GraphStats {
         vertices: positions.len(),
@@ -334,7 +377,7 @@ pub fn build(
             radiance: per_light.iter_mut().map(|l| std::mem::take(&mut l[b].radiance)).collect(),
         })
         .collect();
-    Ok((Graphs { positions, ranges, graphs }, stats))
+    Ok((Graphs { positions, ranges, graphs, coefficients: coefficients(&volume) }, stats))
 }
 
 impl GraphStats {

@@ -6,14 +6,16 @@
 
 use glam::{IVec3, Vec2, Vec3};
 
+use super::transport::Source;
 use super::volume::{Event, MAX_LIGHTS, sample_event};
 use crate::channels::Channels;
 use crate::color::Rgb;
 use crate::geometry::Ray;
 use crate::integrators::RayIntegrator;
 use crate::integrators::common::RayStats;
-use crate::integrators::common::media::sample_t_maj;
+use crate::integrators::common::media::{ShadowEstimate, ratio_tracking, sample_t_maj};
 use crate::math::cell_map::CellMap;
+use crate::media::phase::HenyeyGreenstein;
 use crate::samplers::Sampler;
 use crate::sampling::rng::{Pcg32, hash_sample};
 use crate::scene::Scene;
@@ -24,9 +26,12 @@ pub struct RadianceCache {
     positions: Vec<Vec3>,
     /// Squared render search range per node.
     ranges_sq: Vec<f32>,
-    /// Transported radiance scalars, light-major: `radiance[light * n + node]`.
+    /// Transported radiance, light-major: `radiance[(light * n + node) * k + c]` with k
+    /// values per node (1, or the directional coefficients of an anisotropic medium).
     radiance: Vec<f32>,
     lights: usize,
+    /// Values per node and light.
+    k: usize,
     /// Cell size: twice the mean search range.
     cell: f32,
     /// Per cell, the range in `members` of the nodes whose search sphere reaches into it, so
@@ -47,9 +52,11 @@ impl RadianceCache {
     }
 
     /// A cache over nodes at `positions` with render search ranges `ranges` and, per light,
-    /// one transported radiance scalar per node.
+    /// the transported radiance of each node: one scalar, or (node-major) its directional
+    /// coefficients.
     pub fn new(positions: Vec<Vec3>, ranges: Vec<f32>, radiance: Vec<Vec<f32>>) -> RadianceCache {
         let n = positions.len();
+        let k = radiance.first().map_or(1, |r| r.len().checked_div(n).unwrap_or(1)).max(1);
         let mean = ranges.iter().map(|&r| f64::from(r)).sum::<f64>() / n.max(1) as f64;
         // Cells of twice the mean range: a node's search sphere reaches into about 8 of them
         // (4 bytes each), a lookup checks the nodes of one.
@@ -98,6 +105,7 @@ impl RadianceCache {
             radiance: radiance.into_iter().flatten().collect(),
             positions,
             lights,
+            k,
             cell,
             cells,
             members,
@@ -112,6 +120,30 @@ impl RadianceCache {
     /// True without nodes.
     pub fn is_empty(&self) -> bool {
         self.positions.is_empty()
+    }
+
+    /// Eq. 4.25 at `p` for light `light`: 0 where no node's range contains `p`. In an
+    /// anisotropic medium, each node's radiance leaving toward `wo` (clamped at 0: a band-2
+    /// function can dip below it).
+    pub fn lookup_toward(&self, p: Vec3, light: usize, wo: Vec3) -> f32 {
+        if self.k == 1 {
+            return self.lookup(p, light);
+        }
+        let Some(&(s, e)) = self.cells.get(&(p / self.cell).floor().as_ivec3()) else { return 0.0 };
+        let y = super::sh::basis(wo);
+        let base = light * self.positions.len() * self.k;
+        let (mut sum, mut weight) = (0.0f64, 0.0f64);
+        for &i in &self.members[s as usize..e as usize] {
+            let i = i as usize;
+            let d2 = self.positions[i].distance_squared(p);
+            if d2 < self.ranges_sq[i] {
+                let w = 1.0 / f64::from(d2.max(self.ranges_sq[i] * 1e-12));
+                let c = &self.radiance[base + i * self.k..base + (i + 1) * self.k];
+                sum += w * f64::from(c.iter().zip(&y).map(|(a, b)| a * b).sum::<f32>());
+                weight += w;
+            }
+        }
+        if weight > 0.0 { (sum / weight).max(0.0) as f32 } else { 0.0 }
     }
 
     /// Eq. 4.25 at `p` for light `light`: 0 where no node's range contains `p`.
@@ -163,6 +195,10 @@ pub struct RadianceGraphIntegrator {
     /// Bytes of the graph at its largest: the build's peak, or the cache when it was read
     /// from a file.
     graph_bytes: usize,
+    /// In an anisotropic medium: HG's g and where each cached light comes from. The cache
+    /// then holds the bounces after the first, and single scattering is computed at the
+    /// camera ray's event with the exact phase function.
+    phase: Option<(f32, Vec<Source>)>,
 }
 
 impl RadianceGraphIntegrator {
@@ -171,7 +207,15 @@ impl RadianceGraphIntegrator {
     pub fn new(cache: RadianceCache, lights: Vec<SpectrumValue>, sky: Vec<SpectrumValue>) -> RadianceGraphIntegrator {
         assert_eq!(cache.lights(), lights.len());
         let graph_bytes = cache.memory_bytes();
-        RadianceGraphIntegrator { cache, estimator: Estimator::default(), lights, sky, graph_bytes }
+        RadianceGraphIntegrator { cache, estimator: Estimator::default(), lights, sky, graph_bytes, phase: None }
+    }
+
+    /// The same in a medium scattering by HG with asymmetry `g`, its lights coming from
+    /// `sources` (in cache order).
+    pub fn with_phase(mut self, g: f32, sources: Vec<Source>) -> RadianceGraphIntegrator {
+        assert_eq!(sources.len(), self.lights.len());
+        self.phase = Some((g, sources));
+        self
     }
 
     /// The same, with the graph's build having peaked at `bytes` (more than the cache kept).
@@ -186,12 +230,17 @@ impl RadianceGraphIntegrator {
         self
     }
 
-    /// Σ_lights L_e · L'_search(p), weighted by `w`.
+    /// Σ_lights L_e · L'_search(p), weighted by `w`, leaving toward `wo`: in an anisotropic
+    /// medium, single scattering with the exact phase function (one ratio-tracked shadow
+    /// ray per light) plus the cache's later bounces toward `wo`.
     #[inline]
-    fn radiance_at<C: Channels>(&self, p: Vec3, w: f32, le: &[C]) -> C {
+    fn radiance_at<C: Channels>(&self, scene: &Scene, p: Vec3, wo: Vec3, w: f32, le: &[C], rng: &mut Pcg32) -> C {
         let mut l = C::ZERO;
         for (i, le) in le.iter().enumerate() {
-            let v = self.cache.lookup(p, i);
+            let mut v = self.cache.lookup_toward(p, i, wo);
+            if let Some((g, sources)) = &self.phase {
+                v += single_scattering(scene, p, wo, *g, sources[i], rng);
+            }
             if v > 0.0 {
                 l += *le * (w * v);
             }
@@ -259,7 +308,7 @@ impl RayIntegrator for RadianceGraphIntegrator {
                         u_first.take().unwrap_or_else(|| rng.uniform()),
                         &mut rng,
                     ) {
-                        Event::Scatter(p) => return self.radiance_at(p, 1.0, le),
+                        Event::Scatter(p) => return self.radiance_at(scene, p, -ray.d, 1.0, le, &mut rng),
                         Event::Absorb => return C::ZERO,
                         Event::Pass => {}
                     },
@@ -275,7 +324,7 @@ impl RayIntegrator for RadianceGraphIntegrator {
                             &(),
                             |p, mp, sigma_maj, _, rng| {
                                 let s = sigma_maj[0];
-                                l += self.radiance_at(p, beta * mp.sigma_s[0] / s, le);
+                                l += self.radiance_at(scene, p, -ray.d, beta * mp.sigma_s[0] / s, le, rng);
                                 beta *= ((s - mp.sigma_a[0] - mp.sigma_s[0]) / s).max(0.0);
                                 if beta < 0.05 {
                                     if rng.uniform() < 0.75 {
@@ -308,6 +357,52 @@ impl RayIntegrator for RadianceGraphIntegrator {
         }
         l
     }
+}
+
+/// Light from `source` scattered once at `p` toward `wo` by HG with asymmetry `g`, per unit
+/// of the light's radiance: T_r to the light times the phase function for a distant light;
+/// for light from every direction, the transmittance along a direction sampled by the phase
+/// function (whose weight p/pdf is 1).
+fn single_scattering(scene: &Scene, p: Vec3, wo: Vec3, g: f32, source: Source, rng: &mut Pcg32) -> f32 {
+    let (toward_light, phase) = match source {
+        Source::Along(dir) => (-dir, super::sh::hg(dir.dot(wo), g)),
+        Source::Everywhere => {
+            let u = Vec2::new(rng.uniform(), rng.uniform());
+            match HenyeyGreenstein::new(g).sample_p(wo, u) {
+                Some(s) => (s.wi, 1.0),
+                None => return 0.0,
+            }
+        }
+    };
+    phase * transmittance_out(scene, &Ray::new(p, toward_light), rng)
+}
+
+/// Transmittance from a point inside the scene's one medium along `ray` to infinity: ratio
+/// tracking through each stretch of medium, the boundary crossed as often as it is met.
+fn transmittance_out(scene: &Scene, ray: &Ray, rng: &mut Pcg32) -> f32 {
+    let medium = &scene.media[0];
+    let (mut ray, mut inside, mut tr) = (*ray, true, 1.0f32);
+    // A closed boundary is crossed an even number of times; 64 bounds a pathological mesh.
+    for _ in 0..64 {
+        let hit = scene.surfaces.intersect(&ray, f32::INFINITY);
+        if inside {
+            let t_max = hit.as_ref().map_or(f32::INFINITY, |h| h.surface.t);
+            let mut est = ShadowEstimate::<Rgb> { t_ray: Rgb::ONE, r_u: Rgb::ZERO, r_l: Rgb::ONE };
+            ratio_tracking(medium.into(), &ray, t_max, rng, 0, &(), &mut est);
+            tr *= est.t_ray[0] / est.r_l[0];
+            if tr == 0.0 {
+                return 0.0;
+            }
+        }
+        match hit {
+            None => return tr,
+            Some(h) => {
+                inside = ray.d.dot(h.surface.n) < 0.0;
+                ray = h.surface.spawn_ray(ray.d);
+            }
+        }
+    }
+    tr
 }
 
 #[cfg(test)]

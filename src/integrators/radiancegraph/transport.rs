@@ -2,9 +2,11 @@
 //! Eq. 4.8 with the sampled edge weights of Eq. 4.20, and the Neumann series of Eq. 4.23
 //! computed as Algorithm 1 does, one sparse matrix–vector product per bounce.
 
+use glam::Vec3;
 use rayon::prelude::*;
 
 use super::edges::EdgeLists;
+use super::sh;
 
 /// T by rows. Row `a` holds w_s(a, b) = s_e(a, b) / s_n(a) for every node `b` a sampled
 /// segment from `a` landed in: a point in `a` gathers the radiance of `b` with that weight, so
@@ -36,7 +38,8 @@ pub struct Transported {
     /// thesis's "numerical limits reached"); the radiance is then the sum up to the last
     /// finite product.
     pub bounces_done: u32,
-    /// L'_n of Eq. 4.23 per node.
+    /// L'_n of Eq. 4.23 per node (per node [`sh::COEFFS`] coefficients of directional
+    /// transport, [`Transport::neumann_directional`]).
     pub radiance: Vec<f32>,
 }
 
@@ -130,6 +133,108 @@ impl Transport {
     }
 }
 
+/// Where a light's direct radiance at the nodes comes from, for directional transport.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Source {
+    /// A distant light travelling along this unit direction: scattered by the phase function.
+    Along(Vec3),
+    /// Light from every direction: the direct values are, per node, the coefficients of the
+    /// light it scatters toward each direction.
+    Everywhere,
+}
+
+impl Transport {
+    /// Eq. 4.23 in an anisotropic medium (HG with asymmetry `g`), for each bounce count in
+    /// `bounces`: per node the SH coefficients ([`sh::COEFFS`]) of the radiance scattered
+    /// there after 1 to k bounces through the graph, as a function of the direction it
+    /// leaves in. The direct light (bounce 0) is not included: a render computes it with the
+    /// exact phase function, which band 2 cannot hold at g = 0.9.
+    ///
+    /// Row a gathers from the nodes b its segments landed in, so light travels from b to a
+    /// along d = (x_a − x_b)/|x_a − x_b|; what leaves b along d is the direct light scattered
+    /// by the exact phase function (first bounce) or b's coefficients evaluated at d (later
+    /// ones), and a scatters it into 4π g^l Y_lm(d) per unit (`sh`). An edge from a node to
+    /// itself has no direction: the mean over directions of what b sends is gathered
+    /// isotropically (band 0 only).
+    pub fn neumann_directional(
+        &self,
+        positions: &[Vec3],
+        direct: &[f32],
+        source: Source,
+        g: f32,
+        bounces: &[u32],
+    ) -> Vec<Transported> {
+        let n = self.nodes();
+        let k = sh::COEFFS;
+        let per_node = if source == Source::Everywhere { k } else { 1 };
+        assert_eq!(direct.len(), n * per_node);
+        let bands = sh::bands(g);
+        let y00 = sh::basis(Vec3::Z)[0];
+        let max = bounces.iter().copied().max().unwrap_or(0);
+        let mut total = vec![0.0f32; n * k];
+        let mut current = vec![0.0f32; n * k];
+        let mut next = vec![0.0f32; n * k];
+        let mut done = 0;
+        let mut out: Vec<Transported> = Vec::with_capacity(bounces.len());
+        let snapshot = |done: u32, total: &Vec<f32>, out: &mut Vec<Transported>| {
+            for &b in bounces.iter().filter(|&&b| b == done) {
+                out.push(Transported { bounces: b, bounces_done: done, radiance: total.clone() });
+            }
+        };
+        snapshot(0, &total, &mut out);
+        while done < max {
+            let first = done == 0;
+            next.par_chunks_mut(k).enumerate().with_min_len(1024).for_each(|(a, acc)| {
+                acc.fill(0.0);
+                for (b, w) in self.row(a) {
+                    let b = b as usize;
+                    let v = positions[a] - positions[b];
+                    let len = v.length();
+                    if b == a || len <= 0.0 {
+                        // Isotropic: the mean of what b sends, into band 0.
+                        let mean = match (first, source) {
+                            (true, Source::Along(_)) => direct[b],
+                            (true, Source::Everywhere) => direct[b * k] * y00,
+                            (false, _) => current[b * k] * y00,
+                        };
+                        acc[0] += w * mean / y00;
+                        continue;
+                    }
+                    let d = v / len;
+                    let y = sh::basis(d);
+                    let sent = if first {
+                        match source {
+                            Source::Along(dir) => direct[b] * 4.0 * std::f32::consts::PI * sh::hg(dir.dot(d), g),
+                            Source::Everywhere => sh::eval(&direct[b * k..(b + 1) * k], d),
+                        }
+                    } else {
+                        current[b * k..(b + 1) * k].iter().zip(&y).map(|(c, y)| c * y).sum()
+                    };
+                    for i in 0..k {
+                        acc[i] += w * sent * bands[i] * y[i];
+                    }
+                }
+            });
+            if next.iter().any(|v| !v.is_finite()) {
+                break;
+            }
+            std::mem::swap(&mut current, &mut next);
+            total.iter_mut().zip(&current).for_each(|(t, c)| *t += c);
+            done += 1;
+            snapshot(done, &total, &mut out);
+        }
+        for &b in bounces.iter().filter(|&&b| b > done) {
+            out.push(Transported { bounces: b, bounces_done: done, radiance: total.clone() });
+        }
+        let mut ordered = Vec::with_capacity(bounces.len());
+        for &b in bounces {
+            let i = out.iter().position(|t| t.bounces == b).expect("every count was recorded");
+            ordered.push(out.swap_remove(i));
+        }
+        ordered
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -177,6 +282,52 @@ mod tests {
         let t = Transport::from_counts(&[e(0, 0, 1000)], &[1]);
         let r = t.neumann(&[1.0], &[50]);
         assert!(r[0].bounces_done < 50 && r[0].radiance[0].is_finite(), "{:?}", r[0]);
+    }
+
+    /// At g = 0 directional transport is the thesis's scalar one less its direct term: band 0
+    /// holds the radiance (over Y_00), the other bands are zero, for either source.
+    #[test]
+    fn directional_transport_at_g_0_is_the_thesis() {
+        let t = Transport::from_counts(&[e(0, 1, 1), e(1, 2, 2), e(2, 0, 1), e(1, 1, 1)], &[2, 4, 4]);
+        let positions = [Vec3::ZERO, Vec3::new(1.0, 0.5, 0.0), Vec3::new(-0.3, 2.0, 1.0)];
+        let direct = [1.0, 2.0, 4.0];
+        let scalar = t.neumann(&direct, &[3]);
+        // Isotropic direct light as coefficients: band 0 only, value / Y_00.
+        let y00 = sh::basis(Vec3::Z)[0];
+        let iso: Vec<f32> =
+            direct.iter().flat_map(|&v| (0..sh::COEFFS).map(move |i| if i == 0 { v / y00 } else { 0.0 })).collect();
+        for (source, values) in
+            [(Source::Along(Vec3::new(0.0, -1.0, 0.0)), &direct[..]), (Source::Everywhere, &iso[..])]
+        {
+            let r = t.neumann_directional(&positions, values, source, 0.0, &[3]);
+            assert_eq!(r[0].bounces_done, 3);
+            for (a, c) in r[0].radiance.chunks_exact(sh::COEFFS).enumerate() {
+                let want = scalar[0].radiance[a] - direct[a];
+                assert!((c[0] * sh::basis(Vec3::Z)[0] - want).abs() < 1e-5, "{a}: {c:?} vs {want}");
+                assert!(c[1..].iter().all(|v| v.abs() < 1e-6), "{c:?}");
+            }
+        }
+    }
+
+    /// Two nodes by hand: node 0 gathers from node 1 (weight ½, one bounce). Node 1's direct
+    /// light travels along +x; what it sends to node 0 travels along −x, backwards, so it is
+    /// 4π p(−1) of it; node 0 scatters that into 1 + 3gμ + 5g² P₂(μ) toward ω, μ = −x·ω.
+    #[test]
+    fn one_directional_bounce_by_hand() {
+        let g = 0.5;
+        let t = Transport::from_counts(&[e(0, 1, 1)], &[2, 1]);
+        let positions = [Vec3::ZERO, Vec3::X];
+        let r = t.neumann_directional(&positions, &[0.0, 1.0], Source::Along(Vec3::X), g, &[1, 4]);
+        let sent = 4.0 * std::f32::consts::PI * sh::hg(-1.0, g);
+        for w in [Vec3::X, -Vec3::X, Vec3::Y, Vec3::new(0.6, 0.0, 0.8)] {
+            let mu = -w.x;
+            let want = 0.5 * sent * (1.0 + 3.0 * g * mu + 5.0 * g * g * 0.5 * (3.0 * mu * mu - 1.0));
+            let got = sh::eval(&r[0].radiance[..sh::COEFFS], w);
+            assert!((got - want).abs() < 1e-4 * want.abs().max(1.0), "{w}: {got} vs {want}");
+        }
+        // Nothing reaches node 1, and a longer series adds nothing to this chain.
+        assert!(r[0].radiance[sh::COEFFS..].iter().all(|&v| v == 0.0));
+        assert_eq!(r[1].radiance, r[0].radiance);
     }
 
     /// Any thread count gives the same bits.

@@ -47,8 +47,8 @@ fn stress_judges_every_cell_and_reports_failures() {
     std::fs::create_dir_all(&scenes).unwrap();
     let sun = "LightSource \"distant\" \"point3 from\" [-1 1.5 1] \"point3 to\" [0 0 0] \"rgb L\" [3 3 3]";
     std::fs::write(scenes.join("a-sun.pbrt"), condition("a distant sun", sun)).unwrap();
-    let point = "LightSource \"point\" \"point3 from\" [-2 2.5 2] \"rgb I\" [5 5 5]";
-    std::fs::write(scenes.join("b-point.pbrt"), condition("a point light", point)).unwrap();
+    let spot = "LightSource \"spot\" \"point3 from\" [-2 2.5 2] \"point3 to\" [0 0 0] \"rgb I\" [5 5 5]";
+    std::fs::write(scenes.join("b-spot.pbrt"), condition("a spot light", spot)).unwrap();
     // A coarse, quick graph for the radiance graph (its config beside the scene).
     let graph = r#"{"graphBuilder": {"radiusModifier": 60, "dimensionSteps": 50, "iterationsPerStep": 4}}"#;
     std::fs::write(scenes.join("a-sun.json"), graph).unwrap();
@@ -74,9 +74,9 @@ fn stress_judges_every_cell_and_reports_failures() {
         let (cond, name, verdict) = (&r["condition"], &r["integrator"], r["verdict"].as_str());
         match (name.as_str(), cond.as_str()) {
             ("volpath", _) => assert!(verdict == "baseline" || (verdict == "biased" && r["biased"] == "true")),
-            ("radiancegraph", "b-point") => {
+            ("radiancegraph", "b-spot") => {
                 assert_eq!(verdict, "refused");
-                assert!(r["reason"].contains("distant and uniform infinite lights only"), "{}", r["reason"]);
+                assert!(r["reason"].contains("distant, point and uniform infinite lights only"), "{}", r["reason"]);
             }
             _ => {
                 // The verdict follows from the ratio and its standard error as documented:
@@ -124,12 +124,12 @@ fn stress_judges_every_cell_and_reports_failures() {
             assert_eq!(r["biased"] == "true", rule, "{cond}/{name}: bias {bias}, z {z}");
         }
     }
-    for file in ["stress.md", "heatmap.svg", "heatmap.png", "cells/a-sun/guided.exr", "cells/b-point/radiancegraph.log"]
+    for file in ["stress.md", "heatmap.svg", "heatmap.png", "cells/a-sun/guided.exr", "cells/b-spot/radiancegraph.log"]
     {
         assert!(out.join(file).exists(), "{file}");
     }
     let md = std::fs::read_to_string(out.join("stress.md")).unwrap();
-    assert!(md.contains("| a-sun | 1x |") && md.contains("radiancegraph on b-point: refused"), "{md}");
+    assert!(md.contains("| a-sun | 1x |") && md.contains("radiancegraph on b-spot: refused"), "{md}");
 
     // The references are reused; a cell stopped at the timeout is a failure, and the run
     // says so with its exit code.

@@ -206,12 +206,20 @@ pub(super) fn light_starts(volume: &Volume, config: &Config, seed: u64) -> Vec<S
                     rays.push(Ray::new(c - d * (2.0 * r) + f.x * q.x + f.y * q.y, d));
                 }
             }
+            // As many rays from a point light, in uniform directions (beyond the thesis).
+            GraphLight::Point { pos, .. } => {
+                let mut rng = Pcg32::new(u64::MAX - li as u64, seed);
+                for _ in 0..n * n {
+                    rays.push(Ray::new(*pos, warp::uniform_sphere(glam::Vec2::new(rng.uniform(), rng.uniform()))));
+                }
+            }
         }
     }
-    // Rays that enter the medium start at their entry point.
+    // Rays that enter the medium start at their entry point (a point light inside it: at
+    // the light).
     rays.par_iter()
         .filter_map(|ray| {
-            let (t_in, t_out) = volume.span(ray)?;
+            let (t_in, t_out) = volume.span_from(ray)?;
             Some(Start { ray: Ray::new(ray.at(t_in), ray.d), t_max: t_out - t_in, node: None })
         })
         .collect()

@@ -63,6 +63,9 @@ pub fn direct_light(
                         let iterations = config.light_iterations;
                         distant(volume, positions[a], radius, *dir, &disk, iterations, &mut rng, scratch) * INV_4PI
                     }
+                    GraphLight::Point { pos, .. } => {
+                        point(volume, positions[a], radius, *pos, estimates, &mut rng) * INV_4PI
+                    }
                     GraphLight::Uniform { .. } => {
                         uniform(volume, positions[a], radius, estimates, &mut rng, scratch, sh_out)
                     }
@@ -142,6 +145,29 @@ fn distant(
         }
     }
     if count == 0 { 0.0 } else { (sum / f64::from(count)) as f32 }
+}
+
+/// Mean over uniform points of the node's sphere inside the medium of T_r / r² from a point
+/// light at `light` (beyond the thesis: its direct light per unit intensity, times 4π p).
+fn point(volume: &Volume, c: Vec3, radius: f32, light: Vec3, estimates: usize, rng: &mut Pcg32) -> f32 {
+    // From a point inside the medium a ray meets the boundary from inside: its span starts at 0.
+    let inside = |x: Vec3| matches!(volume.span_from(&Ray::new(x, Vec3::Y)), Some((t0, _)) if t0 == 0.0);
+    let at = |x: Vec3, rng: &mut Pcg32| {
+        let d2 = x.distance_squared(light);
+        let ray = Ray::new(x, (light - x) / d2.sqrt());
+        f64::from(super::volume::transmittance_from_inside(volume.scene, &ray, d2.sqrt(), rng) / d2)
+    };
+    let (mut sum, mut count) = (0.0f64, 0u32);
+    for _ in 0..estimates.max(1) {
+        // A uniform point of the sphere (rejection), counted when it is in the medium.
+        let v = Vec3::new(rng.uniform(), rng.uniform(), rng.uniform()) * 2.0 - Vec3::ONE;
+        if v.length_squared() < 1.0 && inside(c + v * radius) {
+            sum += at(c + v * radius, rng);
+            count += 1;
+        }
+    }
+    // No point in the medium drawn: the centre, a scattering point.
+    if count == 0 { at(c, rng) as f32 } else { (sum / f64::from(count)) as f32 }
 }
 
 /// ∫ p T_r dω for a uniform light: the mean over uniform directions of the transmittance from

@@ -202,6 +202,7 @@ fn source(light: &volume::GraphLight) -> transport::Source {
     match light {
         volume::GraphLight::Distant { dir, .. } => transport::Source::Along(*dir),
         volume::GraphLight::Uniform { .. } => transport::Source::Everywhere,
+        volume::GraphLight::Point { pos, .. } => transport::Source::Point(*pos),
     }
 }
 

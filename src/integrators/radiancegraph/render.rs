@@ -7,13 +7,13 @@
 use glam::{IVec3, Vec2, Vec3};
 
 use super::transport::Source;
-use super::volume::{Event, MAX_LIGHTS, sample_event};
+use super::volume::{Event, MAX_LIGHTS, sample_event, transmittance_from_inside};
 use crate::channels::Channels;
 use crate::color::Rgb;
 use crate::geometry::Ray;
 use crate::integrators::RayIntegrator;
 use crate::integrators::common::RayStats;
-use crate::integrators::common::media::{ShadowEstimate, ratio_tracking, sample_t_maj};
+use crate::integrators::common::media::sample_t_maj;
 use crate::math::cell_map::CellMap;
 use crate::media::phase::HenyeyGreenstein;
 use crate::samplers::Sampler;
@@ -366,6 +366,12 @@ impl RayIntegrator for RadianceGraphIntegrator {
 fn single_scattering(scene: &Scene, p: Vec3, wo: Vec3, g: f32, source: Source, rng: &mut Pcg32) -> f32 {
     let (toward_light, phase) = match source {
         Source::Along(dir) => (-dir, super::sh::hg(dir.dot(wo), g)),
+        Source::Point(pos) => {
+            let (v, d2) = (pos - p, pos.distance_squared(p));
+            let to_light = v / d2.sqrt();
+            let t = transmittance_from_inside(scene, &Ray::new(p, to_light), d2.sqrt(), rng);
+            return t * super::sh::hg(-to_light.dot(wo), g) / d2;
+        }
         Source::Everywhere => {
             let u = Vec2::new(rng.uniform(), rng.uniform());
             match HenyeyGreenstein::new(g).sample_p(wo, u) {
@@ -374,35 +380,7 @@ fn single_scattering(scene: &Scene, p: Vec3, wo: Vec3, g: f32, source: Source, r
             }
         }
     };
-    phase * transmittance_out(scene, &Ray::new(p, toward_light), rng)
-}
-
-/// Transmittance from a point inside the scene's one medium along `ray` to infinity: ratio
-/// tracking through each stretch of medium, the boundary crossed as often as it is met.
-fn transmittance_out(scene: &Scene, ray: &Ray, rng: &mut Pcg32) -> f32 {
-    let medium = &scene.media[0];
-    let (mut ray, mut inside, mut tr) = (*ray, true, 1.0f32);
-    // A closed boundary is crossed an even number of times; 64 bounds a pathological mesh.
-    for _ in 0..64 {
-        let hit = scene.surfaces.intersect(&ray, f32::INFINITY);
-        if inside {
-            let t_max = hit.as_ref().map_or(f32::INFINITY, |h| h.surface.t);
-            let mut est = ShadowEstimate::<Rgb> { t_ray: Rgb::ONE, r_u: Rgb::ZERO, r_l: Rgb::ONE };
-            ratio_tracking(medium.into(), &ray, t_max, rng, 0, &(), &mut est);
-            tr *= est.t_ray[0] / est.r_l[0];
-            if tr == 0.0 {
-                return 0.0;
-            }
-        }
-        match hit {
-            None => return tr,
-            Some(h) => {
-                inside = ray.d.dot(h.surface.n) < 0.0;
-                ray = h.surface.spawn_ray(ray.d);
-            }
-        }
-    }
-    tr
+    phase * transmittance_from_inside(scene, &Ray::new(p, toward_light), f32::INFINITY, rng)
 }
 
 #[cfg(test)]

@@ -141,6 +141,8 @@ pub enum Source {
     /// Light from every direction: the direct values are, per node, the coefficients of the
     /// light it scatters toward each direction.
     Everywhere,
+    /// A point light at this position: light reaches a node along the line from it.
+    Point(Vec3),
 }
 
 impl Transport {
@@ -193,7 +195,7 @@ impl Transport {
                     if b == a || len <= 0.0 {
                         // Isotropic: the mean of what b sends, into band 0.
                         let mean = match (first, source) {
-                            (true, Source::Along(_)) => direct[b],
+                            (true, Source::Along(_) | Source::Point(_)) => direct[b],
                             (true, Source::Everywhere) => direct[b * k] * y00,
                             (false, _) => current[b * k] * y00,
                         };
@@ -206,6 +208,10 @@ impl Transport {
                         match source {
                             Source::Along(dir) => direct[b] * 4.0 * std::f32::consts::PI * sh::hg(dir.dot(d), g),
                             Source::Everywhere => sh::eval(&direct[b * k..(b + 1) * k], d),
+                            Source::Point(pos) => {
+                                let dir = (positions[b] - pos).normalize_or_zero();
+                                direct[b] * 4.0 * std::f32::consts::PI * sh::hg(dir.dot(d), g)
+                            }
                         }
                     } else {
                         current[b * k..(b + 1) * k].iter().zip(&y).map(|(c, y)| c * y).sum()

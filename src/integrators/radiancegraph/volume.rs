@@ -39,13 +39,20 @@ pub enum GraphLight {
         /// Radiance.
         l: SpectrumValue,
     },
+    /// A point light (beyond the thesis): light paths start from it in every direction.
+    Point {
+        /// Position.
+        pos: Vec3,
+        /// Radiant intensity.
+        i: SpectrumValue,
+    },
 }
 
 impl GraphLight {
     /// The radiance.
     pub fn radiance(&self) -> &SpectrumValue {
         match self {
-            GraphLight::Distant { l, .. } | GraphLight::Uniform { l } => l,
+            GraphLight::Distant { l, .. } | GraphLight::Uniform { l } | GraphLight::Point { i: l, .. } => l,
         }
     }
 }
@@ -118,6 +125,7 @@ impl<'a> Volume<'a> {
             match &light.kind {
                 LightKind::Distant { w, l } => lights.push(GraphLight::Distant { dir: -*w, l: *l }),
                 LightKind::UniformInfinite { l } => lights.push(GraphLight::Uniform { l: *l }),
+                LightKind::Point { p, i } => lights.push(GraphLight::Point { pos: *p, i: *i }),
                 other => {
                     let name = light_kind_name(other);
                     if !others.contains(&name) {
@@ -128,7 +136,7 @@ impl<'a> Volume<'a> {
         }
         if !others.is_empty() {
             violated.push(format!(
-                "distant and uniform infinite lights only (the scene has {} lights)",
+                "distant, point and uniform infinite lights only (the scene has {} lights)",
                 others.join(" and ")
             ));
         }
@@ -261,6 +269,37 @@ impl<'a> Volume<'a> {
         ratio_tracking(self.medium.into(), ray, t_max, rng, 0, &(), &mut est);
         est.t_ray[0] / est.r_l[0]
     }
+}
+
+/// Transmittance along `ray`, from a point inside `scene`'s one medium, to distance `t_end`
+/// (∞: out of the scene): ratio tracking through each stretch of medium, the boundary
+/// crossed as often as it is met.
+pub fn transmittance_from_inside(scene: &Scene, ray: &Ray, t_end: f32, rng: &mut Pcg32) -> f32 {
+    let medium = &scene.media[0];
+    let (mut ray, mut inside, mut tr, mut left) = (*ray, true, 1.0f32, t_end);
+    // A closed boundary is crossed an even number of times; 64 bounds a pathological mesh.
+    for _ in 0..64 {
+        let hit = scene.surfaces.intersect(&ray, left);
+        if inside {
+            let t_max = hit.as_ref().map_or(left, |h| h.surface.t);
+            let mut est = ShadowEstimate::<Rgb> { t_ray: Rgb::ONE, r_u: Rgb::ZERO, r_l: Rgb::ONE };
+            ratio_tracking(medium.into(), &ray, t_max, rng, 0, &(), &mut est);
+            tr *= est.t_ray[0] / est.r_l[0];
+            if tr == 0.0 {
+                return 0.0;
+            }
+        }
+        match hit {
+            None => return tr,
+            Some(h) => {
+                inside = ray.d.dot(h.surface.n) < 0.0;
+                let next = h.surface.spawn_ray(ray.d);
+                left -= (next.o - ray.o).dot(ray.d);
+                ray = next;
+            }
+        }
+    }
+    tr
 }
 
 /// Delta tracking through a gray medium with absorption and real scattering as events (the

@@ -71,17 +71,23 @@ fn assert_graph_matches_volpath(text: &str) -> f64 {
     )
 }
 
+/// The cube with HG asymmetry `g` and `lights` added to its sun, against volpath
+/// ([`assert_graph_matches_volpath`]); prints the graph's offset.
+fn assert_lit_cube_matches_volpath(g: f32, lights: &str, what: &str) {
+    let text = cube_text(2.0, "volpath", lights)
+        .replace(r#""rgb sigma_a" [0 0 0]"#, &format!(r#""rgb sigma_a" [0 0 0] "float g" {g}"#));
+    let d = assert_graph_matches_volpath(&text);
+    eprintln!("{what}, g {g}: {:+.2} %", 100.0 * d);
+}
+
 /// Beyond the thesis: anisotropic media, the graph's radiance directional (SH to band 2) and
-/// single scattering exact at the camera ray's event. The cube forward-scattering (g = 0.6)
-/// under the sun, and back-scattering (g = −0.5) under the sun and the sky.
+/// single scattering exact at the camera ray's event. The cube back-scattering (g = −0.5)
+/// under the sun, and forward- (0.6) and back-scattering under the sun and the sky.
 #[test]
 fn anisotropic_media_match_volpath() {
     let sky = r#"LightSource "infinite" "rgb L" [0.2 0.3 0.5]"#;
-    for (g, extra) in [(-0.5, ""), (0.6, sky), (-0.5, sky)] {
-        let text = cube_text(2.0, "volpath", extra)
-            .replace(r#""rgb sigma_a" [0 0 0]"#, &format!(r#""rgb sigma_a" [0 0 0] "float g" {g}"#));
-        let d = assert_graph_matches_volpath(&text);
-        eprintln!("anisotropic cube, g {g}: {:+.2} %", 100.0 * d);
+    for (g, lights) in [(-0.5, ""), (0.6, sky), (-0.5, sky)] {
+        assert_lit_cube_matches_volpath(g, lights, "anisotropic cube");
     }
 }
 
@@ -91,10 +97,7 @@ fn anisotropic_media_match_volpath() {
 fn point_lights_match_volpath() {
     let point = r#"LightSource "point" "point3 from" [-2 2.5 2] "rgb I" [6 6 6]"#;
     for g in [0.0, 0.6] {
-        let text = cube_text(2.0, "volpath", point)
-            .replace(r#""rgb sigma_a" [0 0 0]"#, &format!(r#""rgb sigma_a" [0 0 0] "float g" {g}"#));
-        let d = assert_graph_matches_volpath(&text);
-        eprintln!("cube with a point light, g {g}: {:+.2} %", 100.0 * d);
+        assert_lit_cube_matches_volpath(g, point, "cube with a point light");
     }
 }
 

@@ -129,26 +129,25 @@ impl RadianceCache {
         if self.k == 1 {
             return self.lookup(p, light);
         }
-        let Some(&(s, e)) = self.cells.get(&(p / self.cell).floor().as_ivec3()) else { return 0.0 };
         let y = super::sh::basis(wo);
         let base = light * self.positions.len() * self.k;
-        let (mut sum, mut weight) = (0.0f64, 0.0f64);
-        for &i in &self.members[s as usize..e as usize] {
-            let i = i as usize;
-            let d2 = self.positions[i].distance_squared(p);
-            if d2 < self.ranges_sq[i] {
-                let w = 1.0 / f64::from(d2.max(self.ranges_sq[i] * 1e-12));
-                let c = &self.radiance[base + i * self.k..base + (i + 1) * self.k];
-                sum += w * f64::from(c.iter().zip(&y).map(|(a, b)| a * b).sum::<f32>());
-                weight += w;
-            }
-        }
-        if weight > 0.0 { (sum / weight).max(0.0) as f32 } else { 0.0 }
+        let value = |i: usize| {
+            let c = &self.radiance[base + i * self.k..base + (i + 1) * self.k];
+            c.iter().zip(&y).map(|(a, b)| a * b).sum::<f32>()
+        };
+        self.weighted_mean(p, value).max(0.0) as f32
     }
 
     /// Eq. 4.25 at `p` for light `light`: 0 where no node's range contains `p`.
     pub fn lookup(&self, p: Vec3, light: usize) -> f32 {
         let n = self.positions.len();
+        self.weighted_mean(p, |i| self.radiance[light * n + i]) as f32
+    }
+
+    /// The inverse-square-distance-weighted mean of `value` over the nodes whose range
+    /// contains `p` (Eq. 4.25), 0 when none does.
+    #[inline]
+    fn weighted_mean(&self, p: Vec3, value: impl Fn(usize) -> f32) -> f64 {
         let Some(&(s, e)) = self.cells.get(&(p / self.cell).floor().as_ivec3()) else { return 0.0 };
         let (mut sum, mut weight) = (0.0f64, 0.0f64);
         for &i in &self.members[s as usize..e as usize] {
@@ -158,11 +157,11 @@ impl RadianceCache {
                 // A point at a node's centre would weigh infinitely: clamp the distance to a
                 // millionth of the range.
                 let w = 1.0 / f64::from(d2.max(self.ranges_sq[i] * 1e-12));
-                sum += w * f64::from(self.radiance[light * n + i]);
+                sum += w * f64::from(value(i));
                 weight += w;
             }
         }
-        if weight > 0.0 { (sum / weight) as f32 } else { 0.0 }
+        if weight > 0.0 { sum / weight } else { 0.0 }
     }
 
     /// Number of lights.

@@ -96,41 +96,49 @@ impl Transport {
     /// count): L'_n = Σ_{i=0}^{k} Tⁱ L_d for k bounces, i.e. paths of up to k + 1 segments.
     pub fn neumann(&self, direct: &[f32], bounces: &[u32]) -> Vec<Transported> {
         assert_eq!(direct.len(), self.nodes());
-        let max = bounces.iter().copied().max().unwrap_or(0);
-        let mut total = direct.to_vec();
-        let mut current = direct.to_vec();
-        let mut next = vec![0.0; direct.len()];
-        // Snapshots of the running sum after each bounce a caller asked for.
-        let mut out: Vec<Transported> = Vec::with_capacity(bounces.len());
-        let snapshot = |done: u32, total: &Vec<f32>, out: &mut Vec<Transported>| {
-            for &b in bounces.iter().filter(|&&b| b == done) {
-                out.push(Transported { bounces: b, bounces_done: done, radiance: total.clone() });
-            }
-        };
-        snapshot(0, &total, &mut out);
-        let mut done = 0;
-        while done < max {
-            self.apply(&current, &mut next);
-            if next.iter().any(|v| !v.is_finite()) {
-                break;
-            }
-            std::mem::swap(&mut current, &mut next);
-            total.iter_mut().zip(&current).for_each(|(t, c)| *t += c);
-            done += 1;
-            snapshot(done, &total, &mut out);
-        }
-        // Counts beyond the numerical limit get the last finite sum.
-        for &b in bounces.iter().filter(|&&b| b > done) {
+        series(bounces, direct.to_vec(), |_, current, next| self.apply(current, next))
+    }
+}
+
+/// Algorithm 1's loop for each bounce count in `bounces`: `step(first, current, next)` computes
+/// the next bounce from the current one (`first` for the bounce from the direct light), and
+/// the running sum starts at `total` (the current bounce's values too). A bounce whose values
+/// overflow to ∞ or NaN ends the series (the thesis's "numerical limits reached"): counts
+/// beyond it get the last finite sum.
+fn series(bounces: &[u32], total: Vec<f32>, mut step: impl FnMut(bool, &[f32], &mut [f32])) -> Vec<Transported> {
+    let max = bounces.iter().copied().max().unwrap_or(0);
+    let mut current = total.clone();
+    let mut next = vec![0.0; total.len()];
+    let mut total = total;
+    // Snapshots of the running sum after each bounce a caller asked for.
+    let mut out: Vec<Transported> = Vec::with_capacity(bounces.len());
+    let snapshot = |done: u32, total: &Vec<f32>, out: &mut Vec<Transported>| {
+        for &b in bounces.iter().filter(|&&b| b == done) {
             out.push(Transported { bounces: b, bounces_done: done, radiance: total.clone() });
         }
-        // In the order asked.
-        let mut ordered = Vec::with_capacity(bounces.len());
-        for &b in bounces {
-            let i = out.iter().position(|t| t.bounces == b).expect("every count was recorded");
-            ordered.push(out.swap_remove(i));
+    };
+    snapshot(0, &total, &mut out);
+    let mut done = 0;
+    while done < max {
+        step(done == 0, &current, &mut next);
+        if next.iter().any(|v| !v.is_finite()) {
+            break;
         }
-        ordered
+        std::mem::swap(&mut current, &mut next);
+        total.iter_mut().zip(&current).for_each(|(t, c)| *t += c);
+        done += 1;
+        snapshot(done, &total, &mut out);
     }
+    for &b in bounces.iter().filter(|&&b| b > done) {
+        out.push(Transported { bounces: b, bounces_done: done, radiance: total.clone() });
+    }
+    // In the order asked.
+    let mut ordered = Vec::with_capacity(bounces.len());
+    for &b in bounces {
+        let i = out.iter().position(|t| t.bounces == b).expect("every count was recorded");
+        ordered.push(out.swap_remove(i));
+    }
+    ordered
 }
 
 /// Where a light's direct radiance at the nodes comes from, for directional transport.
@@ -172,20 +180,8 @@ impl Transport {
         assert_eq!(direct.len(), n * per_node);
         let bands = sh::bands(g);
         let y00 = sh::basis(Vec3::Z)[0];
-        let max = bounces.iter().copied().max().unwrap_or(0);
-        let mut total = vec![0.0f32; n * k];
-        let mut current = vec![0.0f32; n * k];
-        let mut next = vec![0.0f32; n * k];
-        let mut done = 0;
-        let mut out: Vec<Transported> = Vec::with_capacity(bounces.len());
-        let snapshot = |done: u32, total: &Vec<f32>, out: &mut Vec<Transported>| {
-            for &b in bounces.iter().filter(|&&b| b == done) {
-                out.push(Transported { bounces: b, bounces_done: done, radiance: total.clone() });
-            }
-        };
-        snapshot(0, &total, &mut out);
-        while done < max {
-            let first = done == 0;
+        // The direct light is not part of the sum; the first step reads it, not `current`.
+        series(bounces, vec![0.0; n * k], |first, current, next| {
             next.par_chunks_mut(k).enumerate().with_min_len(1024).for_each(|(a, acc)| {
                 acc.fill(0.0);
                 for (b, w) in self.row(a) {
@@ -221,23 +217,7 @@ impl Transport {
                     }
                 }
             });
-            if next.iter().any(|v| !v.is_finite()) {
-                break;
-            }
-            std::mem::swap(&mut current, &mut next);
-            total.iter_mut().zip(&current).for_each(|(t, c)| *t += c);
-            done += 1;
-            snapshot(done, &total, &mut out);
-        }
-        for &b in bounces.iter().filter(|&&b| b > done) {
-            out.push(Transported { bounces: b, bounces_done: done, radiance: total.clone() });
-        }
-        let mut ordered = Vec::with_capacity(bounces.len());
-        for &b in bounces {
-            let i = out.iter().position(|t| t.bounces == b).expect("every count was recorded");
-            ordered.push(out.swap_remove(i));
-        }
-        ordered
+        })
     }
 }
 

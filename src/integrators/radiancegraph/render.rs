@@ -359,9 +359,10 @@ impl RayIntegrator for RadianceGraphIntegrator {
 }
 
 /// Light from `source` scattered once at `p` toward `wo` by HG with asymmetry `g`, per unit
-/// of the light's radiance: T_r to the light times the phase function for a distant light;
-/// for light from every direction, the transmittance along a direction sampled by the phase
-/// function (whose weight p/pdf is 1).
+/// of the light's radiance (a point light's intensity): T_r to the light times the phase
+/// function for a distant light, and over r² for a point light; for light from every
+/// direction, the transmittance along a direction sampled by the phase function (whose
+/// weight p/pdf is 1).
 fn single_scattering(scene: &Scene, p: Vec3, wo: Vec3, g: f32, source: Source, rng: &mut Pcg32) -> f32 {
     let (toward_light, phase) = match source {
         Source::Along(dir) => (-dir, super::sh::hg(dir.dot(wo), g)),

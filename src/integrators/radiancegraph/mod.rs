@@ -147,6 +147,12 @@ pub fn create(settings: &RadianceGraphSettings, scene: &Scene) -> crate::Result<
                 format!("the graph has {} lights, the scene {}", f.radiance.len(), volume.lights.len()),
             ));
         }
+        if f.coefficients as usize != coefficients(&volume) {
+            return Err(crate::Error::mismatch(
+                path,
+                "the graph's radiance is not directional as the medium's phase function needs",
+            ));
+        }
         Ok(f)
     };
     let prepare = || {
@@ -164,13 +170,6 @@ pub fn create(settings: &RadianceGraphSettings, scene: &Scene) -> crate::Result<
         Ok(graphs.file(largest, scene_hash, file::config_hash(&config), stats.node_radius))
     };
     let (f, _) = load_or_prepare(settings.graph_data.as_deref(), load, prepare, |path, f| f.write(path))?;
-    if f.coefficients as usize != coefficients(&volume) {
-        let path = settings.graph_data.as_deref().unwrap_or(Path::new(""));
-        return Err(crate::Error::mismatch(
-            path,
-            "the graph's radiance is not directional as the medium's phase function needs",
-        ));
-    }
     let cache = RadianceCache::new(f.positions, f.ranges, f.radiance);
     Ok(render_integrator(&volume, cache).with_estimator(settings.estimator).with_build_peak(build_peak))
 }

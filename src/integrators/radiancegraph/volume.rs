@@ -1,7 +1,7 @@
 //! The scene as the radiance-graph method sees it (thesis Sec. 4.8): one gray, non-emissive
 //! medium (isotropic in the thesis; here HG with |g| ≤ [`MAX_G`]) bounded by `interface`
-//! surfaces, lit by distant lights (the thesis's case) and uniform `infinite` lights (its
-//! Sec. 6.1 asks for them). Everything the method
+//! surfaces, lit by distant lights (the thesis's case), uniform `infinite` lights (its
+//! Sec. 6.1 asks for them) and point lights. Everything the method
 //! needs of the scene goes through here: where the medium ends along a ray, and the two
 //! delta-tracking walks the thesis uses (sample a scattering event; ratio-track transmittance).
 
@@ -265,10 +265,16 @@ impl<'a> Volume<'a> {
     /// pbrt-v4's): unbiased, and walks deep into a dense cloud stop early instead of
     /// multiplying ever smaller ratios to the far side. The thesis tracks to the end.
     pub fn transmittance(&self, ray: &Ray, t_max: f32, rng: &mut Pcg32) -> f32 {
-        let mut est = ShadowEstimate::<Rgb> { t_ray: Rgb::ONE, r_u: Rgb::ZERO, r_l: Rgb::ONE };
-        ratio_tracking(self.medium.into(), ray, t_max, rng, 0, &(), &mut est);
-        est.t_ray[0] / est.r_l[0]
+        ratio_tracked(self.medium, ray, t_max, rng)
     }
+}
+
+/// One ratio-tracking estimate of the transmittance along `ray` to `t_max` inside `medium`
+/// (see [`Volume::transmittance`]).
+fn ratio_tracked(medium: &Medium, ray: &Ray, t_max: f32, rng: &mut Pcg32) -> f32 {
+    let mut est = ShadowEstimate::<Rgb> { t_ray: Rgb::ONE, r_u: Rgb::ZERO, r_l: Rgb::ONE };
+    ratio_tracking(medium.into(), ray, t_max, rng, 0, &(), &mut est);
+    est.t_ray[0] / est.r_l[0]
 }
 
 /// Transmittance along `ray`, from a point inside `scene`'s one medium, to distance `t_end`
@@ -282,9 +288,7 @@ pub fn transmittance_from_inside(scene: &Scene, ray: &Ray, t_end: f32, rng: &mut
         let hit = scene.surfaces.intersect(&ray, left);
         if inside {
             let t_max = hit.as_ref().map_or(left, |h| h.surface.t);
-            let mut est = ShadowEstimate::<Rgb> { t_ray: Rgb::ONE, r_u: Rgb::ZERO, r_l: Rgb::ONE };
-            ratio_tracking(medium.into(), &ray, t_max, rng, 0, &(), &mut est);
-            tr *= est.t_ray[0] / est.r_l[0];
+            tr *= ratio_tracked(medium, &ray, t_max, rng);
             if tr == 0.0 {
                 return 0.0;
             }

@@ -101,6 +101,56 @@ fn point_lights_match_volpath() {
     }
 }
 
+/// A gray ground under the cube and a gray ball beside it (`extra`'s surfaces).
+const GROUND_AND_BALL: &str = r#"AttributeBegin
+  Material "diffuse" "rgb reflectance" [0.5 0.5 0.5]
+  Shape "trianglemesh" "integer indices" [0 1 2 0 2 3]
+    "point3 P" [-8 -1.05 -8  8 -1.05 -8  8 -1.05 8  -8 -1.05 8]
+AttributeEnd
+AttributeBegin
+  Material "diffuse" "rgb reflectance" [0.4 0.4 0.4]
+  Translate -1.9 -0.3 0.2
+  Shape "sphere" "float radius" 0.7
+AttributeEnd"#;
+
+/// Beyond the thesis: surfaces beside the medium. Camera paths shade the ground and the ball
+/// as volpath does and read the graph where they scatter in the cube; the graph's direct
+/// light has the sun and sky reflected once by the surfaces, and its light paths come back
+/// into the cube off them.
+#[test]
+fn surfaces_beside_the_medium_match_volpath() {
+    let sky = r#"LightSource "infinite" "rgb L" [0.2 0.3 0.5]"#;
+    let d = assert_graph_matches_volpath(&cube_text(2.0, "volpath", &format!("{sky}\n{GROUND_AND_BALL}")));
+    eprintln!("cube over ground beside a ball: {:+.2} %", 100.0 * d);
+}
+
+/// Beyond the thesis: a spherical area light beside the cube (its shape a surface beside the
+/// medium), light paths started from it toward the cube.
+#[test]
+fn area_lights_match_volpath() {
+    let light = r#"AttributeBegin
+  Translate -2 2.5 2
+  AreaLightSource "diffuse" "rgb L" [4 4 4]
+  Shape "sphere" "float radius" 0.5
+AttributeEnd"#;
+    let d = assert_graph_matches_volpath(&cube_text(2.0, "volpath", light));
+    eprintln!("cube with a sphere light: {:+.2} %", 100.0 * d);
+}
+
+/// Surfaces beside the medium that reflect colors are refused where the graph meets them:
+/// one value per light and node carries no color.
+#[test]
+fn colored_surfaces_beside_the_medium_are_refused() {
+    let dir = scratch_dir("radiancegraph-colored");
+    let scene = dir.join("s.pbrt");
+    let text = cube_text(2.0, "graph", &GROUND_AND_BALL.replace("[0.4 0.4 0.4]", "[0.6 0.3 0.2]"));
+    std::fs::write(&scene, text).unwrap();
+    let out = nimbus(&["graph", "build", scene.to_str().unwrap(), "--quiet"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(err.contains("surfaces beside the medium that reflect gray light"), "{err}");
+}
+
 /// A σs = 2 cube under a distant light (measured: +0.75 %).
 #[test]
 fn homogeneous_cube_matches_volpath() {
@@ -316,8 +366,9 @@ fn compare_reuses_one_graph_across_seeds() {
 fn constraints_are_checked_by_name() {
     let dir = scratch_dir("radiancegraph-constraints");
     let scene = dir.join("s.pbrt");
-    let text = cube_text(2.0, "graph", r#"LightSource "spot" "point3 from" [0 3 0]"#)
-        .replace(r#""rgb sigma_a" [0 0 0]"#, r#""rgb sigma_a" [0 0.5 0] "float g" 0.8"#);
+    let extra = format!("LightSource \"spot\" \"point3 from\" [0 3 0]\n{GROUND_AND_BALL}");
+    let text =
+        cube_text(2.0, "graph", &extra).replace(r#""rgb sigma_a" [0 0 0]"#, r#""rgb sigma_a" [0 0.5 0] "float g" 0.8"#);
     std::fs::write(&scene, text).unwrap();
     let out = nimbus(&["graph", "build", scene.to_str().unwrap(), "--quiet"]);
     let err = String::from_utf8_lossy(&out.stderr);
@@ -325,7 +376,8 @@ fn constraints_are_checked_by_name() {
     for needed in [
         "a phase function with |g| ≤ 0.75 (medium \"m\" has g = 0.8;",
         "gray coefficients (medium \"m\" has chromatic sigma_a or sigma_s)",
-        "distant, point and uniform infinite lights only (the scene has spot lights)",
+        "distant, point, uniform infinite and diffuse area lights only (the scene has spot lights)",
+        "an isotropic medium where surfaces stand beside it (medium \"m\" has g = 0.8:",
     ] {
         assert!(err.contains(needed), "{needed} not in {err}");
     }

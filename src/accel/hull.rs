@@ -51,6 +51,13 @@ pub struct Hull {
 }
 
 impl Hull {
+    /// The box around the hull's corners.
+    pub fn bounds(&self) -> Bounds3 {
+        let mut b = Bounds3::EMPTY;
+        self.tris.iter().flat_map(|t| t.corners).for_each(|c| b.extend(c));
+        b
+    }
+
     /// Where a ray that starts strictly inside the hull leaves it: the distance to the
     /// exit face's plane and that face (for [`Hull::hit_on_face`]); `None` from elsewhere.
     /// Two dot products per face and no triangle test: inside a dense medium most

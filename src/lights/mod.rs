@@ -204,6 +204,20 @@ impl Light {
         if p.is_finite() { p.max(0.0) } else { 0.0 }
     }
 
+    /// A point of an area light's shape, uniform by area (`None` for other lights and shapes
+    /// that cannot be sampled so): where light tracing starts.
+    pub fn sample_area_point(&self, shapes: &ShapeStore, u: Vec2) -> Option<crate::shapes::ShapeSample> {
+        let LightKind::Area { geometry, .. } = &self.kind else { return None };
+        match *geometry {
+            Geometry::Triangle { mesh, tri } => Some(triangle_sample(&shapes.meshes[mesh as usize], tri, u)),
+            Geometry::Sphere(i) => shapes.spheres[i as usize].sample_area(u),
+            Geometry::Disk(i) => shapes.disks[i as usize].sample_area(u),
+            Geometry::Cylinder(i) => shapes.cylinders[i as usize].sample_area(u),
+            Geometry::Bilinear { mesh, patch } => shapes.bilinear_meshes[mesh as usize].sample_area(patch, u),
+            Geometry::Curve(_) | Geometry::Instance(_) | Geometry::Hull(_) => None,
+        }
+    }
+
     /// Samples incident light at `ctx`, in the path's channels.
     pub fn sample_li<C: Channels>(
         &self,

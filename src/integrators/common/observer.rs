@@ -132,6 +132,22 @@ pub trait PathStrategy {
     fn split_medium(&mut self, _medium: u32, _p: Vec3, _beta: f32) -> u32 {
         1
     }
+    /// Whether this method ends a path at its first real scattering event in a medium with
+    /// its own estimate of the radiance scattered there ([`PathStrategy::medium_estimate`]):
+    /// a radiance cache read where the path enters the medium, everything before it
+    /// (surfaces, their light sampling, emission) traced as volpath traces it.
+    #[inline]
+    fn ends_in_medium(&self) -> bool {
+        false
+    }
+    /// Where [`PathStrategy::ends_in_medium`]: the radiance scattered at `p` in `medium`
+    /// toward `wo` (the phase function's integral of the incident light, every bounce
+    /// included), in the path's channels at `lambda`. `u` seeds the estimate's random
+    /// numbers. The loop adds it times the path's throughput and ends the path.
+    #[inline]
+    fn medium_estimate<C: Channels>(&mut self, _medium: u32, _p: Vec3, _wo: Vec3, _lambda: &C::Lambda, _u: f32) -> C {
+        C::ZERO
+    }
 }
 
 /// What a method learns from the path loop as it happens (observing hooks: they change

@@ -459,8 +459,19 @@ impl<C: Channels, O: PathObserver<C>> Tracer<'_, C, O> {
         if self.per_segment {
             end_segment(&mut w.st, self.sampler);
         }
-        let phase = HenyeyGreenstein::new(m.g);
         let wo = -w.ray.d;
+        // A cached estimate ends the path here (radiance graphs).
+        if self.observer.ends_in_medium() {
+            let u = self.sampler.get_1d();
+            let v = self.observer.medium_estimate::<C>(medium, p, wo, self.lambda, u);
+            if !v.is_zero() {
+                let c = w.st.beta * v / w.st.r_u.average();
+                self.l += c;
+                self.observer.on_emission(&EmissionEvent { depth: w.depth, contribution: c, pdf_light: 0.0 });
+            }
+            return false;
+        }
+        let phase = HenyeyGreenstein::new(m.g);
         // Next-event estimation as Russian roulette where the observer expects it to find
         // nothing (its probability divides what it finds).
         let nee_prob = if self.observer.guides() { self.observer.nee_medium_probability(medium, p) } else { 1.0 };

@@ -8,7 +8,7 @@ use std::f32::consts::PI;
 
 use glam::{Vec2, Vec3};
 
-use crate::accel::{Geometry, NONE};
+use crate::accel::NONE;
 use crate::channels::Channels;
 use crate::geometry::{Ray, spawn_ray};
 use crate::integrators::common::media::sample_t_maj;
@@ -21,7 +21,6 @@ use crate::sampling::distribution::AliasTable;
 use crate::sampling::rng::Pcg32;
 use crate::sampling::warp;
 use crate::scene::Scene;
-use crate::shapes::triangle_sample;
 use crate::spectra::RgbRole;
 use crate::textures::TexContext;
 
@@ -173,16 +172,7 @@ impl Emitter {
             }
             LightKind::Area { geometry, l, image, two_sided, interface, alpha, .. } => {
                 let shapes = &scene.surfaces.shapes;
-                let s = match *geometry {
-                    Geometry::Triangle { mesh, tri } => triangle_sample(&shapes.meshes[mesh as usize], tri, u),
-                    Geometry::Sphere(i) => shapes.spheres[i as usize].sample_area(u)?,
-                    Geometry::Disk(i) => shapes.disks[i as usize].sample_area(u)?,
-                    Geometry::Cylinder(i) => shapes.cylinders[i as usize].sample_area(u)?,
-                    Geometry::Bilinear { mesh, patch } => {
-                        shapes.bilinear_meshes[mesh as usize].sample_area(patch, u)?
-                    }
-                    Geometry::Curve(_) | Geometry::Instance(_) | Geometry::Hull(_) => return None,
-                };
+                let s = light.sample_area_point(shapes, u)?;
                 // pbrt-v4's `SampleLe` checks the point against the alpha texture.
                 let uv = if *alpha != NONE || image.is_some() {
                     shapes.uv_at(*geometry, s.p, s.p + s.n)?

@@ -9,8 +9,8 @@ use rayon::prelude::*;
 
 use super::config::GraphBuilder as Config;
 use super::graph::BuildGraph;
-use super::volume::{Event, GraphLight, Volume};
-use crate::geometry::Ray;
+use super::volume::{Event, GraphLight, Volume, light_area, pick_by_area};
+use crate::geometry::{Ray, spawn_ray};
 use crate::math::Frame;
 use crate::sampling::rng::Pcg32;
 use crate::sampling::warp;
@@ -206,11 +206,30 @@ pub(super) fn light_starts(volume: &Volume, config: &Config, seed: u64) -> Vec<S
                     rays.push(Ray::new(c - d * (2.0 * r) + f.x * q.x + f.y * q.y, d));
                 }
             }
-            // As many rays from a point light, in uniform directions (beyond the thesis).
+            // As many rays from a point light (beyond the thesis), toward the medium.
             GraphLight::Point { pos, .. } => {
                 let mut rng = Pcg32::new(u64::MAX - li as u64, seed);
                 for _ in 0..n * n {
-                    rays.push(Ray::new(*pos, warp::uniform_sphere(glam::Vec2::new(rng.uniform(), rng.uniform()))));
+                    let u = glam::Vec2::new(rng.uniform(), rng.uniform());
+                    rays.push(Ray::new(*pos, toward_volume(volume, *pos, u)));
+                }
+            }
+            // As many rays from area lights: a light chosen by area, a uniform point of it, a
+            // direction toward the medium on a side it emits from.
+            GraphLight::Area { lights, .. } => {
+                let mut rng = Pcg32::new(u64::MAX - li as u64, seed);
+                let scene = volume.scene;
+                let total: f32 = lights.iter().map(|&i| light_area(scene, i)).sum();
+                for _ in 0..n * n {
+                    let light = &scene.lights[pick_by_area(scene, lights, total, rng.uniform()) as usize];
+                    let u = glam::Vec2::new(rng.uniform(), rng.uniform());
+                    let Some(s) = light.sample_area_point(&scene.surfaces.shapes, u) else { continue };
+                    let two_sided = matches!(light.kind, crate::lights::LightKind::Area { two_sided: true, .. });
+                    let d = toward_volume(volume, s.p, glam::Vec2::new(rng.uniform(), rng.uniform()));
+                    let n = if d.dot(s.n) >= 0.0 { s.n } else { -s.n };
+                    if two_sided || n == s.n {
+                        rays.push(spawn_ray(s.p, n, d));
+                    }
                 }
             }
         }
@@ -223,6 +242,18 @@ pub(super) fn light_starts(volume: &Volume, config: &Config, seed: u64) -> Vec<S
             Some(Start { ray: Ray::new(ray.at(t_in), ray.d), t_max: t_out - t_in, node: None })
         })
         .collect()
+}
+
+/// A direction from `o` toward the medium: uniform in the cone its bounding sphere subtends
+/// (uniform over all directions from inside the sphere). Only where light paths go matters
+/// (the first segment makes no edge), and rays that miss the medium make nothing.
+fn toward_volume(volume: &Volume, o: Vec3, u: glam::Vec2) -> Vec3 {
+    let to = volume.center() - o;
+    let (d2, r2) = (to.length_squared(), volume.radius * volume.radius);
+    if d2 <= r2 {
+        return warp::uniform_sphere(u);
+    }
+    Frame::from_z(to / d2.sqrt()).to_world(warp::uniform_cone(u, (1.0 - r2 / d2).sqrt()))
 }
 
 /// Traces one path from `start` (thesis `TracePath`): delta tracking to the next event,
@@ -241,7 +272,13 @@ pub(super) fn trace(volume: &Volume, start: &Start, max_depth: usize, rng: &mut 
     let (mut ray, mut t_max) = (start.ray, start.t_max);
     loop {
         match volume.sample_scatter(&ray, t_max, rng) {
-            Event::Absorb | Event::Pass => return done(out, true),
+            Event::Absorb => return done(out, true),
+            // Left the medium or met a surface inside it: surfaces beside the medium may
+            // reflect the path back in (Russian roulette on their albedo keeps edges counts).
+            Event::Pass => match volume.reflect_back(&ray, rng) {
+                Some((r, t)) => (ray, t_max) = (r, t),
+                None => return done(out, true),
+            },
             Event::Scatter(p) => {
                 out.points.push(p);
                 if out.points.len() - first == max_points {

@@ -78,6 +78,13 @@ pub fn scene_hash(volume: &Volume) -> u64 {
     for light in &volume.lights {
         h.bytes(format!("{light:?}").as_bytes());
     }
+    // Surfaces beside the medium shadow it and send light into it.
+    let s = &volume.scene.surfaces;
+    let b = s.bounds();
+    for v in [b.min, b.max] {
+        v.to_array().iter().for_each(|&x| h.f32(x));
+    }
+    h.bytes(&(s.top.as_ref().map_or(0, |t| t.primitives().len()) as u64).to_le_bytes());
     h.finish()
 }
 

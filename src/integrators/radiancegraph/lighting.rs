@@ -9,7 +9,10 @@ use rayon::prelude::*;
 use super::config::LightingCalculator;
 use super::sh;
 use super::volume::{GraphLight, Volume};
+use crate::color::Rgb;
 use crate::geometry::Ray;
+use crate::integrators::common::shading_frame;
+use crate::materials::bxdf::TransportMode;
 use crate::math::Frame;
 use crate::sampling::rng::Pcg32;
 use crate::sampling::warp;
@@ -47,7 +50,7 @@ pub fn direct_light(
     radius: f32,
     config: &LightingCalculator,
     seed: u64,
-) -> Vec<Vec<f32>> {
+) -> crate::Result<Vec<Vec<f32>>> {
     let disk = disk_points(radius, config.points_on_radius_light);
     let estimates = config.light_iterations as usize * disk.len();
     let n = positions.len() as u64;
@@ -69,9 +72,13 @@ pub fn direct_light(
                     GraphLight::Uniform { .. } => {
                         uniform(volume, positions[a], radius, estimates, &mut rng, scratch, sh_out)
                     }
+                    GraphLight::Area { lights, .. } => {
+                        area(volume, positions[a], radius, lights, estimates, &mut rng, sh_out)
+                    }
                 }
             };
-            let k = if matches!(light, GraphLight::Uniform { .. }) && volume.medium.g != 0.0 { sh::COEFFS } else { 1 };
+            let by_direction = matches!(light, GraphLight::Uniform { .. } | GraphLight::Area { .. });
+            let k = if by_direction && volume.medium.g != 0.0 { sh::COEFFS } else { 1 };
             let per_node = |scratch: &mut Scratch, a: usize| -> [f32; sh::COEFFS] {
                 let mut c = [0.0; sh::COEFFS];
                 let v = per_node(scratch, a, &mut c);
@@ -80,15 +87,103 @@ pub fn direct_light(
                 }
                 c
             };
-            let values: Vec<[f32; sh::COEFFS]> = if config.run_in_parallel {
+            // Light reflected into the medium by the surfaces beside it (an isotropic medium's
+            // scalar: Volume refuses them beside an anisotropic one).
+            let reflected = |a: usize| -> Result<f32, Vec3> {
+                if !volume.has_opaque {
+                    return Ok(0.0);
+                }
+                let mut rng = Pcg32::new(li as u64 * n + a as u64, seed ^ 0x0073_7572_6661_6365);
+                let mut sum = 0.0f64;
+                for _ in 0..estimates.max(1) {
+                    let x = point_in_node(volume, positions[a], radius, &mut rng);
+                    sum += f64::from(via_surface(volume, x, light, &mut rng)?);
+                }
+                Ok((sum / estimates.max(1) as f64) as f32)
+            };
+            let per_node = |scratch: &mut Scratch, a: usize| -> Result<[f32; sh::COEFFS], Vec3> {
+                let mut c = per_node(scratch, a);
+                c[0] += reflected(a)?;
+                Ok(c)
+            };
+            let values: Result<Vec<[f32; sh::COEFFS]>, Vec3> = if config.run_in_parallel {
                 (0..positions.len()).into_par_iter().map_init(Scratch::default, per_node).collect()
             } else {
                 let mut scratch = Scratch::default();
                 (0..positions.len()).map(|a| per_node(&mut scratch, a)).collect()
             };
-            values.iter().flat_map(|c| c[..k].iter().copied()).collect()
+            let values = values.map_err(|at| {
+                crate::Error::Unsupported(format!(
+                    "the radiance-graph method needs surfaces beside the medium that reflect gray light (the one at \
+                     ({:.3}, {:.3}, {:.3}) reflects colors, which one value per light and node cannot carry)",
+                    at.x, at.y, at.z
+                ))
+            })?;
+            Ok(values.iter().flat_map(|c| c[..k].iter().copied()).collect())
         })
         .collect()
+}
+
+/// Light of unit radiance from `light` reaching `x` in the medium after one reflection off a
+/// surface beside it (beyond the thesis), scattered isotropically: one sample of
+/// T_r(x, y) f(y) |cos| T_r(y, light) L / pdf_light at the first opaque surface y along a
+/// uniform direction from `x` (whose density 1/4π cancels the phase function's). Light that
+/// crosses the medium on its way to a surface, and from there back into the medium, is in
+/// the graph's transport no further than this one reflection. `Err(material)` where the
+/// surface reflects colored light (`Err` holds where).
+fn via_surface(volume: &Volume, x: Vec3, light: &GraphLight, rng: &mut Pcg32) -> Result<f32, Vec3> {
+    let scene = volume.scene;
+    let d = warp::uniform_sphere(Vec2::new(rng.uniform(), rng.uniform()));
+    let (t_to, Some((mut hit, inside))) = super::volume::walk(scene, &Ray::new(x, d), f32::INFINITY, true, rng) else {
+        return Ok(0.0);
+    };
+    if t_to <= 0.0 {
+        return Ok(0.0);
+    }
+    let y = hit.surface.p;
+    // Toward the light: (direction, radiance per unit, density, distance).
+    let (wi, l, pdf, dist) = match light {
+        GraphLight::Distant { dir, .. } => (-*dir, 1.0, 1.0, f32::INFINITY),
+        GraphLight::Uniform { .. } => (
+            warp::uniform_sphere(Vec2::new(rng.uniform(), rng.uniform())),
+            1.0,
+            warp::UNIFORM_SPHERE_PDF,
+            f32::INFINITY,
+        ),
+        GraphLight::Point { pos, .. } => {
+            let d2 = pos.distance_squared(y);
+            ((*pos - y) / d2.sqrt(), 1.0 / d2, 1.0, d2.sqrt() * (1.0 - 1e-4))
+        }
+        GraphLight::Area { lights, .. } => {
+            let total: f32 = lights.iter().map(|&i| super::volume::light_area(scene, i)).sum();
+            let i = super::volume::pick_by_area(scene, lights, total, rng.uniform());
+            let pmf = super::volume::light_area(scene, i) / total;
+            let u = Vec2::new(rng.uniform(), rng.uniform());
+            let ctx = crate::lights::LightContext { p: y };
+            let Some(ls) = scene.lights[i as usize].sample_li::<Rgb>(&ctx, u, &scene.surfaces, &scene.sphere, &())
+            else {
+                return Ok(0.0);
+            };
+            (ls.wi, 1.0, pmf * ls.pdf, ls.p.distance(y) * (1.0 - 1e-4))
+        }
+    };
+    let wo = -d;
+    let (material, ctx) = scene.surface_material(&mut hit, wo, None);
+    let Some(bxdf) = material.bxdf::<Rgb>(&scene.textures, &ctx, &mut ()) else { return Ok(0.0) };
+    let frame = shading_frame(&hit);
+    let wl = frame.to_local(wi);
+    let f = bxdf.f(frame.to_local(wo), wl, TransportMode::Radiance) * wl.z.abs();
+    if f.max_element() <= 0.0 {
+        return Ok(0.0);
+    }
+    if f.max_element() - f.min_element() > 1e-3 * f.max_element() {
+        return Err(y);
+    }
+    let (t_from, stopped) = super::volume::walk(scene, &hit.surface.spawn_ray(wi), dist, inside, rng);
+    if stopped.is_some() {
+        return Ok(0.0);
+    }
+    Ok(t_to * f.x * l * t_from / pdf)
 }
 
 /// Per-thread buffers of the direct-light walks.
@@ -140,7 +235,11 @@ fn distant(
                 }
                 u -= b - a;
             }
-            sum += f64::from(volume.transmittance_between(&ray, intervals, 0.0, depth, rng));
+            // An opaque surface between the light and the point (from far beyond the walk's
+            // start as well) leaves it dark.
+            if !volume.occluded(&Ray::new(ray.at(depth), -dir), f32::INFINITY) {
+                sum += f64::from(volume.transmittance_between(&ray, intervals, 0.0, depth, rng));
+            }
             count += 1;
         }
     }
@@ -150,8 +249,6 @@ fn distant(
 /// Mean over uniform points of the node's sphere inside the medium of T_r / r² from a point
 /// light at `light` (beyond the thesis: its direct light per unit intensity, times 4π p).
 fn point(volume: &Volume, c: Vec3, radius: f32, light: Vec3, estimates: usize, rng: &mut Pcg32) -> f32 {
-    // From a point inside the medium a ray meets the boundary from inside: its span starts at 0.
-    let inside = |x: Vec3| matches!(volume.span_from(&Ray::new(x, Vec3::Y)), Some((t0, _)) if t0 == 0.0);
     let at = |x: Vec3, rng: &mut Pcg32| {
         let d2 = x.distance_squared(light);
         let ray = Ray::new(x, (light - x) / d2.sqrt());
@@ -161,13 +258,82 @@ fn point(volume: &Volume, c: Vec3, radius: f32, light: Vec3, estimates: usize, r
     for _ in 0..estimates.max(1) {
         // A uniform point of the sphere (rejection), counted when it is in the medium.
         let v = Vec3::new(rng.uniform(), rng.uniform(), rng.uniform()) * 2.0 - Vec3::ONE;
-        if v.length_squared() < 1.0 && inside(c + v * radius) {
+        if v.length_squared() < 1.0 && volume.contains(c + v * radius) {
             sum += at(c + v * radius, rng);
             count += 1;
         }
     }
     // No point in the medium drawn: the centre, a scattering point.
     if count == 0 { at(c, rng) as f32 } else { (sum / f64::from(count)) as f32 }
+}
+
+/// ∫ p T_r dω over area lights of unit radiance (beyond the thesis): the mean over uniform
+/// points of the node's medium part of light samples toward them (one light chosen by area,
+/// a point by its own sampling), T_r/pdf each, times the isotropic phase function; in an
+/// anisotropic medium also the coefficients of the scattered light into `sh_out`, as
+/// [`uniform`]'s. An opaque surface between (the light's own shape included, for a point
+/// behind it) leaves nothing.
+fn area(
+    volume: &Volume,
+    c: Vec3,
+    radius: f32,
+    lights: &[u32],
+    estimates: usize,
+    rng: &mut Pcg32,
+    sh_out: &mut [f32; sh::COEFFS],
+) -> f32 {
+    let scene = volume.scene;
+    let total: f32 = lights.iter().map(|&i| super::volume::light_area(scene, i)).sum();
+    let g = volume.medium.g;
+    let bands = sh::bands(g);
+    let mut coeffs = [0.0f64; sh::COEFFS];
+    let mut sum = 0.0f64;
+    let n = estimates.max(1);
+    for _ in 0..n {
+        let x = point_in_node(volume, c, radius, rng);
+        let i = super::volume::pick_by_area(scene, lights, total, rng.uniform());
+        let pmf = super::volume::light_area(scene, i) / total;
+        let u = Vec2::new(rng.uniform(), rng.uniform());
+        let light = &scene.lights[i as usize];
+        let Some(ls) = light.sample_li::<crate::color::Rgb>(
+            &crate::lights::LightContext { p: x },
+            u,
+            &scene.surfaces,
+            &scene.sphere,
+            &(),
+        ) else {
+            continue;
+        };
+        let dist = ls.p.distance(x);
+        // Short of the light's own surface, which would count as an occluder.
+        let t = super::volume::transmittance_from_inside(scene, &Ray::new(x, ls.wi), dist * (1.0 - 1e-4), rng);
+        if t <= 0.0 {
+            continue;
+        }
+        let w = t / (pmf * ls.pdf) * INV_4PI;
+        sum += f64::from(w);
+        if g != 0.0 {
+            for ((c, b), y) in coeffs.iter_mut().zip(bands).zip(sh::basis(-ls.wi)) {
+                *c += f64::from(w * b * y);
+            }
+        }
+    }
+    for (o, c) in sh_out.iter_mut().zip(coeffs) {
+        *o = (c / n as f64) as f32;
+    }
+    (sum / n as f64) as f32
+}
+
+/// A uniform point of the sphere of radius `radius` around the node at `c` that lies in the
+/// medium (rejection; the centre, a scattering point, after 16 misses).
+fn point_in_node(volume: &Volume, c: Vec3, radius: f32, rng: &mut Pcg32) -> Vec3 {
+    for _ in 0..16 {
+        let v = Vec3::new(rng.uniform(), rng.uniform(), rng.uniform()) * 2.0 - Vec3::ONE;
+        if v.length_squared() < 1.0 && volume.contains(c + v * radius) {
+            return c + v * radius;
+        }
+    }
+    c
 }
 
 /// ∫ p T_r dω for a uniform light: the mean over uniform directions of the transmittance from
@@ -213,7 +379,11 @@ fn uniform(
             volume.intervals(&ray, f32::INFINITY, intervals);
             ray
         });
-        let t = volume.transmittance_between(&ray, intervals, back, f32::INFINITY, rng);
+        let t = if volume.occluded(&Ray::new(ray.at(back), d), f32::INFINITY) {
+            0.0
+        } else {
+            volume.transmittance_between(&ray, intervals, back, f32::INFINITY, rng)
+        };
         sum += f64::from(t);
         if g != 0.0 && t > 0.0 {
             for ((c, b), y) in coeffs.iter_mut().zip(bands).zip(sh::basis(-d)) {

@@ -82,7 +82,7 @@ impl MethodSettings for RadianceGraphSettings {
     /// The thesis's constraints (one gray isotropic medium, its lights), every violated one
     /// named.
     fn check(&self, scene: &Scene) -> crate::Result<()> {
-        Volume::new(scene).map(|_| ())
+        check_estimator(self.estimator, &Volume::new(scene)?)
     }
 
     fn create(&self, scene: &Scene) -> crate::Result<Box<dyn super::Integrator>> {
@@ -123,6 +123,23 @@ impl RadianceGraphSettings {
     }
 }
 
+/// The collision estimator walks the camera ray through the boundary alone: surfaces beside
+/// the medium need the path loop of the default estimator.
+fn check_estimator(estimator: render::Estimator, volume: &Volume) -> crate::Result<()> {
+    if estimator == render::Estimator::Collision && volume.has_opaque {
+        return Err(crate::Error::Unsupported(
+            "the radiance-graph method's \"collision\" estimator needs surfaces only as the medium's boundary \
+             (the scene has others; the default \"deltatracking\" shades them)"
+                .into(),
+        ));
+    }
+    Ok(())
+}
+
+/// pbrt-v4's `maxdepth` default: what bounds a camera path's surface bounces before it
+/// reaches the medium when the scene gives none.
+const DEFAULT_MAX_DEPTH: u32 = 5;
+
 /// The `"integer maxdepth"` of the scene's `Integrator`, if it gives one.
 pub fn scene_max_depth(e: &nimbus_parser::Entity) -> Result<Option<u32>, nimbus_parser::Error> {
     if e.params.loc("maxdepth").is_none() {
@@ -137,6 +154,7 @@ pub fn scene_max_depth(e: &nimbus_parser::Entity) -> Result<Option<u32>, nimbus_
 /// to that file when one was named ([`load_or_prepare`]).
 pub fn create(settings: &RadianceGraphSettings, scene: &Scene) -> crate::Result<render::RadianceGraphIntegrator> {
     let volume = Volume::new(scene)?;
+    check_estimator(settings.estimator, &volume)?;
     let scene_hash = file::scene_hash(&volume);
     let mut build_peak = 0;
     let load = |path: &Path| {
@@ -171,7 +189,10 @@ pub fn create(settings: &RadianceGraphSettings, scene: &Scene) -> crate::Result<
     };
     let (f, _) = load_or_prepare(settings.graph_data.as_deref(), load, prepare, |path, f| f.write(path))?;
     let cache = RadianceCache::new(f.positions, f.ranges, f.radiance);
-    Ok(render_integrator(&volume, cache).with_estimator(settings.estimator).with_build_peak(build_peak))
+    Ok(render_integrator(&volume, cache)
+        .with_estimator(settings.estimator)
+        .with_build_peak(build_peak)
+        .with_max_depth(settings.max_depth.unwrap_or(DEFAULT_MAX_DEPTH)))
 }
 
 /// Radiance values per node and light: 1 in an isotropic medium (the thesis's scalar), the
@@ -202,6 +223,7 @@ fn source(light: &volume::GraphLight) -> transport::Source {
         volume::GraphLight::Distant { dir, .. } => transport::Source::Along(*dir),
         volume::GraphLight::Uniform { .. } => transport::Source::Everywhere,
         volume::GraphLight::Point { pos, .. } => transport::Source::Point(*pos),
+        volume::GraphLight::Area { lights, .. } => transport::Source::Area(lights.as_slice().into()),
     }
 }
 
@@ -331,7 +353,7 @@ pub fn build(
         peak_bytes: positions.len() * (12 + 4) + transport.memory_bytes(),
     });
     let t = Instant::now();
-    let direct = lighting::direct_light(&volume, &positions, radius, &config.lighting_calculator, seed);
+    let direct = lighting::direct_light(&volume, &positions, radius, &config.lighting_calculator, seed)?;
     stages.push(Stage {
         name: "direct light",
         seconds: t.elapsed().as_secs_f64(),

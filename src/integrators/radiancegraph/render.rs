@@ -7,13 +7,13 @@
 use glam::{IVec3, Vec2, Vec3};
 
 use super::transport::Source;
-use super::volume::{Event, MAX_LIGHTS, sample_event, transmittance_from_inside};
+use super::volume::{MAX_LIGHTS, light_area, pick_by_area, transmittance_from_inside};
 use crate::channels::Channels;
 use crate::color::Rgb;
 use crate::geometry::Ray;
 use crate::integrators::RayIntegrator;
-use crate::integrators::common::RayStats;
 use crate::integrators::common::media::sample_t_maj;
+use crate::integrators::common::{PathConfig, PathRecorder, PathStrategy, RayStats, trace_path};
 use crate::math::cell_map::CellMap;
 use crate::media::phase::HenyeyGreenstein;
 use crate::samplers::Sampler;
@@ -198,6 +198,8 @@ pub struct RadianceGraphIntegrator {
     /// then holds the bounces after the first, and single scattering is computed at the
     /// camera ray's event with the exact phase function.
     phase: Option<(f32, Vec<Source>)>,
+    /// The path loop up to the medium (the scene's `maxdepth` bounds surface bounces).
+    path: PathConfig,
 }
 
 impl RadianceGraphIntegrator {
@@ -206,7 +208,15 @@ impl RadianceGraphIntegrator {
     pub fn new(cache: RadianceCache, lights: Vec<SpectrumValue>, sky: Vec<SpectrumValue>) -> RadianceGraphIntegrator {
         assert_eq!(cache.lights(), lights.len());
         let graph_bytes = cache.memory_bytes();
-        RadianceGraphIntegrator { cache, estimator: Estimator::default(), lights, sky, graph_bytes, phase: None }
+        RadianceGraphIntegrator {
+            cache,
+            estimator: Estimator::default(),
+            lights,
+            sky,
+            graph_bytes,
+            phase: None,
+            path: PathConfig::volpath(5, false),
+        }
     }
 
     /// The same in a medium scattering by HG with asymmetry `g`, its lights coming from
@@ -220,6 +230,12 @@ impl RadianceGraphIntegrator {
     /// The same, with the graph's build having peaked at `bytes` (more than the cache kept).
     pub fn with_build_peak(mut self, bytes: usize) -> RadianceGraphIntegrator {
         self.graph_bytes = self.graph_bytes.max(bytes);
+        self
+    }
+
+    /// The same with paths of at most `max_depth` scattering events before the medium.
+    pub fn with_max_depth(mut self, max_depth: u32) -> RadianceGraphIntegrator {
+        self.path.max_depth = max_depth;
         self
     }
 
@@ -238,7 +254,7 @@ impl RadianceGraphIntegrator {
         for (i, le) in le.iter().enumerate() {
             let mut v = self.cache.lookup_toward(p, i, wo);
             if let Some((g, sources)) = &self.phase {
-                v += single_scattering(scene, p, wo, *g, sources[i], rng);
+                v += single_scattering(scene, p, wo, *g, &sources[i], rng);
             }
             if v > 0.0 {
                 l += *le * (w * v);
@@ -274,6 +290,54 @@ impl RayIntegrator for RadianceGraphIntegrator {
         sampler: &mut Sampler,
         stats: &mut RayStats,
     ) -> C {
+        match self.estimator {
+            // The shared path loop up to the first real scattering event in the medium, which
+            // reads the cache: surfaces beside the medium, area lights and the sky are traced
+            // as volpath traces them.
+            Estimator::DeltaTracking => {
+                let mut reader = CacheReader { graph: self, scene };
+                trace_path(scene, ray, scene.camera_medium, lambda, sampler, &self.path, &mut reader, stats)
+            }
+            Estimator::Collision => self.li_collision(scene, ray, lambda, sampler, stats),
+        }
+    }
+}
+
+/// The path loop's view of the cache: a path ends at its first real scattering event in the
+/// medium with the cache's radiance there.
+struct CacheReader<'a> {
+    graph: &'a RadianceGraphIntegrator,
+    scene: &'a Scene,
+}
+
+impl PathStrategy for CacheReader<'_> {
+    fn ends_in_medium(&self) -> bool {
+        true
+    }
+
+    fn medium_estimate<C: Channels>(&mut self, _medium: u32, p: Vec3, wo: Vec3, lambda: &C::Lambda, u: f32) -> C {
+        let mut le = [C::ZERO; MAX_LIGHTS];
+        for (slot, l) in le.iter_mut().zip(&self.graph.lights) {
+            *slot = C::eval(l, lambda);
+        }
+        let mut rng = Pcg32::new(hash_sample(u, Vec2::ZERO), hash_sample(u, Vec2::ONE));
+        self.graph.radiance_at(self.scene, p, wo, 1.0, &le[..self.graph.lights.len()], &mut rng)
+    }
+}
+
+impl<C: Channels> PathRecorder<C> for CacheReader<'_> {}
+
+impl RadianceGraphIntegrator {
+    /// The collision estimator along the camera ray (a scene whose surfaces are the medium's
+    /// boundary only: the method checks).
+    fn li_collision<C: Channels>(
+        &self,
+        scene: &Scene,
+        ray: Ray,
+        lambda: &mut C::Lambda,
+        sampler: &mut Sampler,
+        stats: &mut RayStats,
+    ) -> C {
         let medium = &scene.media[0];
         let mut rng = Pcg32::new(hash_sample(sampler.get_1d(), Vec2::ZERO), hash_sample(sampler.get_1d(), Vec2::ONE));
         // The first tentative collision comes from the sampler, as in volpath (pbrt-v4's
@@ -299,46 +363,22 @@ impl RayIntegrator for RadianceGraphIntegrator {
             stats.bounce += 1;
             if inside {
                 let t_max = hit.as_ref().map_or(f32::INFINITY, |h| h.surface.t);
-                match self.estimator {
-                    Estimator::DeltaTracking => match sample_event(
-                        medium,
-                        &ray,
-                        t_max,
-                        u_first.take().unwrap_or_else(|| rng.uniform()),
-                        &mut rng,
-                    ) {
-                        Event::Scatter(p) => return self.radiance_at(scene, p, -ray.d, 1.0, le, &mut rng),
-                        Event::Absorb => return C::ZERO,
-                        Event::Pass => {}
-                    },
-                    Estimator::Collision => {
-                        let u = u_first.take().unwrap_or_else(|| rng.uniform());
-                        sample_t_maj::<Rgb, _>(
-                            medium.into(),
-                            &ray,
-                            t_max,
-                            u,
-                            &mut rng,
-                            0,
-                            &(),
-                            |p, mp, sigma_maj, _, rng| {
-                                let s = sigma_maj[0];
-                                l += self.radiance_at(scene, p, -ray.d, beta * mp.sigma_s[0] / s, le, rng);
-                                beta *= ((s - mp.sigma_a[0] - mp.sigma_s[0]) / s).max(0.0);
-                                if beta < 0.05 {
-                                    if rng.uniform() < 0.75 {
-                                        beta = 0.0;
-                                    } else {
-                                        beta /= 0.25;
-                                    }
-                                }
-                                beta > 0.0
-                            },
-                        );
-                        if beta == 0.0 {
-                            return l;
+                let u = u_first.take().unwrap_or_else(|| rng.uniform());
+                sample_t_maj::<Rgb, _>(medium.into(), &ray, t_max, u, &mut rng, 0, &(), |p, mp, sigma_maj, _, rng| {
+                    let s = sigma_maj[0];
+                    l += self.radiance_at(scene, p, -ray.d, beta * mp.sigma_s[0] / s, le, rng);
+                    beta *= ((s - mp.sigma_a[0] - mp.sigma_s[0]) / s).max(0.0);
+                    if beta < 0.05 {
+                        if rng.uniform() < 0.75 {
+                            beta = 0.0;
+                        } else {
+                            beta /= 0.25;
                         }
                     }
+                    beta > 0.0
+                });
+                if beta == 0.0 {
+                    return l;
                 }
             }
             match hit {
@@ -363,11 +403,26 @@ impl RayIntegrator for RadianceGraphIntegrator {
 /// function for a distant light, and over r² for a point light; for light from every
 /// direction, the transmittance along a direction sampled by the phase function (whose
 /// weight p/pdf is 1).
-fn single_scattering(scene: &Scene, p: Vec3, wo: Vec3, g: f32, source: Source, rng: &mut Pcg32) -> f32 {
+fn single_scattering(scene: &Scene, p: Vec3, wo: Vec3, g: f32, source: &Source, rng: &mut Pcg32) -> f32 {
     let (toward_light, phase) = match source {
-        Source::Along(dir) => (-dir, super::sh::hg(dir.dot(wo), g)),
+        Source::Along(dir) => (-*dir, super::sh::hg(dir.dot(wo), g)),
+        Source::Area(lights) => {
+            // One light sample (a light chosen by area), as the graph's direct light.
+            let total: f32 = lights.iter().map(|&i| light_area(scene, i)).sum();
+            let i = pick_by_area(scene, lights, total, rng.uniform());
+            let pmf = light_area(scene, i) / total;
+            let u = Vec2::new(rng.uniform(), rng.uniform());
+            let ctx = crate::lights::LightContext { p };
+            let Some(ls) = scene.lights[i as usize].sample_li::<Rgb>(&ctx, u, &scene.surfaces, &scene.sphere, &())
+            else {
+                return 0.0;
+            };
+            let dist = ls.p.distance(p) * (1.0 - 1e-4);
+            let t = transmittance_from_inside(scene, &Ray::new(p, ls.wi), dist, rng);
+            return t * super::sh::hg(-ls.wi.dot(wo), g) / (pmf * ls.pdf);
+        }
         Source::Point(pos) => {
-            let (v, d2) = (pos - p, pos.distance_squared(p));
+            let (v, d2) = (*pos - p, pos.distance_squared(p));
             let to_light = v / d2.sqrt();
             let t = transmittance_from_inside(scene, &Ray::new(p, to_light), d2.sqrt(), rng);
             return t * super::sh::hg(-to_light.dot(wo), g) / d2;

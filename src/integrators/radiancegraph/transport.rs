@@ -152,7 +152,7 @@ fn series(bounces: &[u32], total: Vec<f32>, mut step: impl FnMut(u32, &[f32], &m
 pub const DIRECTIONAL_BOUNCES: u32 = 10;
 
 /// Where a light's direct radiance at the nodes comes from, for directional transport.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub enum Source {
     /// A distant light travelling along this unit direction: scattered by the phase function.
     Along(Vec3),
@@ -161,6 +161,17 @@ pub enum Source {
     Everywhere,
     /// A point light at this position: light reaches a node along the line from it.
     Point(Vec3),
+    /// Area lights (these scene lights, chosen by area): the direct values are, per node,
+    /// coefficients as for [`Source::Everywhere`].
+    Area(std::sync::Arc<[u32]>),
+}
+
+impl Source {
+    /// Whether the direct values are per-node coefficients of the scattered light (light
+    /// arrives from many directions) rather than one scalar.
+    pub fn by_direction(&self) -> bool {
+        matches!(self, Source::Everywhere | Source::Area(_))
+    }
 }
 
 impl Transport {
@@ -186,7 +197,7 @@ impl Transport {
     ) -> Vec<Transported> {
         let n = self.nodes();
         let k = sh::COEFFS;
-        let per_node = if source == Source::Everywhere { k } else { 1 };
+        let per_node = if source.by_direction() { k } else { 1 };
         assert_eq!(direct.len(), n * per_node);
         let bands = sh::bands(g);
         let y00 = sh::basis(Vec3::Z)[0];
@@ -206,9 +217,9 @@ impl Transport {
                     let len = v.length();
                     if b == a || len <= 0.0 {
                         // Isotropic: the mean of what b sends, into band 0.
-                        let mean = match (first, source) {
+                        let mean = match (first, &source) {
                             (true, Source::Along(_) | Source::Point(_)) => direct[b],
-                            (true, Source::Everywhere) => direct[b * k] * y00,
+                            (true, Source::Everywhere | Source::Area(_)) => direct[b * k] * y00,
                             (false, _) => current[b * k] * y00,
                         };
                         acc[0] += w * mean / y00;
@@ -217,9 +228,9 @@ impl Transport {
                     let d = v / len;
                     let y = sh::basis(d);
                     let sent = if first {
-                        match source {
+                        match &source {
                             Source::Along(dir) => direct[b] * 4.0 * std::f32::consts::PI * sh::hg(dir.dot(d), g),
-                            Source::Everywhere => sh::eval(&direct[b * k..(b + 1) * k], d),
+                            Source::Everywhere | Source::Area(_) => sh::eval(&direct[b * k..(b + 1) * k], d),
                             Source::Point(pos) => {
                                 let dir = (positions[b] - pos).normalize_or_zero();
                                 direct[b] * 4.0 * std::f32::consts::PI * sh::hg(dir.dot(d), g)

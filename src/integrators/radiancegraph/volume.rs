@@ -7,11 +7,12 @@
 
 use glam::Vec3;
 
-use crate::accel::NONE;
+use crate::accel::{Hit, NONE, Primitive};
 use crate::color::Rgb;
 use crate::geometry::{Bounds3, Ray};
 use crate::integrators::common::media::{ShadowEstimate, ratio_tracking, sample_t_maj};
 use crate::lights::LightKind;
+use crate::materials::bxdf::{ReflTransFlags, TransportMode};
 use crate::media::Medium;
 use crate::sampling::rng::Pcg32;
 use crate::scene::Scene;
@@ -19,6 +20,10 @@ use crate::spectra::SpectrumValue;
 
 /// The most lights a graph carries scalars for (camera rays keep their radiance on the stack).
 pub const MAX_LIGHTS: usize = 8;
+
+/// The most surface reflections a light path takes between two scattering points in the
+/// medium (a path between facing mirrors would not end by itself).
+pub const MAX_SURFACE_BOUNCES: usize = 8;
 
 /// The largest |g| the graph's directional radiance holds (README: the cloud's mean at
 /// g = −0.5, 0.6, 0.75 and 0.877 was +1.0 %, +0.4 %, −1.2 % and −9.7 % off volpath's).
@@ -46,13 +51,24 @@ pub enum GraphLight {
         /// Radiant intensity.
         i: SpectrumValue,
     },
+    /// Diffuse area lights of one radiance (beyond the thesis; an emitting mesh is one light
+    /// per triangle): light paths start from their surfaces, cosine-distributed.
+    Area {
+        /// Their indices in the scene's lights.
+        lights: Vec<u32>,
+        /// Radiance.
+        l: SpectrumValue,
+    },
 }
 
 impl GraphLight {
     /// The radiance.
     pub fn radiance(&self) -> &SpectrumValue {
         match self {
-            GraphLight::Distant { l, .. } | GraphLight::Uniform { l } | GraphLight::Point { i: l, .. } => l,
+            GraphLight::Distant { l, .. }
+            | GraphLight::Uniform { l }
+            | GraphLight::Point { i: l, .. }
+            | GraphLight::Area { l, .. } => l,
         }
     }
 }
@@ -71,6 +87,8 @@ pub struct Volume<'a> {
     pub radius: f32,
     /// The lights, in scene order.
     pub lights: Vec<GraphLight>,
+    /// Some surface beside the medium may stop light ([`SurfaceKind::Opaque`]).
+    pub has_opaque: bool,
 }
 
 /// How a sampled segment ended.
@@ -121,11 +139,21 @@ impl<'a> Volume<'a> {
         let mut lights = Vec::new();
         // Each other kind once (an emitting mesh has a light per triangle).
         let mut others: Vec<&str> = Vec::new();
-        for light in &scene.lights {
+        for (i, light) in scene.lights.iter().enumerate() {
             match &light.kind {
                 LightKind::Distant { w, l } => lights.push(GraphLight::Distant { dir: -*w, l: *l }),
                 LightKind::UniformInfinite { l } => lights.push(GraphLight::Uniform { l: *l }),
                 LightKind::Point { p, i } => lights.push(GraphLight::Point { pos: *p, i: *i }),
+                // One graph light per radiance: its scalars are per unit of it.
+                LightKind::Area { l, image: None, alpha: NONE, invisible: false, .. } => {
+                    let index = i as u32;
+                    match lights.iter_mut().find(|g| matches!(g, GraphLight::Area { l: gl, .. } if gl == l)) {
+                        Some(GraphLight::Area { lights, .. }) => lights.push(index),
+                        _ => lights.push(GraphLight::Area { lights: vec![index], l: *l }),
+                    }
+                }
+                LightKind::Area { image: Some(_), .. } => others.push("area (with an emission image)"),
+                LightKind::Area { .. } => others.push("area (with an alpha texture)"),
                 other => {
                     let name = light_kind_name(other);
                     if !others.contains(&name) {
@@ -134,17 +162,21 @@ impl<'a> Volume<'a> {
                 }
             }
         }
+        others.dedup();
         if !others.is_empty() {
             violated.push(format!(
-                "distant, point and uniform infinite lights only (the scene has {} lights)",
+                "distant, point, uniform infinite and diffuse area lights only (the scene has {} lights)",
                 others.join(" and ")
             ));
         }
         if scene.lights.is_empty() {
             violated.push("at least one light (the scene has none)".to_string());
         }
-        if scene.lights.len() > MAX_LIGHTS {
-            violated.push(format!("at most {MAX_LIGHTS} lights (the scene has {})", scene.lights.len()));
+        if lights.len() > MAX_LIGHTS {
+            violated.push(format!(
+                "at most {MAX_LIGHTS} lights, area lights of one radiance counted once (the scene has {})",
+                lights.len()
+            ));
         }
         if scene.camera_medium != NONE {
             violated.push("a camera outside the medium".to_string());
@@ -154,16 +186,33 @@ impl<'a> Volume<'a> {
             violated.push("no object instances".to_string());
         }
         let prims = surfaces.top.as_ref().map_or(&[][..], |t| t.primitives());
-        if prims.is_empty() {
-            violated.push("a medium bounded by `interface` surfaces (the scene has no surfaces)".to_string());
-        } else if prims.iter().any(|p| {
-            p.interface == NONE
-                || !surfaces.pass_through.get(p.material as usize).copied().unwrap_or(false)
-                || scene.interfaces[p.interface as usize] != [0, NONE]
-        }) {
+        let mut bounds = Bounds3::EMPTY;
+        for p in prims {
+            if surface_kind(scene, p) == SurfaceKind::Boundary {
+                let b = match p.geometry {
+                    crate::accel::Geometry::Hull(k) => surfaces.hulls.all[k as usize].bounds(),
+                    g => surfaces.shapes.bounds(g),
+                };
+                bounds = bounds.union(&b);
+            }
+        }
+        if bounds.is_empty() {
+            violated.push("a medium bounded by `interface` surfaces (the scene has none)".to_string());
+        }
+        if prims.iter().any(|p| surface_kind(scene, p) == SurfaceKind::OtherInterface) {
             violated.push(
-                "surfaces only as the medium's boundary (`interface` material, medium inside, none outside)".into(),
+                "surfaces that change the medium only as its boundary (`interface` material, medium inside, \
+                 none outside)"
+                    .into(),
             );
+        }
+        let has_opaque = prims.iter().any(|p| surface_kind(scene, p) == SurfaceKind::Opaque);
+        if let Some(m) = medium.filter(|m| has_opaque && m.g != 0.0) {
+            violated.push(format!(
+                "an isotropic medium where surfaces stand beside it (medium \"{}\" has g = {}: the light they \
+                 reflect into it is not directional in the graph)",
+                m.name, m.g
+            ));
         }
         if !violated.is_empty() {
             return Err(crate::Error::Unsupported(format!(
@@ -171,7 +220,6 @@ impl<'a> Volume<'a> {
                 violated.iter().map(|v| format!("\n  - {v}")).collect::<String>()
             )));
         }
-        let bounds = surfaces.bounds();
         Ok(Volume {
             scene,
             medium: medium.expect("checked"),
@@ -179,6 +227,7 @@ impl<'a> Volume<'a> {
             bounds,
             radius: 0.5 * (bounds.max - bounds.min).length(),
             lights,
+            has_opaque,
         })
     }
 
@@ -187,15 +236,15 @@ impl<'a> Volume<'a> {
         0.5 * (self.bounds.min + self.bounds.max)
     }
 
-    /// Where `ray` (from outside the medium) first enters it and where it next leaves:
-    /// `(t_in, t_out)`. `None` if it misses.
+    /// Where `ray` (from outside the medium) first enters it and where it next leaves (at the
+    /// boundary, or an opaque surface inside): `(t_in, t_out)`. `None` if it misses, or meets
+    /// an opaque surface first.
     pub fn span(&self, ray: &Ray) -> Option<(f32, f32)> {
-        let hit = self.scene.surfaces.intersect(ray, f32::INFINITY)?;
+        let (t_in, hit, kind) = first_hit(self.scene, ray, f32::INFINITY, false)?;
         // Entering: the direction points against the surface normal.
-        if ray.d.dot(hit.surface.n) >= 0.0 {
+        if kind != SurfaceKind::Boundary || ray.d.dot(hit.surface.n) >= 0.0 {
             return None;
         }
-        let t_in = hit.surface.t;
         let inner = hit.surface.spawn_ray(ray.d);
         let exit = self.exit(&inner)?;
         Some((t_in, (inner.o - ray.o).dot(ray.d) + exit))
@@ -204,28 +253,45 @@ impl<'a> Volume<'a> {
     /// The part of `ray` inside the medium from wherever its origin is: `(0, t_exit)` from
     /// inside, `(t_in, t_out)` from outside when it enters, `None` when it misses.
     pub fn span_from(&self, ray: &Ray) -> Option<(f32, f32)> {
-        let hit = self.scene.surfaces.intersect(ray, f32::INFINITY)?;
-        if ray.d.dot(hit.surface.n) > 0.0 { Some((0.0, hit.surface.t)) } else { self.span(ray) }
+        // Inside when the first boundary met is left through.
+        let (_, hit, _) = first_hit(self.scene, ray, f32::INFINITY, true)?;
+        if ray.d.dot(hit.surface.n) > 0.0 { Some((0.0, self.exit(ray)?)) } else { self.span(ray) }
     }
 
     /// The medium's intervals along `ray` (whose origin is outside it) that start before
-    /// `t_end`, in order, into `v` (cleared first; callers reuse it).
+    /// `t_end`, in order, into `v` (cleared first; callers reuse it). Opaque surfaces are
+    /// passed: [`Volume::occluded`] asks for them.
     pub fn intervals(&self, ray: &Ray, t_end: f32, v: &mut Vec<(f32, f32)>) {
         v.clear();
-        let mut offset = 0.0;
-        let mut r = *ray;
+        let (mut r, mut offset, mut start) = (*ray, 0.0, None);
         // A closed boundary is crossed an even number of times; 64 bounds a pathological mesh.
         for _ in 0..64 {
-            let Some((t_in, t_out)) = self.span(&r) else { break };
-            if offset + t_in >= t_end {
-                break;
+            let Some((t, hit, _)) = first_hit(self.scene, &r, f32::INFINITY, true) else { break };
+            let t = offset + t;
+            if r.d.dot(hit.surface.n) < 0.0 {
+                if t >= t_end {
+                    break;
+                }
+                start = Some(t);
+            } else if let Some(a) = start.take() {
+                v.push((a, t));
             }
-            v.push((offset + t_in, offset + t_out));
-            let exit = r.at(t_out);
-            let next = crate::geometry::spawn_ray(exit, r.d, r.d);
+            let next = hit.surface.spawn_ray(r.d);
             offset += (next.o - r.o).dot(r.d);
             r = next;
         }
+    }
+
+    /// Whether `x` is inside the medium: a ray from it meets the boundary from inside first.
+    pub fn contains(&self, x: Vec3) -> bool {
+        let ray = Ray::new(x, Vec3::Y);
+        matches!(first_hit(self.scene, &ray, f32::INFINITY, true), Some((_, h, _)) if ray.d.dot(h.surface.n) > 0.0)
+    }
+
+    /// Whether an opaque surface (any but the medium's boundary) lies along `ray` before
+    /// `t_max`: light from beyond it does not arrive.
+    pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
+        self.has_opaque && first_opaque(self.scene, ray, t_max)
     }
 
     /// Transmittance along `ray` between distances `t0` and `t1`, given the medium's
@@ -245,9 +311,45 @@ impl<'a> Volume<'a> {
         tr
     }
 
-    /// Distance from a point inside the medium along `ray` to the boundary.
+    /// Distance from a point inside the medium along `ray` to where light along it leaves the
+    /// medium or stops: the boundary, or an opaque surface inside the medium.
     pub fn exit(&self, ray: &Ray) -> Option<f32> {
-        self.scene.surfaces.intersect(ray, f32::INFINITY).map(|h| h.surface.t)
+        first_hit(self.scene, ray, f32::INFINITY, false).map(|(t, _, _)| t)
+    }
+
+    /// A light path's segment `ray` from inside the medium passed through it: where the
+    /// surfaces beside the medium send it back in, if they do. At each opaque surface it meets
+    /// the BSDF samples a direction and the path goes on with probability f|cos|/pdf (gray:
+    /// [`Volume::new`] and the direct light check it), so it stays a path of weight one whose
+    /// next scattering point is an edge like any other; the medium's part of the way back is
+    /// `(ray, t_max)` from where it enters. At most [`MAX_SURFACE_BOUNCES`] reflections.
+    pub fn reflect_back(&self, ray: &Ray, rng: &mut Pcg32) -> Option<(Ray, f32)> {
+        if !self.has_opaque {
+            return None;
+        }
+        let scene = self.scene;
+        let mut ray = *ray;
+        for _ in 0..MAX_SURFACE_BOUNCES {
+            let mut hit = next_opaque(scene, &ray)?;
+            let wo = -ray.d;
+            let (material, ctx) = scene.surface_material(&mut hit, wo, None);
+            let bxdf = material.bxdf::<Rgb>(&scene.textures, &ctx, &mut ())?;
+            let frame = crate::integrators::common::shading_frame(&hit);
+            let u = glam::Vec2::new(rng.uniform(), rng.uniform());
+            let bs =
+                bxdf.sample_f(frame.to_local(wo), rng.uniform(), u, TransportMode::Radiance, ReflTransFlags::ALL)?;
+            let weight = crate::color::average(bs.f * bs.wi.z.abs() / bs.pdf);
+            // Also ends a NaN weight.
+            if weight.is_nan() || rng.uniform() >= weight {
+                return None;
+            }
+            let wi = frame.to_world(bs.wi);
+            ray = hit.spawn_ray(wi);
+            if let Some((t_in, t_out)) = self.span_from(&ray) {
+                return Some((Ray::new(ray.at(t_in), wi), t_out - t_in));
+            }
+        }
+        None
     }
 
     /// Samples where a segment from a point inside the medium first interacts (delta
@@ -279,23 +381,34 @@ fn ratio_tracked(medium: &Medium, ray: &Ray, t_max: f32, rng: &mut Pcg32) -> f32
 
 /// Transmittance along `ray`, from a point inside `scene`'s one medium, to distance `t_end`
 /// (∞: out of the scene): ratio tracking through each stretch of medium, the boundary
-/// crossed as often as it is met.
+/// crossed as often as it is met; 0 behind an opaque surface.
 pub fn transmittance_from_inside(scene: &Scene, ray: &Ray, t_end: f32, rng: &mut Pcg32) -> f32 {
+    match walk(scene, ray, t_end, true, rng) {
+        (t, None) => t,
+        (_, Some(_)) => 0.0,
+    }
+}
+
+/// Along `ray` from a point inside the medium (`inside`) or outside it, to distance `t_end`:
+/// the transmittance up to where it stops, and the opaque surface it stops at, if any, with
+/// whether that surface is inside the medium.
+pub fn walk(scene: &Scene, ray: &Ray, t_end: f32, inside: bool, rng: &mut Pcg32) -> (f32, Option<(Hit, bool)>) {
     let medium = &scene.media[0];
-    let (mut ray, mut inside, mut tr, mut left) = (*ray, true, 1.0f32, t_end);
+    let (mut ray, mut inside, mut tr, mut left) = (*ray, inside, 1.0f32, t_end);
     // A closed boundary is crossed an even number of times; 64 bounds a pathological mesh.
     for _ in 0..64 {
-        let hit = scene.surfaces.intersect(&ray, left);
+        let hit = first_hit(scene, &ray, left, false);
         if inside {
-            let t_max = hit.as_ref().map_or(left, |h| h.surface.t);
+            let t_max = hit.as_ref().map_or(left, |h| h.0);
             tr *= ratio_tracked(medium, &ray, t_max, rng);
             if tr == 0.0 {
-                return 0.0;
+                return (0.0, None);
             }
         }
         match hit {
-            None => return tr,
-            Some(h) => {
+            None => return (tr, None),
+            Some((_, h, SurfaceKind::Opaque)) => return (tr, Some((h, inside))),
+            Some((_, h, _)) => {
                 inside = ray.d.dot(h.surface.n) < 0.0;
                 let next = h.surface.spawn_ray(ray.d);
                 left -= (next.o - ray.o).dot(ray.d);
@@ -303,7 +416,84 @@ pub fn transmittance_from_inside(scene: &Scene, ray: &Ray, t_end: f32, rng: &mut
             }
         }
     }
-    tr
+    (tr, None)
+}
+
+/// What a surface is to the method.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SurfaceKind {
+    /// The medium's boundary: an `interface` material with the medium inside, none outside.
+    Boundary,
+    /// A surface beside the medium that changes no medium (ground, objects, area lights'
+    /// shapes): camera paths shade it as volpath does; it stops light paths and shadow rays.
+    Opaque,
+    /// An `interface` material that changes no medium: crossed as if absent.
+    Invisible,
+    /// Any other change of medium (a dielectric around the medium, ...).
+    OtherInterface,
+}
+
+/// The kind of primitive `p` of `scene`.
+pub fn surface_kind(scene: &Scene, p: &Primitive) -> SurfaceKind {
+    let pass = scene.surfaces.pass_through.get(p.material as usize).copied().unwrap_or(false);
+    let sides = (p.interface != NONE).then(|| scene.interfaces[p.interface as usize]);
+    match sides {
+        Some([inside, outside]) if inside != outside => {
+            if pass && [inside, outside] == [0, NONE] {
+                SurfaceKind::Boundary
+            } else {
+                SurfaceKind::OtherInterface
+            }
+        }
+        _ if pass => SurfaceKind::Invisible,
+        _ => SurfaceKind::Opaque,
+    }
+}
+
+/// The first surface along `ray` before `t_max` that the method sees, with its distance
+/// along `ray` and its kind: invisible surfaces are passed, and opaque ones too where
+/// `boundary_only`.
+fn first_hit(scene: &Scene, ray: &Ray, t_max: f32, boundary_only: bool) -> Option<(f32, Hit, SurfaceKind)> {
+    let (mut r, mut offset) = (*ray, 0.0);
+    for _ in 0..64 {
+        let hit = scene.surfaces.intersect(&r, t_max - offset)?;
+        let kind = surface_kind(scene, &hit.prim);
+        if kind == SurfaceKind::Boundary || (kind != SurfaceKind::Invisible && !boundary_only) {
+            return Some((offset + hit.surface.t, hit, kind));
+        }
+        let next = hit.surface.spawn_ray(r.d);
+        offset += (next.o - r.o).dot(r.d);
+        r = next;
+    }
+    None
+}
+
+/// The first opaque surface along `ray` (boundaries and invisible surfaces passed).
+fn next_opaque(scene: &Scene, ray: &Ray) -> Option<Hit> {
+    let mut r = *ray;
+    for _ in 0..64 {
+        let (_, hit, kind) = first_hit(scene, &r, f32::INFINITY, false)?;
+        if kind != SurfaceKind::Boundary {
+            return Some(hit);
+        }
+        r = hit.surface.spawn_ray(r.d);
+    }
+    None
+}
+
+/// Whether an opaque surface lies along `ray` before `t_max` (boundaries passed).
+fn first_opaque(scene: &Scene, ray: &Ray, t_max: f32) -> bool {
+    let (mut r, mut offset) = (*ray, 0.0);
+    for _ in 0..64 {
+        let Some((t, hit, kind)) = first_hit(scene, &r, t_max - offset, false) else { return false };
+        if kind != SurfaceKind::Boundary {
+            return true;
+        }
+        let next = hit.surface.spawn_ray(r.d);
+        offset += t + (next.o - hit.surface.p).dot(r.d);
+        r = next;
+    }
+    false
 }
 
 /// Delta tracking through a gray medium with absorption and real scattering as events (the
@@ -324,6 +514,28 @@ pub fn sample_event(medium: &Medium, ray: &Ray, t_max: f32, u: f32, rng: &mut Pc
         }
     });
     event
+}
+
+/// The area of scene light `i` (0 for a light that is not an area light).
+pub fn light_area(scene: &Scene, i: u32) -> f32 {
+    match scene.lights[i as usize].kind {
+        LightKind::Area { area, .. } => area,
+        _ => 0.0,
+    }
+}
+
+/// One of the area lights `lights`, chosen by `u` in proportion to their areas (which sum
+/// to `total`).
+pub fn pick_by_area(scene: &Scene, lights: &[u32], total: f32, u: f32) -> u32 {
+    let mut left = u * total;
+    for &i in lights {
+        let a = light_area(scene, i);
+        if left < a {
+            return i;
+        }
+        left -= a;
+    }
+    lights[lights.len() - 1]
 }
 
 fn light_kind_name(k: &LightKind) -> &'static str {

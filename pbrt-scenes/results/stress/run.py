@@ -24,7 +24,8 @@ from PIL import Image, ImageDraw
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.abspath(os.path.join(HERE, "..", "..", ".."))
-NIMBUS = os.path.join(ROOT, "target", "release", "nimbus")
+# $NIMBUS names another binary (a copy, so that a build does not change it mid-run).
+NIMBUS = os.environ.get("NIMBUS", os.path.join(ROOT, "target", "release", "nimbus"))
 SCENES = os.path.join(ROOT, "pbrt-scenes", "stress")
 SCALE = 2
 

@@ -59,9 +59,8 @@ fn plan(scene: &str, integrator: &str) -> Option<Judge> {
         }
         ("radiancegraph", "fog-emitter") => Refused("a camera outside the medium"),
         ("radiancegraph", "emissive-smoke") => Refused("a non-emissive medium"),
-        ("radiancegraph", "many-lights" | "wax-small-light") => {
-            Refused("distant, point and uniform infinite lights only")
-        }
+        ("radiancegraph", "many-lights") => Refused("a camera outside the medium"),
+        ("radiancegraph", "wax-small-light") => Refused("surfaces that change the medium only as its boundary"),
         ("radiancegraph", "cloud-sun-sky") => Elsewhere("radiancegraph::anisotropic_media_match_volpath"),
         ("radiancegraph", _) if !media => Refused("one medium (the scene has none)"),
         _ => return None,

@@ -1,6 +1,7 @@
 //! What every integrator shares: the path loop (one piece of code that observers watch
 //! vertex by vertex), shadow-ray transmittance, and ray statistics.
 
+mod camera_line;
 mod direct;
 pub mod media;
 pub mod observer;

@@ -9,8 +9,9 @@
 
 use glam::{Vec2, Vec3};
 
+use super::camera_line::line_emission;
 use super::direct::{Scatterer, extra_direct, sample_direct};
-use super::media::{Collision, Tracking, line_transmittance};
+use super::media::{Collision, Tracking};
 use super::observer::{EmissionEvent, PathObserver, VertexEvent};
 use super::{MAX_SUBSURFACE_EVENTS, RayStats};
 use crate::accel::{Found, Hit, NONE};
@@ -316,7 +317,8 @@ impl<C: Channels, O: PathObserver<C>> Tracer<'_, C, O> {
         if self.config.camera_line && w.depth == 0 && w.medium != NONE && !w.line_done {
             w.line_done = true;
             let hit = found.map(|f| self.scene.surfaces.resolve(f));
-            let c = line_emission(self.scene, w.ray, hit, w.medium, &w.st, self.lambda, self.stats);
+            let weight = w.st.beta / w.st.r_u.average();
+            let c = line_emission(self.scene, w.ray, hit, w.medium, weight, self.lambda, self.stats);
             if !c.is_zero() {
                 self.l += c;
                 self.observer.on_emission(&EmissionEvent { depth: w.depth, contribution: c, pdf_light: 0.0 });
@@ -710,65 +712,6 @@ impl<C: Channels, O: PathObserver<C>> Tracer<'_, C, O> {
         self.enter(w, medium_after(scene, &hit, wi, w.medium), &tex_ctx);
         w.ray = hit.spawn_ray(wi);
         !rr(&mut w.st, w.eta_scale, w.depth, self.sampler)
-    }
-}
-
-/// The area-light emission along the straight line `ray` (starting in `medium`, first hitting
-/// `hit`): lights hit through `interface` surfaces and the one opaque surface it ends at,
-/// each times the transmittance up to it ([`line_transmittance`]),
-/// which is the expectation of what delta tracking along the line adds at depth 0
-/// ([`PathConfig::camera_line`]). The estimate is the same for every channel's sampling
-/// technique, so β/mean(r_u) weighs it as any depth-0 emission.
-fn line_emission<C: Channels>(
-    scene: &Scene,
-    mut ray: Ray,
-    mut hit: Option<Hit>,
-    mut medium: u32,
-    st: &PathState<C>,
-    lambda: &C::Lambda,
-    stats: &mut RayStats,
-) -> C {
-    // Most lines reach no light: find out by intersections alone before tracking anything.
-    let (mut probe, mut next) = (ray, hit);
-    loop {
-        let Some(h) = next else { return C::ZERO };
-        if h.prim.area_light != NONE {
-            break;
-        }
-        if !scene.materials[h.prim.material as usize].is_interface() {
-            return C::ZERO;
-        }
-        probe = h.spawn_ray(probe.d);
-        stats.shadow += 1;
-        next = scene.surfaces.intersect(&probe, f32::INFINITY);
-    }
-    // Its own stream: the camera segment's delta tracking keeps its random numbers.
-    let mut rng = Pcg32::new(
-        crate::sampling::rng::hash_vec3(ray.o) ^ 0x5851_f42d_4c95_7f2d,
-        crate::sampling::rng::hash_vec3(ray.d),
-    );
-    let mut weight = st.beta / st.r_u.average();
-    let mut sum = C::ZERO;
-    loop {
-        if medium != NONE {
-            let t_max = hit.as_ref().map_or(f32::INFINITY, |h| h.surface.t);
-            weight *= line_transmittance::<C>(&scene.media[medium as usize], &ray, t_max, &mut rng, lambda);
-            if weight.is_zero() {
-                return sum;
-            }
-        }
-        let Some(h) = hit else { return sum };
-        if h.prim.area_light != NONE {
-            sum += weight
-                * scene.lights[h.prim.area_light as usize].emitted::<C>(&h.surface, -ray.d, lambda, &scene.surfaces);
-        }
-        if !scene.materials[h.prim.material as usize].is_interface() {
-            return sum;
-        }
-        medium = medium_after(scene, &h, ray.d, medium);
-        ray = h.spawn_ray(ray.d);
-        stats.shadow += 1;
-        hit = scene.surfaces.intersect(&ray, f32::INFINITY);
     }
 }
 

@@ -9,7 +9,7 @@ use rayon::prelude::*;
 
 use super::config::GraphBuilder as Config;
 use super::graph::BuildGraph;
-use super::volume::{Event, GraphLight, Volume, light_area, pick_by_area};
+use super::volume::{Event, GraphLight, Volume, pick_area_light};
 use crate::geometry::{Ray, spawn_ray};
 use crate::math::Frame;
 use crate::sampling::rng::Pcg32;
@@ -219,9 +219,8 @@ pub(super) fn light_starts(volume: &Volume, config: &Config, seed: u64) -> Vec<S
             GraphLight::Area { lights, .. } => {
                 let mut rng = Pcg32::new(u64::MAX - li as u64, seed);
                 let scene = volume.scene;
-                let total: f32 = lights.iter().map(|&i| light_area(scene, i)).sum();
                 for _ in 0..n * n {
-                    let light = &scene.lights[pick_by_area(scene, lights, total, rng.uniform()) as usize];
+                    let light = &scene.lights[pick_area_light(scene, lights, rng.uniform()) as usize];
                     let u = glam::Vec2::new(rng.uniform(), rng.uniform());
                     let Some(s) = light.sample_area_point(&scene.surfaces.shapes, u) else { continue };
                     let two_sided = matches!(light.kind, crate::lights::LightKind::Area { two_sided: true, .. });

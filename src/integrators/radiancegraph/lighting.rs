@@ -8,7 +8,7 @@ use rayon::prelude::*;
 
 use super::config::LightingCalculator;
 use super::sh;
-use super::volume::{GraphLight, Volume};
+use super::volume::{GraphLight, Volume, sample_area_lights};
 use crate::color::Rgb;
 use crate::geometry::Ray;
 use crate::integrators::common::shading_frame;
@@ -154,18 +154,10 @@ fn via_surface(volume: &Volume, x: Vec3, light: &GraphLight, rng: &mut Pcg32) ->
             let d2 = pos.distance_squared(y);
             ((*pos - y) / d2.sqrt(), 1.0 / d2, 1.0, d2.sqrt() * (1.0 - 1e-4))
         }
-        GraphLight::Area { lights, .. } => {
-            let total: f32 = lights.iter().map(|&i| super::volume::light_area(scene, i)).sum();
-            let i = super::volume::pick_by_area(scene, lights, total, rng.uniform());
-            let pmf = super::volume::light_area(scene, i) / total;
-            let u = Vec2::new(rng.uniform(), rng.uniform());
-            let ctx = crate::lights::LightContext { p: y };
-            let Some(ls) = scene.lights[i as usize].sample_li::<Rgb>(&ctx, u, &scene.surfaces, &scene.sphere, &())
-            else {
-                return Ok(0.0);
-            };
-            (ls.wi, 1.0, pmf * ls.pdf, ls.p.distance(y) * (1.0 - 1e-4))
-        }
+        GraphLight::Area { lights, .. } => match sample_area_lights(scene, lights, y, rng) {
+            Some((wi, dist, pdf)) => (wi, 1.0, pdf, dist),
+            None => return Ok(0.0),
+        },
     };
     let wo = -d;
     let (material, ctx) = scene.surface_material(&mut hit, wo, None);
@@ -283,7 +275,6 @@ fn area(
     sh_out: &mut [f32; sh::COEFFS],
 ) -> f32 {
     let scene = volume.scene;
-    let total: f32 = lights.iter().map(|&i| super::volume::light_area(scene, i)).sum();
     let g = volume.medium.g;
     let bands = sh::bands(g);
     let mut coeffs = [0.0f64; sh::COEFFS];
@@ -291,29 +282,15 @@ fn area(
     let n = estimates.max(1);
     for _ in 0..n {
         let x = point_in_node(volume, c, radius, rng);
-        let i = super::volume::pick_by_area(scene, lights, total, rng.uniform());
-        let pmf = super::volume::light_area(scene, i) / total;
-        let u = Vec2::new(rng.uniform(), rng.uniform());
-        let light = &scene.lights[i as usize];
-        let Some(ls) = light.sample_li::<crate::color::Rgb>(
-            &crate::lights::LightContext { p: x },
-            u,
-            &scene.surfaces,
-            &scene.sphere,
-            &(),
-        ) else {
-            continue;
-        };
-        let dist = ls.p.distance(x);
-        // Short of the light's own surface, which would count as an occluder.
-        let t = super::volume::transmittance_from_inside(scene, &Ray::new(x, ls.wi), dist * (1.0 - 1e-4), rng);
+        let Some((wi, dist, pdf)) = sample_area_lights(scene, lights, x, rng) else { continue };
+        let t = super::volume::transmittance_from_inside(scene, &Ray::new(x, wi), dist, rng);
         if t <= 0.0 {
             continue;
         }
-        let w = t / (pmf * ls.pdf) * INV_4PI;
+        let w = t / pdf * INV_4PI;
         sum += f64::from(w);
         if g != 0.0 {
-            for ((c, b), y) in coeffs.iter_mut().zip(bands).zip(sh::basis(-ls.wi)) {
+            for ((c, b), y) in coeffs.iter_mut().zip(bands).zip(sh::basis(-wi)) {
                 *c += f64::from(w * b * y);
             }
         }

@@ -7,7 +7,7 @@
 use glam::{IVec3, Vec2, Vec3};
 
 use super::transport::Source;
-use super::volume::{MAX_LIGHTS, light_area, pick_by_area, transmittance_from_inside};
+use super::volume::{MAX_LIGHTS, sample_area_lights, transmittance_from_inside};
 use crate::channels::Channels;
 use crate::color::Rgb;
 use crate::geometry::Ray;
@@ -407,19 +407,10 @@ fn single_scattering(scene: &Scene, p: Vec3, wo: Vec3, g: f32, source: &Source, 
     let (toward_light, phase) = match source {
         Source::Along(dir) => (-*dir, super::sh::hg(dir.dot(wo), g)),
         Source::Area(lights) => {
-            // One light sample (a light chosen by area), as the graph's direct light.
-            let total: f32 = lights.iter().map(|&i| light_area(scene, i)).sum();
-            let i = pick_by_area(scene, lights, total, rng.uniform());
-            let pmf = light_area(scene, i) / total;
-            let u = Vec2::new(rng.uniform(), rng.uniform());
-            let ctx = crate::lights::LightContext { p };
-            let Some(ls) = scene.lights[i as usize].sample_li::<Rgb>(&ctx, u, &scene.surfaces, &scene.sphere, &())
-            else {
-                return 0.0;
-            };
-            let dist = ls.p.distance(p) * (1.0 - 1e-4);
-            let t = transmittance_from_inside(scene, &Ray::new(p, ls.wi), dist, rng);
-            return t * super::sh::hg(-ls.wi.dot(wo), g) / (pmf * ls.pdf);
+            // One light sample, as the graph's direct light.
+            let Some((wi, dist, pdf)) = sample_area_lights(scene, lights, p, rng) else { return 0.0 };
+            let t = transmittance_from_inside(scene, &Ray::new(p, wi), dist, rng);
+            return t * super::sh::hg(-wi.dot(wo), g) / pdf;
         }
         Source::Point(pos) => {
             let (v, d2) = (*pos - p, pos.distance_squared(p));

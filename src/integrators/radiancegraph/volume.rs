@@ -516,17 +516,36 @@ pub fn sample_event(medium: &Medium, ray: &Ray, t_max: f32, u: f32, rng: &mut Pc
     event
 }
 
+/// A light sample at `p` from the area lights `lights` of one radiance, per unit of it: one of
+/// them chosen by area, a point by its own sampling. Returns the unit direction toward it,
+/// the distance to stop short of its surface (which would count as an occluder), and the
+/// sample's density (choice × solid angle); `None` when the sample carries nothing.
+pub fn sample_area_lights(scene: &Scene, lights: &[u32], p: Vec3, rng: &mut Pcg32) -> Option<(Vec3, f32, f32)> {
+    let total: f32 = lights.iter().map(|&i| light_area(scene, i)).sum();
+    let i = pick_by_area(scene, lights, total, rng.uniform());
+    let pmf = light_area(scene, i) / total;
+    let u = glam::Vec2::new(rng.uniform(), rng.uniform());
+    let ctx = crate::lights::LightContext { p };
+    let ls = scene.lights[i as usize].sample_li::<Rgb>(&ctx, u, &scene.surfaces, &scene.sphere, &())?;
+    Some((ls.wi, ls.p.distance(p) * (1.0 - 1e-4), pmf * ls.pdf))
+}
+
 /// The area of scene light `i` (0 for a light that is not an area light).
-pub fn light_area(scene: &Scene, i: u32) -> f32 {
+fn light_area(scene: &Scene, i: u32) -> f32 {
     match scene.lights[i as usize].kind {
         LightKind::Area { area, .. } => area,
         _ => 0.0,
     }
 }
 
-/// One of the area lights `lights`, chosen by `u` in proportion to their areas (which sum
-/// to `total`).
-pub fn pick_by_area(scene: &Scene, lights: &[u32], total: f32, u: f32) -> u32 {
+/// One of the area lights `lights`, chosen by `u` in proportion to their areas.
+pub fn pick_area_light(scene: &Scene, lights: &[u32], u: f32) -> u32 {
+    let total: f32 = lights.iter().map(|&i| light_area(scene, i)).sum();
+    pick_by_area(scene, lights, total, u)
+}
+
+/// [`pick_area_light`] with the areas' sum `total` known.
+fn pick_by_area(scene: &Scene, lights: &[u32], total: f32, u: f32) -> u32 {
     let mut left = u * total;
     for &i in lights {
         let a = light_area(scene, i);

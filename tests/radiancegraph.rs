@@ -515,4 +515,10 @@ fn a_config_less_graph_is_sized_from_the_medium_and_the_camera() {
     // At 32² the pixel is coarser than a fifth of the free path; at 1024² the node budget binds.
     assert_eq!(thick.radius_from, "pixel footprint");
     assert_eq!(sized(20.0, 1024).radius_from, "node budget");
+    // Nodes over half a free path are said to be coarse: the σs = 20 cube at 16² (pixel
+    // footprint about 0.18 against a free path of 0.05), not at 1024².
+    for (s, coarse) in [(sized(20.0, 16), true), (sized(20.0, 1024), false), (sized(2.0, 32), false)] {
+        let over = s.radius / s.free_path > sizing::COARSE_RADIUS_PER_FREE_PATH;
+        assert_eq!((s.coarse().is_some(), over), (coarse, coarse), "{s:?}");
+    }
 }

@@ -175,6 +175,8 @@ fn build(args: &BuildArgs) -> Result<ExitCode> {
             "points_per_path": s.points_per_path,
             "iterations_per_step": s.config.graph_builder.iterations_per_step,
             "expected_nodes": s.expected_nodes(),
+            "radius_per_free_path": s.radius / s.free_path,
+            "coarse": s.coarse(),
         });
     }
     if let Some((avg, std)) = stats.render_search_range {

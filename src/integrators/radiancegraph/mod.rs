@@ -173,12 +173,14 @@ pub fn create(settings: &RadianceGraphSettings, scene: &Scene) -> crate::Result<
         }
         Ok(f)
     };
+    let mut coarse = None;
     let prepare = || {
         let seed = scene.sampler.seed as u64;
         let (config, radius) = match &settings.config {
             Some(path) => (GraphConfig::from_file(path).map_err(|e| crate::Error::Invalid(e.to_string()))?, None),
             None => {
                 let s = sizing::size(&volume, seed, settings.max_depth);
+                coarse = s.coarse();
                 (s.config, Some(s.radius))
             }
         };
@@ -190,6 +192,7 @@ pub fn create(settings: &RadianceGraphSettings, scene: &Scene) -> crate::Result<
     let (f, _) = load_or_prepare(settings.graph_data.as_deref(), load, prepare, |path, f| f.write(path))?;
     let cache = RadianceCache::new(f.positions, f.ranges, f.radiance);
     Ok(render_integrator(&volume, cache)
+        .with_note(coarse)
         .with_estimator(settings.estimator)
         .with_build_peak(build_peak)
         .with_max_depth(settings.max_depth.unwrap_or(DEFAULT_MAX_DEPTH)))

@@ -200,6 +200,8 @@ pub struct RadianceGraphIntegrator {
     phase: Option<(f32, Vec<Source>)>,
     /// The path loop up to the medium (the scene's `maxdepth` bounds surface bounces).
     path: PathConfig,
+    /// A warning for the render's summary (a graph sized too coarse for its medium).
+    note: Option<String>,
 }
 
 impl RadianceGraphIntegrator {
@@ -216,6 +218,7 @@ impl RadianceGraphIntegrator {
             graph_bytes,
             phase: None,
             path: PathConfig::volpath(5, false),
+            note: None,
         }
     }
 
@@ -236,6 +239,12 @@ impl RadianceGraphIntegrator {
     /// The same with paths of at most `max_depth` scattering events before the medium.
     pub fn with_max_depth(mut self, max_depth: u32) -> RadianceGraphIntegrator {
         self.path.max_depth = max_depth;
+        self
+    }
+
+    /// The same with a warning for the render's summary.
+    pub fn with_note(mut self, note: Option<String>) -> RadianceGraphIntegrator {
+        self.note = note;
         self
     }
 
@@ -270,12 +279,14 @@ impl RayIntegrator for RadianceGraphIntegrator {
     }
 
     fn report(&self) -> Vec<String> {
-        vec![format!(
+        let mut lines = vec![format!(
             "graph       {} nodes, cache {:.2} MiB, {:.2} MiB at the graph's largest",
             self.cache.positions.len(),
             self.cache.memory_bytes() as f64 / (1 << 20) as f64,
             self.graph_bytes as f64 / (1 << 20) as f64
-        )]
+        )];
+        lines.extend(self.note.as_ref().map(|n| format!("warning     {n}")));
+        lines
     }
 
     fn precomputed_bytes(&self) -> usize {

@@ -137,6 +137,18 @@ AttributeEnd"#;
     eprintln!("cube with a sphere light: {:+.2} %", 100.0 * d);
 }
 
+/// Beyond the thesis: an emitting medium (one spectrum, here a homogeneous `Le`, orange)
+/// with the sun. Its emission is one more graph light: light paths start at emitting points,
+/// a node's direct light is the emission reaching it; camera paths add the emission along
+/// their way as volpath does.
+#[test]
+fn emissive_media_match_volpath() {
+    let text = cube_text(2.0, "volpath", "")
+        .replace(r#""rgb sigma_a" [0 0 0]"#, r#""rgb sigma_a" [0.5 0.5 0.5] "rgb Le" [1 0.6 0.3]"#);
+    let d = assert_graph_matches_volpath(&text);
+    eprintln!("emitting cube: {:+.2} %", 100.0 * d);
+}
+
 /// Surfaces beside the medium that reflect colors are refused where the graph meets them:
 /// one value per light and node carries no color.
 #[test]

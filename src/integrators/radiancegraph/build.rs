@@ -214,6 +214,24 @@ pub(super) fn light_starts(volume: &Volume, config: &Config, seed: u64) -> Vec<S
                     rays.push(Ray::new(*pos, toward_volume(volume, *pos, u)));
                 }
             }
+            // As many rays from the medium's emitting points: uniform points of its bounds
+            // (kept where it emits, up to 64 tries each), uniform directions.
+            GraphLight::Emission { .. } => {
+                let mut rng = Pcg32::new(u64::MAX - li as u64, seed);
+                let b = volume.bounds;
+                for _ in 0..n * n {
+                    for _ in 0..64 {
+                        let u = Vec3::new(rng.uniform(), rng.uniform(), rng.uniform());
+                        let p = b.min + (b.max - b.min) * u;
+                        let mp = volume.medium.sample_point::<crate::color::Rgb>(p, &());
+                        if mp.le.max_element() > 0.0 && mp.sigma_a.max_element() > 0.0 && volume.contains(p) {
+                            let d = warp::uniform_sphere(glam::Vec2::new(rng.uniform(), rng.uniform()));
+                            rays.push(Ray::new(p, d));
+                            break;
+                        }
+                    }
+                }
+            }
             // As many rays from area lights: a light chosen by area, a uniform point of it, a
             // direction toward the medium on a side it emits from.
             GraphLight::Area { lights, .. } => {

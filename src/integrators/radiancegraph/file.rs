@@ -69,6 +69,7 @@ pub fn scene_hash(volume: &Volume) -> u64 {
                 let mp = volume.medium.sample_point::<Rgb>(p, &());
                 h.f32(mp.sigma_a.x);
                 h.f32(mp.sigma_s.x);
+                h.f32(mp.le.x);
             }
         }
     }

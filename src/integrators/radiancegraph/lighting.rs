@@ -75,6 +75,7 @@ pub fn direct_light(
                     GraphLight::Area { lights, .. } => {
                         area(volume, positions[a], radius, lights, estimates, &mut rng, sh_out)
                     }
+                    GraphLight::Emission { l } => emission(volume, positions[a], radius, l.rgb, estimates, &mut rng),
                 }
             };
             let by_direction = matches!(light, GraphLight::Uniform { .. } | GraphLight::Area { .. });
@@ -158,6 +159,8 @@ fn via_surface(volume: &Volume, x: Vec3, light: &GraphLight, rng: &mut Pcg32) ->
             Some((wi, dist, pdf)) => (wi, 1.0, pdf, dist),
             None => return Ok(0.0),
         },
+        // Volume refuses an emitting medium beside surfaces.
+        GraphLight::Emission { .. } => return Ok(0.0),
     };
     let wo = -d;
     let (material, ctx) = scene.surface_material(&mut hit, wo, None);
@@ -297,6 +300,21 @@ fn area(
     }
     for (o, c) in sh_out.iter_mut().zip(coeffs) {
         *o = (c / n as f64) as f32;
+    }
+    (sum / n as f64) as f32
+}
+
+/// The medium's emission of unit spectrum `unit` scattered at the node at `c` (beyond the
+/// thesis): the mean, over uniform points of the node's medium part and uniform directions,
+/// of the emission reaching the point along the direction (isotropic scattering: the
+/// direction's density 1/4π cancels the phase function's).
+fn emission(volume: &Volume, c: Vec3, radius: f32, unit: Rgb, estimates: usize, rng: &mut Pcg32) -> f32 {
+    let n = estimates.max(1);
+    let mut sum = 0.0f64;
+    for _ in 0..n {
+        let x = point_in_node(volume, c, radius, rng);
+        let d = warp::uniform_sphere(Vec2::new(rng.uniform(), rng.uniform()));
+        sum += f64::from(super::volume::emission_along(volume.scene, &Ray::new(x, d), unit, rng));
     }
     (sum / n as f64) as f32
 }

@@ -227,6 +227,8 @@ fn source(light: &volume::GraphLight) -> transport::Source {
         volume::GraphLight::Uniform { .. } => transport::Source::Everywhere,
         volume::GraphLight::Point { pos, .. } => transport::Source::Point(*pos),
         volume::GraphLight::Area { lights, .. } => transport::Source::Area(lights.as_slice().into()),
+        // From every direction (only in an isotropic medium: Volume refuses the others).
+        volume::GraphLight::Emission { .. } => transport::Source::Everywhere,
     }
 }
 

@@ -13,7 +13,7 @@ use crate::geometry::{Bounds3, Ray};
 use crate::integrators::common::media::{ShadowEstimate, ratio_tracking, sample_t_maj};
 use crate::lights::LightKind;
 use crate::materials::bxdf::{ReflTransFlags, TransportMode};
-use crate::media::Medium;
+use crate::media::{Emission, Medium, MediumKind};
 use crate::sampling::rng::Pcg32;
 use crate::scene::Scene;
 use crate::spectra::SpectrumValue;
@@ -51,6 +51,13 @@ pub enum GraphLight {
         /// Radiant intensity.
         i: SpectrumValue,
     },
+    /// The medium's own emission (beyond the thesis), one spectrum times a scalar field
+    /// (`Le` of a homogeneous medium, `Le` × `Lescale` of a grid): light paths start from
+    /// emitting points of the medium; a node's direct light is the emission reaching it.
+    Emission {
+        /// The emission's spectrum (its scalar field multiplies it).
+        l: SpectrumValue,
+    },
     /// Diffuse area lights of one radiance (beyond the thesis; an emitting mesh is one light
     /// per triangle): light paths start from their surfaces, cosine-distributed.
     Area {
@@ -68,6 +75,7 @@ impl GraphLight {
             GraphLight::Distant { l, .. }
             | GraphLight::Uniform { l }
             | GraphLight::Point { i: l, .. }
+            | GraphLight::Emission { l }
             | GraphLight::Area { l, .. } => l,
         }
     }
@@ -130,7 +138,18 @@ impl<'a> Volume<'a> {
                 violated.push(format!("gray coefficients (medium \"{}\" has chromatic sigma_a or sigma_s)", m.name));
             }
             if m.emissive {
-                violated.push(format!("a non-emissive medium (medium \"{}\" emits)", m.name));
+                match emission_spectrum(m) {
+                    None => violated.push(format!(
+                        "a non-emissive medium, or one whose emission is one spectrum times a scalar field \
+                         (medium \"{}\" emits by temperature or per-voxel color)",
+                        m.name
+                    )),
+                    Some(_) if m.g != 0.0 => violated.push(format!(
+                        "a non-emissive medium, or an isotropic one (medium \"{}\" emits and has g = {})",
+                        m.name, m.g
+                    )),
+                    Some(_) => {}
+                }
             }
         }
         if scene.has_motion() {
@@ -162,6 +181,9 @@ impl<'a> Volume<'a> {
                 }
             }
         }
+        if let Some(l) = medium.filter(|m| m.emissive && m.g == 0.0).and_then(emission_spectrum) {
+            lights.push(GraphLight::Emission { l });
+        }
         others.dedup();
         if !others.is_empty() {
             violated.push(format!(
@@ -169,7 +191,7 @@ impl<'a> Volume<'a> {
                 others.join(" and ")
             ));
         }
-        if scene.lights.is_empty() {
+        if lights.is_empty() && others.is_empty() {
             violated.push("at least one light (the scene has none)".to_string());
         }
         if lights.len() > MAX_LIGHTS {
@@ -207,6 +229,13 @@ impl<'a> Volume<'a> {
             );
         }
         let has_opaque = prims.iter().any(|p| surface_kind(scene, p) == SurfaceKind::Opaque);
+        if let Some(m) = medium.filter(|m| has_opaque && m.emissive) {
+            violated.push(format!(
+                "a non-emissive medium where surfaces stand beside it (medium \"{}\" emits: the light it sends \
+                 to them and back is not in the graph)",
+                m.name
+            ));
+        }
         if let Some(m) = medium.filter(|m| has_opaque && m.g != 0.0) {
             violated.push(format!(
                 "an isotropic medium where surfaces stand beside it (medium \"{}\" has g = {}: the light they \
@@ -514,6 +543,68 @@ pub fn sample_event(medium: &Medium, ray: &Ray, t_max: f32, u: f32, rng: &mut Pc
         }
     });
     event
+}
+
+/// The spectrum of `medium`'s emission when it is one spectrum times a scalar field (a
+/// homogeneous medium's `Le`; a grid's `Le` with its `Lescale` grid), else `None`.
+pub fn emission_spectrum(medium: &Medium) -> Option<SpectrumValue> {
+    match &medium.kind {
+        MediumKind::Homogeneous { le, .. } => Some(*le),
+        MediumKind::Grid(g) => match &g.emission {
+            Emission::Radiance { le, .. } => Some(*le),
+            _ => None,
+        },
+        MediumKind::RgbGrid(_) => None,
+    }
+}
+
+/// The emission reaching the origin of `ray` (inside the medium) along it, per unit of the
+/// emission's spectrum `unit` (RGB): ∫ T_r(t) σa(t) s(t) dt over the medium's stretches, s
+/// the emission's scalar field. At each tentative collision of the majorant the collision
+/// estimator adds the ratio-tracked transmittance so far times σa s / σmaj; Russian roulette
+/// below 0.05 as the shadow rays'. Opaque surfaces end it.
+pub fn emission_along(scene: &Scene, ray: &Ray, unit: Rgb, rng: &mut Pcg32) -> f32 {
+    let medium = &scene.media[0];
+    let c = if unit.x >= unit.y && unit.x >= unit.z {
+        0
+    } else if unit.y >= unit.z {
+        1
+    } else {
+        2
+    };
+    let per_unit = 1.0 / unit[c];
+    let (mut ray, mut inside, mut tr, mut sum) = (*ray, true, 1.0f32, 0.0f32);
+    for _ in 0..64 {
+        let hit = first_hit(scene, &ray, f32::INFINITY, false);
+        if inside {
+            let t_max = hit.as_ref().map_or(f32::INFINITY, |h| h.0);
+            let u = rng.uniform();
+            sample_t_maj::<Rgb, _>(medium.into(), &ray, t_max, u, rng, 0, &(), |_, mp, sigma_maj, _, rng| {
+                let s = sigma_maj[0];
+                sum += tr * mp.sigma_a[0] * mp.le[c] * per_unit / s;
+                tr *= ((s - mp.sigma_a[0] - mp.sigma_s[0]) / s).max(0.0);
+                if tr < 0.05 {
+                    if rng.uniform() < 0.75 {
+                        tr = 0.0;
+                    } else {
+                        tr /= 0.25;
+                    }
+                }
+                tr > 0.0
+            });
+            if tr == 0.0 {
+                return sum;
+            }
+        }
+        match hit {
+            None | Some((_, _, SurfaceKind::Opaque)) => return sum,
+            Some((_, h, _)) => {
+                inside = ray.d.dot(h.surface.n) < 0.0;
+                ray = h.surface.spawn_ray(ray.d);
+            }
+        }
+    }
+    sum
 }
 
 /// A light sample at `p` from the area lights `lights` of one radiance, per unit of it: one of

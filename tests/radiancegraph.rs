@@ -147,6 +147,22 @@ fn emissive_media_match_volpath() {
         .replace(r#""rgb sigma_a" [0 0 0]"#, r#""rgb sigma_a" [0.5 0.5 0.5] "rgb Le" [1 0.6 0.3]"#);
     let d = assert_graph_matches_volpath(&text);
     eprintln!("emitting cube: {:+.2} %", 100.0 * d);
+    // A grid's Le times its Lescale grid (and a density grid): the emission's scalar field.
+    let n = 4usize;
+    let density: Vec<String> = (0..n * n * n).map(|i| format!("{:.2}", 0.5 + (i % 7) as f32 / 7.0)).collect();
+    let scale: Vec<String> = (0..n * n * n).map(|i| format!("{:.2}", (i % 5) as f32 / 2.0)).collect();
+    let grid = format!(
+        r#"MakeNamedMedium "m" "string type" "uniformgrid" "integer nx" {n} "integer ny" {n} "integer nz" {n}
+  "rgb sigma_s" [2 2 2] "rgb sigma_a" [0.5 0.5 0.5] "rgb Le" [1 0.5 0.2] "point3 p0" [-1 -1 -1] "point3 p1" [1 1 1]
+  "float density" [{}] "float Lescale" [{}]"#,
+        density.join(" "),
+        scale.join(" ")
+    );
+    let text = cube_text(2.0, "volpath", "");
+    let start = text.find("MakeNamedMedium").unwrap();
+    let end = text.find("AttributeBegin").unwrap();
+    let d = assert_graph_matches_volpath(&format!("{}{grid}\n{}", &text[..start], &text[end..]));
+    eprintln!("emitting grid: {:+.2} %", 100.0 * d);
 }
 
 /// Surfaces beside the medium that reflect colors are refused where the graph meets them:

@@ -214,6 +214,8 @@ pub(super) fn light_starts(volume: &Volume, config: &Config, seed: u64) -> Vec<S
                     rays.push(Ray::new(*pos, toward_volume(volume, *pos, u)));
                 }
             }
+            // A light's reflection has the light's own paths.
+            GraphLight::Reflected { .. } => {}
             // As many rays from the medium's emitting points: uniform points of its bounds
             // (kept where it emits, up to 64 tries each), uniform directions.
             GraphLight::Emission { .. } => {

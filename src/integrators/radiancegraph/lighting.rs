@@ -11,8 +11,6 @@ use super::sh;
 use super::volume::{GraphLight, Volume, sample_area_lights};
 use crate::color::Rgb;
 use crate::geometry::Ray;
-use crate::integrators::common::shading_frame;
-use crate::materials::bxdf::TransportMode;
 use crate::math::Frame;
 use crate::sampling::rng::Pcg32;
 use crate::sampling::warp;
@@ -76,9 +74,12 @@ pub fn direct_light(
                         area(volume, positions[a], radius, lights, estimates, &mut rng, sh_out)
                     }
                     GraphLight::Emission { l } => emission(volume, positions[a], radius, l.rgb, estimates, &mut rng),
+                    // Computed below.
+                    GraphLight::Reflected { .. } => 0.0,
                 }
             };
-            let by_direction = matches!(light, GraphLight::Uniform { .. } | GraphLight::Area { .. });
+            let by_direction =
+                matches!(light, GraphLight::Uniform { .. } | GraphLight::Area { .. } | GraphLight::Reflected { .. });
             let k = if by_direction && volume.medium.g != 0.0 { sh::COEFFS } else { 1 };
             let per_node = |scratch: &mut Scratch, a: usize| -> [f32; sh::COEFFS] {
                 let mut c = [0.0; sh::COEFFS];
@@ -88,23 +89,44 @@ pub fn direct_light(
                 }
                 c
             };
-            // Light reflected into the medium by the surfaces beside it (an isotropic medium's
-            // scalar: Volume refuses them beside an anisotropic one).
-            let reflected = |a: usize| -> Result<f32, Vec3> {
-                if !volume.has_opaque {
-                    return Ok(0.0);
-                }
+            // Light reflected into the medium by the surfaces beside it: in an isotropic medium
+            // part of each light's scalar; in an anisotropic one the coefficients of a light of
+            // its own (`GraphLight::Reflected`), as it arrives from other directions.
+            let g = volume.medium.g;
+            let reflected = |a: usize, of: &GraphLight, sh_out: &mut [f32; sh::COEFFS]| -> Result<f32, Vec3> {
                 let mut rng = Pcg32::new(li as u64 * n + a as u64, seed ^ 0x0073_7572_6661_6365);
-                let mut sum = 0.0f64;
+                let (mut sum, mut coeffs) = (0.0f64, [0.0f64; sh::COEFFS]);
+                let bands = sh::bands(g);
                 for _ in 0..estimates.max(1) {
                     let x = point_in_node(volume, positions[a], radius, &mut rng);
-                    sum += f64::from(via_surface(volume, x, light, &mut rng)?);
+                    let d = warp::uniform_sphere(Vec2::new(rng.uniform(), rng.uniform()));
+                    let v = super::volume::reflected_along(volume.scene, &Ray::new(x, d), of, &mut rng)?;
+                    sum += f64::from(v);
+                    if g != 0.0 && v > 0.0 {
+                        for ((c, b), y) in coeffs.iter_mut().zip(bands).zip(sh::basis(-d)) {
+                            *c += f64::from(v * b * y);
+                        }
+                    }
                 }
-                Ok((sum / estimates.max(1) as f64) as f32)
+                let m = estimates.max(1) as f64;
+                for (o, c) in sh_out.iter_mut().zip(coeffs) {
+                    *o = (c / m) as f32;
+                }
+                Ok((sum / m) as f32)
             };
             let per_node = |scratch: &mut Scratch, a: usize| -> Result<[f32; sh::COEFFS], Vec3> {
+                if let GraphLight::Reflected { of } = light {
+                    let mut c = [0.0; sh::COEFFS];
+                    let v = reflected(a, of, &mut c)?;
+                    if k == 1 {
+                        c[0] = v;
+                    }
+                    return Ok(c);
+                }
                 let mut c = per_node(scratch, a);
-                c[0] += reflected(a)?;
+                if volume.has_opaque && g == 0.0 {
+                    c[0] += reflected(a, light, &mut [0.0; sh::COEFFS])?;
+                }
                 Ok(c)
             };
             let values: Result<Vec<[f32; sh::COEFFS]>, Vec3> = if config.run_in_parallel {
@@ -123,62 +145,6 @@ pub fn direct_light(
             Ok(values.iter().flat_map(|c| c[..k].iter().copied()).collect())
         })
         .collect()
-}
-
-/// Light of unit radiance from `light` reaching `x` in the medium after one reflection off a
-/// surface beside it (beyond the thesis), scattered isotropically: one sample of
-/// T_r(x, y) f(y) |cos| T_r(y, light) L / pdf_light at the first opaque surface y along a
-/// uniform direction from `x` (whose density 1/4π cancels the phase function's). Light that
-/// crosses the medium on its way to a surface, and from there back into the medium, is in
-/// the graph's transport no further than this one reflection. `Err(material)` where the
-/// surface reflects colored light (`Err` holds where).
-fn via_surface(volume: &Volume, x: Vec3, light: &GraphLight, rng: &mut Pcg32) -> Result<f32, Vec3> {
-    let scene = volume.scene;
-    let d = warp::uniform_sphere(Vec2::new(rng.uniform(), rng.uniform()));
-    let (t_to, Some((mut hit, inside))) = super::volume::walk(scene, &Ray::new(x, d), f32::INFINITY, true, rng) else {
-        return Ok(0.0);
-    };
-    if t_to <= 0.0 {
-        return Ok(0.0);
-    }
-    let y = hit.surface.p;
-    // Toward the light: (direction, radiance per unit, density, distance).
-    let (wi, l, pdf, dist) = match light {
-        GraphLight::Distant { dir, .. } => (-*dir, 1.0, 1.0, f32::INFINITY),
-        GraphLight::Uniform { .. } => (
-            warp::uniform_sphere(Vec2::new(rng.uniform(), rng.uniform())),
-            1.0,
-            warp::UNIFORM_SPHERE_PDF,
-            f32::INFINITY,
-        ),
-        GraphLight::Point { pos, .. } => {
-            let d2 = pos.distance_squared(y);
-            ((*pos - y) / d2.sqrt(), 1.0 / d2, 1.0, d2.sqrt() * (1.0 - 1e-4))
-        }
-        GraphLight::Area { lights, .. } => match sample_area_lights(scene, lights, y, rng) {
-            Some((wi, dist, pdf)) => (wi, 1.0, pdf, dist),
-            None => return Ok(0.0),
-        },
-        // Volume refuses an emitting medium beside surfaces.
-        GraphLight::Emission { .. } => return Ok(0.0),
-    };
-    let wo = -d;
-    let (material, ctx) = scene.surface_material(&mut hit, wo, None);
-    let Some(bxdf) = material.bxdf::<Rgb>(&scene.textures, &ctx, &mut ()) else { return Ok(0.0) };
-    let frame = shading_frame(&hit);
-    let wl = frame.to_local(wi);
-    let f = bxdf.f(frame.to_local(wo), wl, TransportMode::Radiance) * wl.z.abs();
-    if f.max_element() <= 0.0 {
-        return Ok(0.0);
-    }
-    if f.max_element() - f.min_element() > 1e-3 * f.max_element() {
-        return Err(y);
-    }
-    let (t_from, stopped) = super::volume::walk(scene, &hit.surface.spawn_ray(wi), dist, inside, rng);
-    if stopped.is_some() {
-        return Ok(0.0);
-    }
-    Ok(t_to * f.x * l * t_from / pdf)
 }
 
 /// Per-thread buffers of the direct-light walks.

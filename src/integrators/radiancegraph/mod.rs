@@ -229,6 +229,7 @@ fn source(light: &volume::GraphLight) -> transport::Source {
         volume::GraphLight::Area { lights, .. } => transport::Source::Area(lights.as_slice().into()),
         // From every direction (only in an isotropic medium: Volume refuses the others).
         volume::GraphLight::Emission { .. } => transport::Source::Everywhere,
+        volume::GraphLight::Reflected { of } => transport::Source::Reflected(std::sync::Arc::new((**of).clone())),
     }
 }
 

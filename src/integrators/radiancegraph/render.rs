@@ -423,6 +423,14 @@ fn single_scattering(scene: &Scene, p: Vec3, wo: Vec3, g: f32, source: &Source, 
             let t = transmittance_from_inside(scene, &Ray::new(p, wi), dist, rng);
             return t * super::sh::hg(-wi.dot(wo), g) / pdf;
         }
+        Source::Reflected(light) => {
+            // A direction by the phase function (weight 1) and the light the surfaces reflect
+            // along it. A colored surface was refused where the build's direct light met it;
+            // one it never met counts as dark here.
+            let u = Vec2::new(rng.uniform(), rng.uniform());
+            let Some(s) = HenyeyGreenstein::new(g).sample_p(wo, u) else { return 0.0 };
+            return super::volume::reflected_along(scene, &Ray::new(p, s.wi), light, rng).unwrap_or(0.0);
+        }
         Source::Point(pos) => {
             let (v, d2) = (*pos - p, pos.distance_squared(p));
             let to_light = v / d2.sqrt();

@@ -164,13 +164,16 @@ pub enum Source {
     /// Area lights (these scene lights, chosen by area): the direct values are, per node,
     /// coefficients as for [`Source::Everywhere`].
     Area(std::sync::Arc<[u32]>),
+    /// A light's light reflected once by the surfaces beside the medium: coefficients as for
+    /// [`Source::Everywhere`].
+    Reflected(std::sync::Arc<super::volume::GraphLight>),
 }
 
 impl Source {
     /// Whether the direct values are per-node coefficients of the scattered light (light
     /// arrives from many directions) rather than one scalar.
     pub fn by_direction(&self) -> bool {
-        matches!(self, Source::Everywhere | Source::Area(_))
+        matches!(self, Source::Everywhere | Source::Area(_) | Source::Reflected(_))
     }
 }
 
@@ -219,7 +222,7 @@ impl Transport {
                         // Isotropic: the mean of what b sends, into band 0.
                         let mean = match (first, &source) {
                             (true, Source::Along(_) | Source::Point(_)) => direct[b],
-                            (true, Source::Everywhere | Source::Area(_)) => direct[b * k] * y00,
+                            (true, Source::Everywhere | Source::Area(_) | Source::Reflected(_)) => direct[b * k] * y00,
                             (false, _) => current[b * k] * y00,
                         };
                         acc[0] += w * mean / y00;
@@ -230,7 +233,9 @@ impl Transport {
                     let sent = if first {
                         match &source {
                             Source::Along(dir) => direct[b] * 4.0 * std::f32::consts::PI * sh::hg(dir.dot(d), g),
-                            Source::Everywhere | Source::Area(_) => sh::eval(&direct[b * k..(b + 1) * k], d),
+                            Source::Everywhere | Source::Area(_) | Source::Reflected(_) => {
+                                sh::eval(&direct[b * k..(b + 1) * k], d)
+                            }
                             Source::Point(pos) => {
                                 let dir = (positions[b] - pos).normalize_or_zero();
                                 direct[b] * 4.0 * std::f32::consts::PI * sh::hg(dir.dot(d), g)

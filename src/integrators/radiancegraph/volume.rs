@@ -30,7 +30,7 @@ pub const MAX_SURFACE_BOUNCES: usize = 8;
 pub const MAX_G: f32 = 0.75;
 
 /// A light the graph carries one radiance scalar per node for.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub enum GraphLight {
     /// Parallel light travelling along `dir`.
     Distant {
@@ -58,6 +58,13 @@ pub enum GraphLight {
         /// The emission's spectrum (its scalar field multiplies it).
         l: SpectrumValue,
     },
+    /// Light of `of` reflected once by the surfaces beside an anisotropic medium into it (beyond
+    /// the thesis): a light of its own, whose direct values are directional coefficients, as
+    /// it arrives from the surfaces' directions, not the light's.
+    Reflected {
+        /// The light reflected.
+        of: Box<GraphLight>,
+    },
     /// Diffuse area lights of one radiance (beyond the thesis; an emitting mesh is one light
     /// per triangle): light paths start from their surfaces, cosine-distributed.
     Area {
@@ -77,6 +84,7 @@ impl GraphLight {
             | GraphLight::Point { i: l, .. }
             | GraphLight::Emission { l }
             | GraphLight::Area { l, .. } => l,
+            GraphLight::Reflected { of } => of.radiance(),
         }
     }
 }
@@ -194,12 +202,6 @@ impl<'a> Volume<'a> {
         if lights.is_empty() && others.is_empty() {
             violated.push("at least one light (the scene has none)".to_string());
         }
-        if lights.len() > MAX_LIGHTS {
-            violated.push(format!(
-                "at most {MAX_LIGHTS} lights, area lights of one radiance counted once (the scene has {})",
-                lights.len()
-            ));
-        }
         if scene.camera_medium != NONE {
             violated.push("a camera outside the medium".to_string());
         }
@@ -236,11 +238,17 @@ impl<'a> Volume<'a> {
                 m.name
             ));
         }
-        if let Some(m) = medium.filter(|m| has_opaque && m.g != 0.0) {
+        // In an anisotropic medium the light the surfaces reflect into it is a light of its own.
+        if medium.is_some_and(|m| has_opaque && m.g != 0.0) {
+            let reflected: Vec<GraphLight> =
+                lights.iter().map(|l| GraphLight::Reflected { of: Box::new(l.clone()) }).collect();
+            lights.extend(reflected);
+        }
+        if lights.len() > MAX_LIGHTS {
             violated.push(format!(
-                "an isotropic medium where surfaces stand beside it (medium \"{}\" has g = {}: the light they \
-                 reflect into it is not directional in the graph)",
-                m.name, m.g
+                "at most {MAX_LIGHTS} lights, area lights of one radiance counted once and, in an anisotropic \
+                 medium beside surfaces, each light's reflection once more (the scene has {})",
+                lights.len()
             ));
         }
         if !violated.is_empty() {
@@ -605,6 +613,61 @@ pub fn emission_along(scene: &Scene, ray: &Ray, unit: Rgb, rng: &mut Pcg32) -> f
         }
     }
     sum
+}
+
+/// Light of unit radiance from `light` arriving at the origin of `ray` (in the medium) along
+/// it, backwards, after one reflection off a surface beside the medium (beyond the thesis): one
+/// sample of T_r(x, y) f(y) |cos| T_r(y, light) L / pdf_light at the first opaque surface y
+/// along the ray. Light that crosses the medium on its way to a surface, and from there back
+/// into the medium, is in the graph's transport no further than this one reflection. `Err`
+/// (where) when the surface reflects colored light.
+pub fn reflected_along(scene: &Scene, ray: &Ray, light: &GraphLight, rng: &mut Pcg32) -> Result<f32, Vec3> {
+    let d = ray.d;
+    let (t_to, Some((mut hit, inside))) = walk(scene, ray, f32::INFINITY, true, rng) else {
+        return Ok(0.0);
+    };
+    if t_to <= 0.0 {
+        return Ok(0.0);
+    }
+    let y = hit.surface.p;
+    // Toward the light: (direction, radiance per unit, density, distance).
+    let (wi, l, pdf, dist) = match light {
+        GraphLight::Distant { dir, .. } => (-*dir, 1.0, 1.0, f32::INFINITY),
+        GraphLight::Uniform { .. } => (
+            crate::sampling::warp::uniform_sphere(glam::Vec2::new(rng.uniform(), rng.uniform())),
+            1.0,
+            crate::sampling::warp::UNIFORM_SPHERE_PDF,
+            f32::INFINITY,
+        ),
+        GraphLight::Point { pos, .. } => {
+            let d2 = pos.distance_squared(y);
+            ((*pos - y) / d2.sqrt(), 1.0 / d2, 1.0, d2.sqrt() * (1.0 - 1e-4))
+        }
+        GraphLight::Area { lights, .. } => match sample_area_lights(scene, lights, y, rng) {
+            Some((wi, dist, pdf)) => (wi, 1.0, pdf, dist),
+            None => return Ok(0.0),
+        },
+        // Volume refuses an emitting medium beside surfaces; a reflected light is reflected
+        // once, by its own light.
+        GraphLight::Emission { .. } | GraphLight::Reflected { .. } => return Ok(0.0),
+    };
+    let wo = -d;
+    let (material, ctx) = scene.surface_material(&mut hit, wo, None);
+    let Some(bxdf) = material.bxdf::<Rgb>(&scene.textures, &ctx, &mut ()) else { return Ok(0.0) };
+    let frame = crate::integrators::common::shading_frame(&hit);
+    let wl = frame.to_local(wi);
+    let f = bxdf.f(frame.to_local(wo), wl, TransportMode::Radiance) * wl.z.abs();
+    if f.max_element() <= 0.0 {
+        return Ok(0.0);
+    }
+    if f.max_element() - f.min_element() > 1e-3 * f.max_element() {
+        return Err(y);
+    }
+    let (t_from, stopped) = walk(scene, &hit.surface.spawn_ray(wi), dist, inside, rng);
+    if stopped.is_some() {
+        return Ok(0.0);
+    }
+    Ok(t_to * f.x * l * t_from / pdf)
 }
 
 /// A light sample at `p` from the area lights `lights` of one radiance, per unit of it: one of

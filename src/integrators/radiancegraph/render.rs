@@ -7,12 +7,10 @@
 use glam::{IVec3, Vec2, Vec3};
 
 use super::transport::Source;
-use super::volume::{MAX_LIGHTS, sample_area_lights, transmittance_from_inside};
+use super::volume::{MAX_LIGHTS, collision_walk, sample_area_lights, transmittance_from_inside};
 use crate::channels::Channels;
-use crate::color::Rgb;
 use crate::geometry::Ray;
 use crate::integrators::RayIntegrator;
-use crate::integrators::common::media::sample_t_maj;
 use crate::integrators::common::{PathConfig, PathRecorder, PathStrategy, RayStats, trace_path};
 use crate::math::cell_map::CellMap;
 use crate::media::phase::HenyeyGreenstein;
@@ -375,18 +373,8 @@ impl RadianceGraphIntegrator {
             if inside {
                 let t_max = hit.as_ref().map_or(f32::INFINITY, |h| h.surface.t);
                 let u = u_first.take().unwrap_or_else(|| rng.uniform());
-                sample_t_maj::<Rgb, _>(medium.into(), &ray, t_max, u, &mut rng, 0, &(), |p, mp, sigma_maj, _, rng| {
-                    let s = sigma_maj[0];
-                    l += self.radiance_at(scene, p, -ray.d, beta * mp.sigma_s[0] / s, le, rng);
-                    beta *= ((s - mp.sigma_a[0] - mp.sigma_s[0]) / s).max(0.0);
-                    if beta < 0.05 {
-                        if rng.uniform() < 0.75 {
-                            beta = 0.0;
-                        } else {
-                            beta /= 0.25;
-                        }
-                    }
-                    beta > 0.0
+                beta = collision_walk(medium, &ray, t_max, u, &mut rng, beta, |p, mp, w, rng| {
+                    l += self.radiance_at(scene, p, -ray.d, w * mp.sigma_s[0], le, rng);
                 });
                 if beta == 0.0 {
                     return l;

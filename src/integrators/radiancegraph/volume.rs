@@ -13,7 +13,7 @@ use crate::geometry::{Bounds3, Ray};
 use crate::integrators::common::media::{ShadowEstimate, ratio_tracking, sample_t_maj};
 use crate::lights::LightKind;
 use crate::materials::bxdf::{ReflTransFlags, TransportMode};
-use crate::media::{Emission, Medium, MediumKind};
+use crate::media::{Emission, Medium, MediumKind, MediumPoint};
 use crate::sampling::rng::Pcg32;
 use crate::scene::Scene;
 use crate::spectra::SpectrumValue;
@@ -589,18 +589,8 @@ pub fn emission_along(scene: &Scene, ray: &Ray, unit: Rgb, rng: &mut Pcg32) -> f
         if inside {
             let t_max = hit.as_ref().map_or(f32::INFINITY, |h| h.0);
             let u = rng.uniform();
-            sample_t_maj::<Rgb, _>(medium.into(), &ray, t_max, u, rng, 0, &(), |_, mp, sigma_maj, _, rng| {
-                let s = sigma_maj[0];
-                sum += tr * mp.sigma_a[0] * mp.le[c] * per_unit / s;
-                tr *= ((s - mp.sigma_a[0] - mp.sigma_s[0]) / s).max(0.0);
-                if tr < 0.05 {
-                    if rng.uniform() < 0.75 {
-                        tr = 0.0;
-                    } else {
-                        tr /= 0.25;
-                    }
-                }
-                tr > 0.0
+            tr = collision_walk(medium, &ray, t_max, u, rng, tr, |_, mp, w, _| {
+                sum += w * mp.sigma_a[0] * mp.le[c] * per_unit;
             });
             if tr == 0.0 {
                 return sum;
@@ -670,6 +660,37 @@ pub fn reflected_along(scene: &Scene, ray: &Ray, light: &GraphLight, rng: &mut P
         return Ok(0.0);
     }
     Ok(t_to * f.x * l * t_from / pdf)
+}
+
+/// A collision estimator along `ray` to `t_max` in `medium` (gray): at each tentative collision
+/// of the majorant (the first at `u`), `add(p, coefficients, w, rng)` with w the ratio-tracked
+/// transmittance so far, starting from `tr`, over σmaj — so that Σ w·f estimates
+/// ∫ T_r(t) f(t) dt —, then the transmittance takes the null fraction, with Russian roulette
+/// below 0.05 as the shadow rays'. Returns the transmittance at `t_max` (0 once roulette or a
+/// collision ends it).
+pub fn collision_walk(
+    medium: &Medium,
+    ray: &Ray,
+    t_max: f32,
+    u: f32,
+    rng: &mut Pcg32,
+    mut tr: f32,
+    mut add: impl FnMut(Vec3, &MediumPoint<Rgb>, f32, &mut Pcg32),
+) -> f32 {
+    sample_t_maj::<Rgb, _>(medium.into(), ray, t_max, u, rng, 0, &(), |p, mp, sigma_maj, _, rng| {
+        let s = sigma_maj[0];
+        add(p, mp, tr / s, rng);
+        tr *= ((s - mp.sigma_a[0] - mp.sigma_s[0]) / s).max(0.0);
+        if tr < 0.05 {
+            if rng.uniform() < 0.75 {
+                tr = 0.0;
+            } else {
+                tr /= 0.25;
+            }
+        }
+        tr > 0.0
+    });
+    tr
 }
 
 /// A light sample at `p` from the area lights `lights` of one radiance, per unit of it: one of

@@ -243,11 +243,19 @@ impl Mixture {
         self.base
     }
 
-    /// The coefficients at a vertex; `mix` false leaves the BSDF or phase function alone
-    /// (the path's throughput is above 1, see `tracer.rs`).
+    /// The coefficients at a vertex, the other densities' shares scaled by `mix` ∈ [0, 1]
+    /// (1: the scene's coefficients; 0: the BSDF or phase function alone; below 1 where the
+    /// path's throughput has risen above 1, see `tracer.rs`).
     #[inline]
-    pub fn weights<C: Channels>(&self, sc: &Scatterer<'_, C>, mix: bool) -> Weights {
-        if mix && sc.mixes() { self.base } else { Weights::SCATTER_ONLY }
+    pub fn weights<C: Channels>(&self, sc: &Scatterer<'_, C>, mix: f32) -> Weights {
+        if mix <= 0.0 || !sc.mixes() {
+            return Weights::SCATTER_ONLY;
+        }
+        if mix >= 1.0 {
+            return self.base;
+        }
+        let (light, env) = (self.base.light * mix, self.base.env * mix);
+        Weights { scatter: 1.0 - light - env, light, env }
     }
 
     /// Draws ω' from p (the paper's 1D example: `u_comp` picks a density and, rescaled to
@@ -260,7 +268,7 @@ impl Mixture {
         scene: &Scene,
         x: Vec3,
         sc: &Scatterer<'_, C>,
-        mix: bool,
+        mix: f32,
         u_comp: f32,
         u: Vec2,
         lambda: &C::Lambda,
@@ -345,7 +353,7 @@ impl Mixture {
         wi: Vec3,
         first: Option<&Hit>,
     ) -> f32 {
-        let w = self.weights(sc, true);
+        let w = self.weights(sc, 1.0);
         let light = if w.light > 0.0 { self.light_pdf(scene, x, wi, first) } else { 0.0 };
         let env = if w.env > 0.0 { self.env_pdf(scene, wi) } else { 0.0 };
         w.scatter * sc.eval(wi).1 + w.light * light + w.env * env
@@ -492,7 +500,7 @@ AttributeEnd"#;
             for _ in 0..n {
                 let u_comp = rng.uniform();
                 let u = Vec2::new(rng.uniform(), rng.uniform());
-                let ms = m.sample::<Rgb>(&s, x, sc, true, u_comp, u, &()).expect("every density samples from x");
+                let ms = m.sample::<Rgb>(&s, x, sc, 1.0, u_comp, u, &()).expect("every density samples from x");
                 let theta = (ms.wi.z as f64).clamp(-1.0, 1.0).acos();
                 let phi = (ms.wi.y as f64).atan2(ms.wi.x as f64).rem_euclid(2.0 * PI);
                 let i = ((theta / PI * NT as f64) as usize).min(NT - 1);
@@ -534,20 +542,34 @@ AttributeEnd"#;
 
     /// A luminaire sample whose ray meets something else first has weight 0; a BSDF sample
     /// towards the same light through the same blocker does not count the light's density.
+    /// The graded mixture (`tracer.rs`, a throughput above 1): the other shares scaled, the
+    /// phase function's taking the rest; 0 leaves it alone.
+    #[test]
+    fn mixture_shares_scale_with_mix() {
+        let s = scene();
+        let m = mixture(&s);
+        let sc: Scatterer<'_, Rgb> = Scatterer::Medium { phase: HenyeyGreenstein::new(0.0), wo: Vec3::Z };
+        let (full, half) = (m.weights(&sc, 1.0), m.weights(&sc, 0.5));
+        assert_eq!(full, m.base_weights());
+        assert!((half.light - 0.5 * full.light).abs() < 1e-6 && (half.env - 0.5 * full.env).abs() < 1e-6);
+        assert!((half.scatter + half.light + half.env - 1.0).abs() < 1e-6);
+        assert_eq!(m.weights(&sc, 0.0), Weights::SCATTER_ONLY);
+    }
+
     #[test]
     fn blocked_light_samples_have_no_weight() {
         let s = scene();
         let m = mixture(&s);
         let x = Vec3::new(0.0, 0.0, 0.0);
         let sc = Scatterer::Medium { phase: HenyeyGreenstein::new(0.0), wo: Vec3::Z };
-        let w = m.weights(&sc, true);
+        let w = m.weights(&sc, 1.0);
         let ms = (0..64)
             .find_map(|k| {
                 let ms = m.sample::<Rgb>(
                     &s,
                     x,
                     &sc,
-                    true,
+                    1.0,
                     w.scatter + 0.5 * w.light,
                     Vec2::new((k as f32 + 0.5) / 64.0, 0.3),
                     &(),

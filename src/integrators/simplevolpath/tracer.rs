@@ -30,6 +30,10 @@ use crate::integrators::common::{MAX_SUBSURFACE_EVENTS, RayStats, medium_after, 
 use crate::lights::LightContext;
 use crate::media::phase::HenyeyGreenstein;
 use crate::samplers::Sampler;
+
+/// The throughput above which a medium vertex samples the phase function alone (see
+/// `Path::mix_share`).
+const MAX_MIXING_BETA: f32 = 2.0;
 use crate::sampling::distribution::AliasTable;
 use crate::scene::Scene;
 
@@ -82,19 +86,33 @@ impl<C: Channels> Path<C> {
         true
     }
 
-    /// Whether a medium vertex samples from the whole mixture. Its weight f/p is at most
-    /// Λ/c_s (c_s < 1 the phase function's share): unbiased at each vertex, but a product over
-    /// n vertices whose second moment can grow as (1/c_s)^n, which the long forward-scattering
-    /// chains of a dense cloud turn into fireflies (with g = 0.877, p_s ≫ p_e ahead, so most
-    /// vertices weigh about 1/c_s). The coefficients may depend on anything but the direction
-    /// drawn here, so a path whose throughput has risen above 1 samples the phase function
-    /// alone (weight Λ ≤ 1) until it falls back: β then never exceeds max(1, Λ/c_s) through
-    /// the media's mixtures, and each vertex stays an unbiased one-sample MIS estimator.
-    /// Surface vertices keep the mixture: their chains are short (ρ < 1, roulette), and a
-    /// small luminaire found by the BSDF alone would be a firefly of its own.
+    /// How much of the mixture a medium vertex samples from: the scale of the luminaire and
+    /// environment shares ([`super::mixture::Mixture::weights`]). A vertex's weight f/p is at
+    /// most Λ/c_s (c_s < 1 the phase function's share): unbiased at each vertex, but a product
+    /// over n vertices whose second moment can grow as (1/c_s)^n, which the long
+    /// forward-scattering chains of a dense cloud turn into fireflies (with g = 0.877,
+    /// p_s ≫ p_e ahead, so most vertices weigh about 1/c_s). The coefficients may depend on
+    /// anything but the direction drawn here, so a path whose throughput β has risen above 1
+    /// scales the other shares by 1/β (c_s = 1 − (1 − c_s⁰)/β: a vertex multiplies β by at
+    /// most β/(β − 1 + c_s⁰), so β grows by less than 1 − c_s⁰ per vertex instead of by the
+    /// factor 1/c_s⁰) and above [`MAX_MIXING_BETA`] samples the phase function alone (weight
+    /// Λ ≤ 1): β never exceeds about MAX_MIXING_BETA·Λ through the media's mixtures, each
+    /// vertex stays an unbiased one-sample MIS estimator, and luminaires keep being sampled
+    /// along the chains of a small light's medium (the stress matrix's `08-light-small`, where
+    /// turning the mixture off above β = 1 left a light of radius 0.05 to the phase function:
+    /// relMSE 4125× volpath's). Surface vertices keep the mixture: their chains are short
+    /// (ρ < 1, roulette), and a small luminaire found by the BSDF alone would be a firefly of
+    /// its own.
     #[inline]
-    fn mixes(&self) -> bool {
-        (self.beta * self.eta_scale / self.r_u.average()).max_element() <= 1.0
+    fn mix_share(&self) -> f32 {
+        let beta = (self.beta * self.eta_scale / self.r_u.average()).max_element();
+        if beta <= 1.0 {
+            1.0
+        } else if beta <= MAX_MIXING_BETA {
+            1.0 / beta
+        } else {
+            0.0
+        }
     }
 
     /// Russian roulette; true when the path ends. The sampler value is drawn at every vertex.
@@ -297,7 +315,7 @@ pub fn trace<C: Channels>(
         // intersection, weighted by f / p with p evaluated where the ray went.
         let u_comp = sampler.get_1d();
         let u = sampler.get_2d();
-        let mix = !matches!(sc, Scatterer::Medium { .. }) || path.mixes();
+        let mix = if matches!(sc, Scatterer::Medium { .. }) { path.mix_share() } else { 1.0 };
         let Some(s) = mixture.sample(scene, x, &sc, mix, u_comp, u, lambda) else { break };
         if s.f.is_zero() {
             break;

@@ -3,7 +3,7 @@
 //! node's outgoing edges with their sample counts.
 //!
 //! Memory, per node: position 12 B, sample count 4 B, next-in-cell link 4 B, edge-list row
-//! 8 B, in arrays that grow by fixed chunks, and a hash grid with cells of twice the radius
+//! 8 B, kept scattering points for the direct light 52 B ([`Members`]), in arrays that grow by fixed chunks, and a hash grid with cells of twice the radius
 //! (a few nodes per cell); per edge: target and count, 8 B, in slots at most twice a list's
 //! length ([`EdgeLists`]). The thesis keeps `std::map`s of nodes, edges and per-node edge maps
 //! (≈ 190 B per edge).
@@ -17,6 +17,51 @@ use crate::math::cell_map::CellMap;
 type Cells = CellMap<u32>;
 
 const NONE: u32 = u32::MAX;
+
+/// Scattering points kept per node (a uniform reservoir of the light-path vertices that joined
+/// it), where its direct light is estimated.
+pub const MEMBERS: usize = 8;
+
+/// A kept point as its offset from the node's position in 1/32767ths of the node radius (a
+/// joined point lies within the radius): 6 bytes instead of 12.
+type Offset = [i16; 3];
+
+/// Each node's kept points ([`MEMBERS`] at most).
+pub struct Members {
+    offsets: Vec<[Offset; MEMBERS]>,
+    counts: Vec<u32>,
+    radius: f32,
+}
+
+impl Members {
+    /// Number of nodes.
+    pub fn len(&self) -> usize {
+        self.counts.len()
+    }
+
+    /// True without nodes.
+    pub fn is_empty(&self) -> bool {
+        self.counts.is_empty()
+    }
+
+    /// Bytes held.
+    pub fn memory_bytes(&self) -> usize {
+        self.offsets.len() * std::mem::size_of::<[Offset; MEMBERS]>() + self.counts.len() * 4
+    }
+
+    /// The points kept for node `a` at `position` (at least one: a node is made by a point),
+    /// in the first entries of the array, and their number.
+    #[inline]
+    pub fn of(&self, a: usize, position: Vec3) -> ([Vec3; MEMBERS], usize) {
+        let n = (self.counts[a] as usize).clamp(1, MEMBERS);
+        let scale = self.radius / f32::from(i16::MAX);
+        let mut out = [position; MEMBERS];
+        for (o, q) in out[..n].iter_mut().zip(&self.offsets[a]) {
+            *o += Vec3::new(f32::from(q[0]), f32::from(q[1]), f32::from(q[2])) * scale;
+        }
+        (out, n)
+    }
+}
 
 /// A growable array in fixed chunks of 2¹⁶ elements: pushing never copies or doubles.
 struct Chunked<T> {
@@ -104,6 +149,8 @@ pub struct BuildGraph {
     positions: Chunked<Vec3>,
     samples: Chunked<u32>,
     next_in_cell: Chunked<u32>,
+    members: Chunked<[Offset; MEMBERS]>,
+    joins: Chunked<u32>,
     cells: Cells,
     out: EdgeLists,
     /// Runs of consecutive path vertices in one node.
@@ -121,6 +168,8 @@ impl BuildGraph {
             positions: Chunked::new(),
             samples: Chunked::new(),
             next_in_cell: Chunked::new(),
+            members: Chunked::new(),
+            joins: Chunked::new(),
             cells: Cells::default(),
             out: EdgeLists::default(),
             in_node: RunStats::default(),
@@ -209,8 +258,33 @@ impl BuildGraph {
         *head = i;
         self.positions.push(p);
         self.samples.push(0);
+        self.members.push([[0; 3]; MEMBERS]);
+        self.joins.push(0);
         self.out.push_node();
         i
+    }
+
+    /// Offers scattering point `p` to node `a`'s reservoir: each of the node's points so far
+    /// is kept with the same probability (Vitter's algorithm R, its random choice a hash of
+    /// the node and the count, so the graph stays the same at any thread count).
+    fn join(&mut self, a: u32, p: Vec3) {
+        let k = self.joins.get(a as usize);
+        *self.joins.get_mut(a as usize) = k.saturating_add(1);
+        let slot = if (k as usize) < MEMBERS {
+            k as usize
+        } else {
+            // SplitMix64's finaliser of (node, count).
+            let mut h = (u64::from(a) << 32 | u64::from(k)).wrapping_add(0x9e37_79b9_7f4a_7c15);
+            h = (h ^ (h >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+            h = (h ^ (h >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+            h ^= h >> 31;
+            (h % (u64::from(k) + 1)) as usize
+        };
+        if slot < MEMBERS {
+            let q = ((p - self.positions.get(a as usize)) / self.radius * f32::from(i16::MAX)).round();
+            let q = q.clamp(Vec3::splat(-f32::from(i16::MAX)), Vec3::splat(f32::from(i16::MAX)));
+            self.members.get_mut(a as usize)[slot] = [q.x as i16, q.y as i16, q.z as i16];
+        }
     }
 
     /// Groups one traced path into the graph (thesis Sec. 4.3): each scattering point joins
@@ -232,6 +306,7 @@ impl BuildGraph {
                 Some(n) => n,
                 None => self.add_node(p),
             };
+            self.join(node, p);
             if let Some(v) = prev {
                 *self.samples.get_mut(v as usize) += 1;
                 self.out.add(v, node);
@@ -273,6 +348,8 @@ impl BuildGraph {
         let nodes = self.positions.bytes()
             + self.samples.bytes()
             + self.next_in_cell.bytes()
+            + self.members.bytes()
+            + self.joins.bytes()
             + rows
             // hashbrown: key, value and one control byte per bucket.
             + self.cells.capacity() * (std::mem::size_of::<IVec3>() + 4 + 1);
@@ -281,17 +358,57 @@ impl BuildGraph {
 
     /// The node positions, the transport matrix (Eq. 4.8 with Eq. 4.20's weights, made from
     /// the edge lists in place) and the in-node run statistics.
-    pub fn into_parts(self) -> (Vec<Vec3>, Transport, RunStats) {
-        let BuildGraph { positions, samples, out, in_node, .. } = self;
+    pub fn into_parts(self) -> (Vec<Vec3>, Transport, RunStats, Members) {
+        let BuildGraph { positions, samples, out, in_node, members, joins, radius, .. } = self;
         let samples = samples.into_vec();
         let t = Transport::from_lists(out, &samples);
-        (positions.into_vec(), t, in_node)
+        let members = Members { offsets: members.into_vec(), counts: joins.into_vec(), radius };
+        (positions.into_vec(), t, in_node, members)
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Each node keeps the points that joined it, up to [`MEMBERS`], each with the same
+    /// chance: over 200 nodes joined by 100 points each (the k-th at k/100 of the radius along
+    /// x), the kept points' mean position is the joined points' (0.495 of the radius), and
+    /// every kept point is a joined one to the offsets' precision.
+    #[test]
+    fn nodes_keep_a_uniform_sample_of_their_points() {
+        let mut g = BuildGraph::new(1.0);
+        let centre = |i: usize| Vec3::new(0.0, 0.0, 10.0 * i as f32);
+        for i in 0..200 {
+            let points: Vec<Vec3> = (0..100).map(|k| centre(i) + Vec3::X * (k as f32 / 100.0)).collect();
+            g.add_path(None, &points, true);
+        }
+        assert_eq!(g.len(), 200);
+        let (positions, _, _, members) = g.into_parts();
+        let (mut sum, mut n) = (0.0f64, 0);
+        for (a, &p) in positions.iter().enumerate() {
+            assert_eq!(p, centre(a));
+            let (kept, count) = members.of(a, p);
+            assert_eq!(count, MEMBERS);
+            for x in &kept[..count] {
+                let d = *x - p;
+                let k = d.x * 100.0;
+                assert!((k - k.round()).abs() < 0.01 && d.y.abs() < 1e-4 && d.z.abs() < 1e-4, "{d}");
+                sum += f64::from(d.x);
+                n += 1;
+            }
+        }
+        // 1600 draws of a uniform over {0, …, 0.99}: standard error 0.0072.
+        let mean = sum / f64::from(n);
+        assert!((mean - 0.495).abs() < 0.03, "kept points' mean {mean}");
+        // A node with fewer points than slots keeps them all.
+        let mut g = BuildGraph::new(1.0);
+        g.add_path(None, &[Vec3::ZERO, Vec3::new(0.5, 0.0, 0.0)], true);
+        let (positions, _, _, members) = g.into_parts();
+        let (kept, count) = members.of(0, positions[0]);
+        assert_eq!(count, 2);
+        assert!((kept[1] - Vec3::new(0.5, 0.0, 0.0)).length() < 1e-4);
+    }
 
     #[test]
     fn points_join_the_closest_node_within_the_radius() {
@@ -309,7 +426,7 @@ mod tests {
         assert_eq!(g.closest_within_radius(Vec3::new(2.1, 0.0, 0.0)), Some(1));
         assert_eq!(g.count_within(Vec3::ZERO, 3.0), 2);
         assert_eq!(g.count_within(Vec3::ZERO, 2.9), 1);
-        let (pos, t, runs) = g.into_parts();
+        let (pos, t, runs, _) = g.into_parts();
         assert_eq!(pos.len(), 2);
         // w(0,1) = 1/2, w(1,0) = 1/1.
         assert_eq!(t.row(0).collect::<Vec<_>>(), [(1, 0.5)]);

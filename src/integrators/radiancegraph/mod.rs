@@ -346,7 +346,7 @@ pub fn build(
         return Err(crate::Error::invalid("no light path scattered in the medium: the graph is empty"));
     }
     let t = Instant::now();
-    let (positions, transport, runs) = graph.into_parts();
+    let (positions, transport, runs, members) = graph.into_parts();
     let rsr = &config.graph_builder.render_search_range;
     let ranges = if rsr.active {
         search_range::search_ranges(&positions, rsr.neighbours_to_use as usize)?
@@ -356,15 +356,16 @@ pub fn build(
     stages.push(Stage {
         name: "search ranges",
         seconds: t.elapsed().as_secs_f64(),
-        peak_bytes: positions.len() * (12 + 4) + transport.memory_bytes(),
+        peak_bytes: positions.len() * (12 + 4) + transport.memory_bytes() + members.memory_bytes(),
     });
     let t = Instant::now();
-    let direct = lighting::direct_light(&volume, &positions, radius, &config.lighting_calculator, seed)?;
+    let direct = lighting::direct_light(&volume, &positions, &members, &config.lighting_calculator, seed)?;
     stages.push(Stage {
         name: "direct light",
         seconds: t.elapsed().as_secs_f64(),
-        peak_bytes: direct.len() * positions.len() * 4,
+        peak_bytes: direct.len() * positions.len() * 4 + members.memory_bytes(),
     });
+    drop(members);
     let t = Instant::now();
     let bounces = &config.lighting_calculator.bounces;
     let g = volume.medium.g;

@@ -37,8 +37,8 @@ pub const NODE_BUDGET: f64 = 400.0e3;
 /// cube's radius 0.173 against its 0.82 / 5.
 const RADIUS_PER_FREE_PATH: f32 = 0.2;
 /// Node radius per mean free path above which the graph is coarse: its bias grows with the
-/// nodes' size in free paths (the real Disney cloud at g = 0, README: +6.5 % at 0.39, +19.7 %
-/// at 0.73, +47 % at 1.5), and the pixel footprint or the node budget can set a radius this
+/// nodes' size in free paths (the real Disney cloud at g = 0, README: +8.1 % at 0.73 and
+/// +14.7 % at 1.5 free paths), and the pixel footprint or the node budget can set a radius this
 /// large in a dense cloud.
 pub const COARSE_RADIUS_PER_FREE_PATH: f32 = 0.5;
 /// Grid rays per side over each light in the pilot, and paths per ray.
@@ -83,7 +83,7 @@ impl Sizing {
         (r > COARSE_RADIUS_PER_FREE_PATH).then(|| {
             format!(
                 "the graph's nodes span {r:.2} free paths (radius set by the {}): a graph this coarse is biased \
-                 (the real Disney cloud: +20 % at 0.73 free paths, +47 % at 1.5); a config with a smaller \
+                 (the real Disney cloud at g = 0: +8 % at 0.73 free paths, +15 % at 1.5); a config with a smaller \
                  radius builds longer and is less so",
                 self.radius_from
             )

@@ -524,6 +524,9 @@ fn a_config_less_graph_is_sized_from_the_medium_and_the_camera() {
     // Bounces: a path of the scene's depth has depth − 1; without one, the thesis's 9.
     assert_eq!(sized_to(2.0, 32, Some(12)).config.lighting_calculator.bounces, [11]);
     assert_eq!(sized_to(2.0, 32, None).config.lighting_calculator.bounces, [9]);
+    // Light paths as long as the scene's (the thesis's 10 without a maxdepth).
+    assert_eq!(sized_to(2.0, 32, Some(40)).config.graph_builder.max_depth, 40);
+    assert_eq!(sized_to(2.0, 32, None).config.graph_builder.max_depth, 10);
     let thick = sized(20.0, 32);
     assert!((0.8..1.0).contains(&(thick.free_path * 20.0)), "{thick:?}");
     let fine = sized(20.0, 64);

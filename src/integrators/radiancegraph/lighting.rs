@@ -10,7 +10,8 @@
 //! dense and the light arrives. A uniform point counts the empty corners of a cloud's bounding
 //! volume and its thin, brightly lit fringe as much as the shadowed core: on the real Disney
 //! cloud at g = 0 that put the no-config graph's image mean +47 % above volpath's; at the
-//! kept vertices, +15 % (README: "Direct light where light paths scatter").
+//! kept vertices, +15 % (README: "Direct light where light paths scatter"). Point lights keep
+//! uniform points (see [`point`]).
 
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
@@ -54,6 +55,7 @@ pub fn disk_points(radius: f32, n: u32) -> Vec<Vec2> {
 pub fn direct_light(
     volume: &Volume,
     positions: &[Vec3],
+    radius: f32,
     members: &Members,
     config: &LightingCalculator,
     seed: u64,
@@ -82,11 +84,7 @@ pub fn direct_light(
                         }) * INV_4PI
                     }
                     GraphLight::Point { pos, .. } => {
-                        node.scalar(&mut rng, |x, rng| {
-                            let d2 = x.distance_squared(*pos);
-                            let ray = Ray::new(x, (*pos - x) / d2.sqrt());
-                            transmittance_from_inside(volume.scene, &ray, d2.sqrt(), rng) / d2
-                        }) * INV_4PI
+                        point(volume, positions[a], radius, *pos, estimates, &mut rng) * INV_4PI
                     }
                     // ∫ p T_r dω: uniform directions, the transmittance out along each.
                     GraphLight::Uniform { .. } => node.directional(&mut rng, &mut c, |x, rng| {
@@ -140,6 +138,30 @@ pub fn direct_light(
             Ok(values.iter().flat_map(|c| c[..k].iter().copied()).collect())
         })
         .collect()
+}
+
+/// Mean over uniform points of the node's sphere at `c` inside the medium of T_r / r² from a
+/// point light at `light` (beyond the thesis: its direct light per unit intensity, times 4π
+/// p). Not at the kept vertices: near the light they crowd as its 1/r² does, and their mean of
+/// 1/r² has no bound (the stress matrix's point light inside the sphere came out +11 % and
+/// +25 % at two build seeds against +1.6 % and +5.8 % from uniform points).
+fn point(volume: &Volume, c: Vec3, radius: f32, light: Vec3, estimates: usize, rng: &mut Pcg32) -> f32 {
+    let at = |x: Vec3, rng: &mut Pcg32| {
+        let d2 = x.distance_squared(light);
+        let ray = Ray::new(x, (light - x) / d2.sqrt());
+        f64::from(transmittance_from_inside(volume.scene, &ray, d2.sqrt(), rng) / d2)
+    };
+    let (mut sum, mut count) = (0.0f64, 0u32);
+    for _ in 0..estimates {
+        // A uniform point of the sphere (rejection), counted when it is in the medium.
+        let v = Vec3::new(rng.uniform(), rng.uniform(), rng.uniform()) * 2.0 - Vec3::ONE;
+        if v.length_squared() < 1.0 && volume.contains(c + v * radius) {
+            sum += at(c + v * radius, rng);
+            count += 1;
+        }
+    }
+    // No point in the medium drawn: the centre, a scattering point.
+    if count == 0 { at(c, rng) as f32 } else { (sum / f64::from(count)) as f32 }
 }
 
 /// A node as its direct light sees it: the points kept for it, cycled through for its

@@ -359,7 +359,7 @@ pub fn build(
         peak_bytes: positions.len() * (12 + 4) + transport.memory_bytes() + members.memory_bytes(),
     });
     let t = Instant::now();
-    let direct = lighting::direct_light(&volume, &positions, &members, &config.lighting_calculator, seed)?;
+    let direct = lighting::direct_light(&volume, &positions, radius, &members, &config.lighting_calculator, seed)?;
     stages.push(Stage {
         name: "direct light",
         seconds: t.elapsed().as_secs_f64(),

@@ -3,8 +3,9 @@
 //! node's outgoing edges with their sample counts.
 //!
 //! Memory, per node: position 12 B, sample count 4 B, next-in-cell link 4 B, edge-list row
-//! 8 B, kept scattering points for the direct light 52 B ([`Members`]), in arrays that grow by fixed chunks, and a hash grid with cells of twice the radius
-//! (a few nodes per cell); per edge: target and count, 8 B, in slots at most twice a list's
+//! 8 B, kept scattering points for the direct light 52 B ([`Members`]), in arrays that grow
+//! by fixed chunks, and a hash grid with cells of twice the radius (a few nodes per cell);
+//! per edge: target and count, 8 B, in slots at most twice a list's
 //! length ([`EdgeLists`]). The thesis keeps `std::map`s of nodes, edges and per-node edge maps
 //! (≈ 190 B per edge).
 
@@ -357,7 +358,7 @@ impl BuildGraph {
     }
 
     /// The node positions, the transport matrix (Eq. 4.8 with Eq. 4.20's weights, made from
-    /// the edge lists in place) and the in-node run statistics.
+    /// the edge lists in place), the in-node run statistics and the points each node kept.
     pub fn into_parts(self) -> (Vec<Vec3>, Transport, RunStats, Members) {
         let BuildGraph { positions, samples, out, in_node, members, joins, radius, .. } = self;
         let samples = samples.into_vec();

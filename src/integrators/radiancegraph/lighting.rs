@@ -47,7 +47,8 @@ pub fn disk_points(radius: f32, n: u32) -> Vec<Vec2> {
 
 /// Direct light scalars of every node for every light: `result[light][node]`, the value of
 /// Eq. 4.22 without L_e (each light's radiance multiplies its scalars when rendering), at the
-/// points `members` kept for each node (at `positions`). In an anisotropic medium the values of a light that
+/// points `members` kept for each node (at `positions`; a point light's at uniform points of
+/// the node's sphere of `radius`). In an anisotropic medium the values of a light that
 /// arrives from many directions (uniform, area, reflected) are, per node, the
 /// [`sh::COEFFS`] coefficients of the light it scatters toward each direction
 /// (`result[light][node * COEFFS + k]`): light from every direction is not scattered

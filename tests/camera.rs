@@ -81,7 +81,7 @@ fn pathgraph_sees_through_the_lens_as_volpath_does() {
     std::fs::write(&lens, DGAUSS).unwrap();
     let params = r#""float aperturediameter" 17 "float focusdistance" 6"#;
     let opts = BuildOptions { seed: Some(2), ..Default::default() };
-    let graph_params = r#""integer clustersize" 1 "integer iterations" 2"#;
+    let graph_params = r#""integer clustersize" 1 "integer iterations" 2 "integer linesamples" 0"#;
     let graph = load_scene(&scene(&lens, params, "pathgraph", graph_params, false), &opts);
     let volpath = load_scene(&scene(&lens, params, "volpath", "", false), &opts);
     let line = VolPath::with_config(PathConfig { camera_line: true, ..PathConfig::volpath(10, false) });

@@ -1,15 +1,101 @@
-//! The camera line's area lights ([`super::PathConfig::camera_line`]): what delta tracking
-//! along the camera's straight line adds at depth 0, estimated by ratio tracking whatever the
-//! segment's own tracking does.
+//! The camera line, estimated beyond what the path's own camera segment does: its area
+//! lights ([`super::PathConfig::camera_line`]: what delta tracking along the camera's
+//! straight line adds at depth 0, estimated by ratio tracking whatever the segment's own
+//! tracking does), and the direct light at more first collisions along it
+//! ([`super::PathConfig::line_direct`]).
+
+use glam::Vec2;
 
 use super::RayStats;
-use super::media::line_transmittance;
-use super::path::medium_after;
+use super::direct::{Scatterer, sample_direct};
+use super::media::{Collision, Tracking, line_transmittance};
+use super::observer::NoObserver;
+use super::path::{PathState, medium_after};
 use crate::accel::{Hit, NONE};
 use crate::channels::Channels;
 use crate::geometry::Ray;
-use crate::sampling::rng::Pcg32;
+use crate::media::MediumView;
+use crate::media::phase::HenyeyGreenstein;
+use crate::sampling::rng::{Pcg32, hash_sample};
 use crate::scene::Scene;
+
+/// The sum of `n` independent estimates of the direct light at the first collision along
+/// `ray` through `medium` up to `t_max` (a stretch of the camera line, `(ray, t_max, medium)`),
+/// each as the path's own camera segment would make it: a collision by delta tracking from the
+/// path state `st` at the stretch's start (absorption, or no collision before `t_max`, gives
+/// nothing; β and r_u take the same ratios as the path's in chromatic media), then one light
+/// sample there by light sampling alone (unbiased without the phase technique), its shadow
+/// ray on a stream of its own. `seed` (one sampler dimension) seeds every random number.
+/// Also returns the estimates' sample variance (of their channels' mean; 0 for fewer than
+/// two), from which a method can judge how many are worth taking.
+pub(super) fn line_direct<C: Channels>(
+    scene: &Scene,
+    (ray, t_max, medium): (&Ray, f32, u32),
+    st: &PathState<C>,
+    n: u32,
+    seed: f32,
+    lambda: &C::Lambda,
+    stats: &mut RayStats,
+) -> (C, f32) {
+    let m = &scene.media[medium as usize];
+    let view = MediumView { medium: m, entered: st.entered };
+    let scatterer = Scatterer::Medium { phase: HenyeyGreenstein::new(m.g), wo: -ray.d };
+    let mut rng = Pcg32::new(hash_sample(seed, Vec2::new(0.75, 0.25)), 0x2545_f491_4f6c_dd1d);
+    let (mut sum, mut squares) = (C::ZERO, 0.0f64);
+    for _ in 0..n {
+        let mut s = *st;
+        let hero = s.hero;
+        let mut at = None;
+        let walk = Tracking { medium: view, ray, t_max, hero, lambda, residual: false };
+        let u = rng.uniform();
+        walk.run(u, &mut rng, |c: &Collision<C>, rng| {
+            let (mp, sigma_maj, t_maj) = (&c.mp, c.sigma_maj, c.t_s);
+            let um = rng.uniform();
+            let p_absorb = mp.sigma_a[hero] / sigma_maj[hero];
+            let p_scatter = mp.sigma_s[hero] / sigma_maj[hero];
+            if um < p_absorb {
+                false
+            } else if um < p_absorb + p_scatter {
+                if m.chromatic {
+                    let pdf = t_maj[hero] * mp.sigma_s[hero];
+                    s.beta *= t_maj * mp.sigma_s / pdf;
+                    s.r_u *= t_maj * mp.sigma_s / pdf;
+                }
+                at = Some(c.p);
+                false
+            } else {
+                let sigma_n = (sigma_maj - mp.sigma_a - mp.sigma_s).max(C::ZERO);
+                let pdf = t_maj[hero] * sigma_n[hero];
+                if pdf == 0.0 {
+                    s.beta = C::ZERO;
+                } else if m.chromatic {
+                    s.beta *= t_maj * sigma_n / pdf;
+                    s.r_u *= t_maj * sigma_n / pdf;
+                }
+                !s.beta.is_zero() && !s.r_u.is_zero()
+            }
+        });
+        let Some(p) = at else { continue };
+        if s.beta.is_zero() || s.r_u.is_zero() {
+            continue;
+        }
+        let u = (rng.uniform(), Vec2::new(rng.uniform(), rng.uniform()));
+        let stream = (u64::from(rng.next_u32()) << 32 | u64::from(rng.next_u32())) | 1;
+        if let Some(c) =
+            sample_direct(scene, p, None, medium, &scatterer, u, &s, lambda, 0, &mut NoObserver, stats, Some(stream))
+        {
+            sum += c;
+            squares += f64::from(c.average()).powi(2);
+        }
+    }
+    let spread = if n > 1 {
+        let mean = f64::from(sum.average()) / f64::from(n);
+        ((squares - f64::from(n) * mean * mean) / f64::from(n - 1)).max(0.0) as f32
+    } else {
+        0.0
+    };
+    (sum, spread)
+}
 
 /// The area-light emission along the straight line `ray` (starting in `medium`, first hitting
 /// `hit`): lights hit through `interface` surfaces and the one opaque surface it ends at,

@@ -166,6 +166,13 @@ pub trait PathRecorder<C: Channels> {
     /// (not added to the path's estimate).
     #[inline]
     fn on_extra_direct(&mut self, _depth: u32, _contribution: C) {}
+    /// The sum of `samples` extra first vertices' light samples on a stretch of the camera
+    /// line through a medium ([`super::PathConfig::line_direct`]; not added to the path's
+    /// estimate) and their sample variance (`spread`, of the channels' mean); `own` when the
+    /// path's own first vertex is on the same stretch (a medium vertex at depth 0), so that
+    /// its direct light is one estimate of `samples + 1`.
+    #[inline]
+    fn on_line_direct(&mut self, _sum: C, _spread: f32, _samples: u32, _own: bool) {}
 }
 
 /// A method's view of the path loop: what it records and how it steers. Implement

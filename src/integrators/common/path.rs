@@ -9,7 +9,7 @@
 
 use glam::{Vec2, Vec3};
 
-use super::camera_line::line_emission;
+use super::camera_line::{line_direct, line_emission};
 use super::direct::{Scatterer, extra_direct, sample_direct};
 use super::media::{Collision, Tracking};
 use super::observer::{EmissionEvent, PathObserver, VertexEvent};
@@ -43,6 +43,15 @@ pub struct PathConfig {
     /// use them for the pixel's direct light (Hu et al. 2024, Sec. 4). 0 for every per-ray
     /// method.
     pub extra_direct: u32,
+    /// Extra first vertices along the camera line: on each stretch of the camera ray through
+    /// a medium, this many more collisions are sampled by delta tracking (each from its own
+    /// random numbers, up to the stretch's end) and each takes one light sample (light
+    /// sampling alone), reported to the observer and not added to the path's estimate. With
+    /// the path's own first vertex they are `line_direct + 1` independent estimates of the
+    /// direct light at the camera ray's first collision there: path graphs take their mean
+    /// for the pixel's non-aggregated direct light, which back-lit and rim-lit media are
+    /// mostly made of. 0 for every per-ray method.
+    pub line_direct: u32,
     /// In chromatic media, draw the hero wavelength anew at every scattering vertex and apply
     /// the spectral MIS over the hero choice per segment (β and r_u divided by the mean of r_u
     /// there) instead of over the whole path: unbiased as well, and it makes every segment's
@@ -72,6 +81,7 @@ impl PathConfig {
             regularize,
             next_event: true,
             extra_direct: 0,
+            line_direct: 0,
             hero_per_segment: false,
             camera_line: false,
         }
@@ -290,7 +300,14 @@ impl<C: Channels, O: PathObserver<C>> Tracer<'_, C, O> {
             // Area lights on the camera line (depth 0) once it has been estimated.
             let line_counted = w.line_done && w.depth == 0;
             if w.medium != NONE {
-                match self.track_medium(w, found.map_or(f32::INFINITY, |f| f.t())) {
+                let t_max = found.map_or(f32::INFINITY, |f| f.t());
+                let line = self.line_direct(w, t_max);
+                let tracked = self.track_medium(w, t_max);
+                if let Some((sum, spread)) = line {
+                    let own = matches!(tracked, Tracked::Scattered(_));
+                    self.observer.on_line_direct(sum, spread, self.config.line_direct, own);
+                }
+                match tracked {
                     Tracked::Ended => return,
                     Tracked::Scattered(p) if self.scatter_in_medium(w, p) => continue,
                     Tracked::Scattered(_) => return,
@@ -324,6 +341,26 @@ impl<C: Channels, O: PathObserver<C>> Tracer<'_, C, O> {
                 self.observer.on_emission(&EmissionEvent { depth: w.depth, contribution: c, pdf_light: 0.0 });
             }
         }
+    }
+
+    /// The extra first vertices' light samples on the camera line's stretch through the
+    /// walk's medium up to `t_max` ([`PathConfig::line_direct`]): their sum and sample
+    /// variance, or None where none are taken (past the first vertex, in `subsurface` media,
+    /// which stand for a BSSRDF).
+    #[inline]
+    fn line_direct(&mut self, w: &Walk<C>, t_max: f32) -> Option<(C, f32)> {
+        let (scene, config) = (self.scene, self.config);
+        if config.line_direct == 0 || w.depth != 0 || config.max_depth == 0 {
+            return None;
+        }
+        let m = &scene.media[w.medium as usize];
+        if m.subsurface {
+            return None;
+        }
+        // One sampler dimension seeds them all, so their count does not shift the path's own.
+        let seed = self.sampler.get_1d();
+        let stretch = (&w.ray, t_max, w.medium);
+        Some(line_direct(scene, stretch, &w.st, config.line_direct, seed, self.lambda, self.stats))
     }
 
     /// Delta tracking through the current medium up to the surface at `t_max` (or infinity),

@@ -7,6 +7,7 @@
 
 mod cluster;
 mod lanes;
+mod line;
 mod nearest;
 mod record;
 mod settings;
@@ -67,6 +68,8 @@ pub struct PathGraph {
     /// per camera ray, as volpath renders them.
     without_media: bool,
     report: Mutex<Report>,
+    /// Extra first vertices per camera ray, measured and chosen over the first samples.
+    line: Mutex<line::LineTuning>,
     /// The recording arrays, kept from one graph sample to the next: allocating them afresh
     /// faulted in every page again (a tenth of a sample's time on fog-emitter at 512×384).
     stores: Mutex<Stores>,
@@ -118,21 +121,24 @@ pub fn create(settings: &PathGraphSettings, scene: &Scene) -> crate::Result<Path
         },
         without_media: scene.media.is_empty(),
         report: Mutex::new(Report::default()),
+        line: Mutex::new(line::LineTuning::default()),
         stores: Mutex::new(Stores::default()),
     })
 }
 
 impl PathGraph {
     /// Records one 1-spp pass in the channels `C` into `stores`: graph vertices (in film RGB)
-    /// and one path per pixel, each tile's in one block. Returns the blocks (start and length
-    /// in the vertex store) in tile order: the canonical vertex order, which does not depend
-    /// on the thread count, while the store's order does.
+    /// and one path per pixel, each tile's in one block, with the path loop's `config`.
+    /// Returns the blocks (start and length in the vertex store) in tile order: the canonical
+    /// vertex order, which does not depend on the thread count, while the store's order does;
+    /// and the paths' Σ of the extra first vertices' sample variances, summed in that order.
     fn record<C: RenderChannels>(
         &self,
         scene: &Scene,
         pass: &ImagePass<'_>,
+        config: &PathConfig,
         stores: &mut Stores,
-    ) -> (RayStats, Vec<(u32, u32)>) {
+    ) -> (RayStats, Vec<(u32, u32)>, f64) {
         let (mut vertices, mut paths) = (std::mem::take(&mut stores.vertices), std::mem::take(&mut stores.paths));
         vertices.clear();
         paths.clear();
@@ -159,7 +165,7 @@ impl PathGraph {
                         scene.camera_medium,
                         lambda,
                         sampler,
-                        &self.config,
+                        config,
                         rec,
                         stats,
                     );
@@ -172,7 +178,7 @@ impl PathGraph {
                     p.scale_last(c.weight);
                 }
             },
-            |_, (_, mut v, mut p)| {
+            |_, (rec, mut v, mut p)| {
                 let len = v.len() as u32;
                 let start = {
                     let mut g = lock(&graph);
@@ -183,14 +189,16 @@ impl PathGraph {
                     start
                 };
                 lock(&staging).push((v, p));
-                (start, len)
+                ((start, len), rec.line_spread)
             },
         );
+        let spread = blocks.iter().map(|b| b.1).sum();
+        let blocks = blocks.into_iter().map(|b| b.0).collect();
         let (vertices, paths) = graph.into_inner().unwrap_or_else(|e| e.into_inner());
         stores.vertices = vertices;
         stores.paths = paths;
         stores.staging = staging.into_inner().unwrap_or_else(|e| e.into_inner());
-        (stats, blocks)
+        (stats, blocks, spread)
     }
 }
 
@@ -259,9 +267,15 @@ impl ImageIntegrator for PathGraph {
         let start = Instant::now();
         // Taken, not held: a concurrent sample (none today) would record into fresh arrays.
         let mut stores = std::mem::take(&mut *lock(&self.stores));
-        let (stats, blocks) = match scene.transport.transport {
-            Transport::Rgb => self.record::<Rgb>(scene, pass, &mut stores),
-            Transport::Spectral => self.record::<SampledSpectrum>(scene, pass, &mut stores),
+        // A render's first sample measures afresh: rendering the same image again gives it again.
+        if pass.sample_index() == 0 {
+            *lock(&self.line) = line::LineTuning::default();
+        }
+        let line_direct = self.settings.line_samples.unwrap_or_else(|| lock(&self.line).samples());
+        let config = PathConfig { line_direct, ..self.config };
+        let (stats, blocks, spread) = match scene.transport.transport {
+            Transport::Rgb => self.record::<Rgb>(scene, pass, &config, &mut stores),
+            Transport::Spectral => self.record::<SampledSpectrum>(scene, pass, &config, &mut stores),
         };
         let Stores { vertices: v, paths, .. } = &mut stores;
         let recorded = Instant::now();
@@ -384,6 +398,10 @@ impl ImageIntegrator for PathGraph {
                 }
             },
         );
+        if self.settings.line_samples.is_none() {
+            let pixels = paths.pixel.iter().zip(&paths.before).map(|(&i, l)| (i, l.element_sum() / 3.0));
+            lock(&self.line).observe(spread, paths.len(), pixels);
+        }
         for (((&index, &weight), &l), &d) in paths.pixel.iter().zip(&paths.weight).zip(&paths.before).zip(&paths.beta) {
             out(PixelValue { index, weight, l, unbiased: combine.then_some(l + d) });
         }
@@ -414,7 +432,7 @@ impl Integrator for PathGraph {
 
     /// Per-ray callers get the path-traced estimate the graph starts from.
     fn li_rgb(&self, scene: &Scene, ray: Ray, lambda: &mut (), sampler: &mut Sampler, stats: &mut RayStats) -> Rgb {
-        let config = PathConfig { extra_direct: 0, ..self.config };
+        let config = PathConfig { extra_direct: 0, line_direct: 0, ..self.config };
         trace_path(scene, ray, scene.camera_medium, lambda, sampler, &config, &mut NoObserver, stats)
     }
 
@@ -426,7 +444,7 @@ impl Integrator for PathGraph {
         sampler: &mut Sampler,
         stats: &mut RayStats,
     ) -> SampledSpectrum {
-        let config = PathConfig { extra_direct: 0, ..self.config };
+        let config = PathConfig { extra_direct: 0, line_direct: 0, ..self.config };
         trace_path::<SampledSpectrum, _>(
             scene,
             ray,
@@ -487,6 +505,17 @@ impl Integrator for PathGraph {
                 added as f64 / r.max_vertices.max(1) as f64
             ));
         }
+        let line = lock(&self.line);
+        lines.push(match (self.settings.line_samples, line.chosen(), line.measured) {
+            (Some(n), ..) => format!("pathgraph   {n} extra first vertices per camera ray (linesamples)"),
+            (None, Some(n), Some((v_d, total))) => format!(
+                "pathgraph   {n} extra first vertices per camera ray, chosen after {} samples with {}: one first \
+                 vertex's direct light has variance {v_d:.3e}, the pixels {total:.3e} per sample",
+                2,
+                line::PROBE
+            ),
+            _ => format!("pathgraph   {} extra first vertices per camera ray (measuring)", line.samples()),
+        });
         lines
     }
 }

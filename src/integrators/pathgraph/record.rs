@@ -255,6 +255,14 @@ pub struct Recorder<C: Channels> {
     nee: Vec<NeeEvent<C>>,
     emission: Vec<EmissionEvent<C>>,
     extra: Option<(u32, C)>,
+    /// The extra first vertices' direct light along the camera line, each stretch's sum over
+    /// its samples and the path's own vertex (`PathConfig::line_direct`), and the share left
+    /// to the own first vertex's direct light when it was on such a stretch (else 1).
+    line: C,
+    line_share: f32,
+    /// The extra samples' sample variances so far, summed over stretches and paths: the
+    /// variance of one first vertex's direct light, which decides how many to take.
+    pub line_spread: f64,
     /// Graph vertex (index into the per-path arrays below) of each scattering vertex, by
     /// depth; NONE for folded ones.
     graph: Vec<u32>,
@@ -280,6 +288,9 @@ impl<C: Channels> Default for Recorder<C> {
             nee: Vec::new(),
             emission: Vec::new(),
             extra: None,
+            line: C::ZERO,
+            line_share: 1.0,
+            line_spread: 0.0,
             graph: Vec::new(),
             depth: Vec::new(),
             e: Vec::new(),
@@ -313,6 +324,15 @@ impl<C: Channels> PathRecorder<C> for Recorder<C> {
     #[inline]
     fn on_extra_direct(&mut self, depth: u32, contribution: C) {
         self.extra = Some((depth, contribution));
+    }
+    #[inline]
+    fn on_line_direct(&mut self, sum: C, spread: f32, samples: u32, own: bool) {
+        self.line_spread += f64::from(spread);
+        let share = 1.0 / (samples + 1) as f32;
+        self.line += sum * share;
+        if own {
+            self.line_share = share;
+        }
     }
 }
 
@@ -406,7 +426,7 @@ impl<C: Channels> Recorder<C> {
         let graph = &self.graph;
         let before_depth =
             |depth: usize| -> Option<usize> { (0..depth.min(graph.len())).rev().find(|&d| graph[d] != NONE) };
-        let mut before = C::ZERO;
+        let mut before = self.line;
         let vs = &self.vertices;
         // Radiance found after graph vertex at depth `d` by no technique the graph aggregates.
         let mut fold = |d: Option<usize>, x: C, c: &mut [C], w: &[C]| match d {
@@ -424,7 +444,11 @@ impl<C: Channels> Recorder<C> {
                     self.e[k] += div(e.contribution, vs[d].beta);
                     self.light[k] = (e.wi, e.pdf_light, e.pdf_scatter);
                 }
-                _ => fold(before_depth(d), e.contribution, &mut self.c, &self.w),
+                // The own first vertex's direct light is one of the camera line's estimates.
+                _ => {
+                    let share = if d == 0 { self.line_share } else { 1.0 };
+                    fold(before_depth(d), e.contribution * share, &mut self.c, &self.w)
+                }
             }
         }
         for e in &self.emission {
@@ -441,7 +465,10 @@ impl<C: Channels> Recorder<C> {
                     sw.0 += y;
                     sw.1 += y * e.pdf_light;
                 }
-                _ => fold(before_depth(d), e.contribution, &mut self.c, &self.w),
+                _ => {
+                    let share = if d == 1 && e.pdf_light > 0.0 { self.line_share } else { 1.0 };
+                    fold(before_depth(d), e.contribution * share, &mut self.c, &self.w)
+                }
             }
         }
         // The path-traced L⁺ and L̄ of each graph vertex, backwards along the path.
@@ -488,15 +515,19 @@ impl<C: Channels> Recorder<C> {
             let beta_rgb = rgb_factor(beta, self.scattered[0], &to_rgb, one);
             // The pixel's own direct light at its first graph vertex (E + R as the vertex
             // stores them), or the extra light samples' taken there.
-            let direct = match self.extra {
+            let mut direct = match self.extra {
                 Some((depth, c)) if depth as usize == self.depth[0] => to_rgb(div(c, beta)),
                 _ => to_rgb(self.e[0]) + to_rgb(self.r[0]),
             };
+            if self.depth[0] == 0 {
+                direct *= self.line_share;
+            }
             paths.before.push(to_rgb(before) + beta_rgb * direct);
             paths.first.push(base);
             paths.beta.push(beta_rgb);
         }
         self.extra = None;
+        (self.line, self.line_share) = (C::ZERO, 1.0);
         self.vertices.clear();
         self.nee.clear();
         self.emission.clear();

@@ -1,6 +1,7 @@
 //! `pathgraph` parameters: the path loop's `maxdepth` and `regularize` (shared with
 //! `volpath`, so switching a volpath scene to pathgraph keeps its paths) and the graph's
-//! cluster size, iteration count and extra first-vertex light samples, and whether pixels
+//! cluster size, iteration count, extra first-vertex light samples and extra first vertices
+//! along the camera ray, and whether pixels
 //! combine the graph's estimate with their paths' unbiased one.
 
 use nimbus_parser::{Entity, Error};
@@ -24,6 +25,10 @@ pub struct PathGraphSettings {
     /// Extra light samples at each path's first vertex, used for the pixel's direct light
     /// instead of the path's own (`integer extradirect`, Sec. 4; 0 = the path's own).
     pub extra_direct: u32,
+    /// Extra first vertices along each camera ray, each with a light sample, whose mean with
+    /// the path's own is the pixel's direct light (`integer linesamples`; absent: chosen after
+    /// two samples from the measured noise, `line.rs`).
+    pub line_samples: Option<u32>,
     /// Combine each pixel's graph estimate with the unbiased path-traced estimate its own
     /// paths carry, trusting the graph as far as the two agree (`bool combine`, default true;
     /// README: consistency). False: the graph's estimate alone, as in the paper, whose bias
@@ -39,6 +44,7 @@ impl Default for PathGraphSettings {
             cluster_size: 16,
             iterations: 2,
             extra_direct: 0,
+            line_samples: None,
             combine: true,
         }
     }
@@ -65,6 +71,10 @@ impl PathGraphSettings {
             cluster_size: count("clustersize", d.cluster_size, 1, 4096)?,
             iterations: count("iterations", d.iterations, 0, 1000)?,
             extra_direct: count("extradirect", d.extra_direct, 0, 4096)?,
+            line_samples: match p.loc("linesamples") {
+                None => None,
+                Some(_) => Some(count("linesamples", 0, 0, 1024)?),
+            },
             combine: p.get_one_bool("combine", d.combine)?,
         })
     }
@@ -86,6 +96,10 @@ mod tests {
         let s = read(r#""integer maxdepth" 12 "integer clustersize" 1 "integer iterations" 0 "integer extradirect" 4"#)
             .unwrap();
         assert_eq!((s.max_depth, s.cluster_size, s.iterations, s.extra_direct), (12, 1, 0, 4));
+        assert_eq!(s.line_samples, None);
+        assert_eq!(read(r#""integer linesamples" 0"#).unwrap().line_samples, Some(0));
+        assert_eq!(read(r#""integer linesamples" 8"#).unwrap().line_samples, Some(8));
+        assert!(read(r#""integer linesamples" -1"#).unwrap_err().to_string().contains("linesamples"));
     }
 
     #[test]

@@ -56,22 +56,12 @@ pub(super) fn line_direct<C: Channels>(
             if um < p_absorb {
                 false
             } else if um < p_absorb + p_scatter {
-                if m.chromatic {
-                    let pdf = t_maj[hero] * mp.sigma_s[hero];
-                    s.beta *= t_maj * mp.sigma_s / pdf;
-                    s.r_u *= t_maj * mp.sigma_s / pdf;
-                }
+                s.scatter_collision(t_maj, mp.sigma_s, m.chromatic);
                 at = Some(c.p);
                 false
             } else {
                 let sigma_n = (sigma_maj - mp.sigma_a - mp.sigma_s).max(C::ZERO);
-                let pdf = t_maj[hero] * sigma_n[hero];
-                if pdf == 0.0 {
-                    s.beta = C::ZERO;
-                } else if m.chromatic {
-                    s.beta *= t_maj * sigma_n / pdf;
-                    s.r_u *= t_maj * sigma_n / pdf;
-                }
+                s.null_collision(t_maj, sigma_n, m.chromatic);
                 !s.beta.is_zero() && !s.r_u.is_zero()
             }
         });

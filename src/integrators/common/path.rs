@@ -124,6 +124,34 @@ pub(super) struct PathState<C: Channels> {
     pub(super) entered: Option<MediumPoint<C>>,
 }
 
+impl<C: Channels> PathState<C> {
+    /// A real-scattering collision, chosen with the hero channel's probability: in chromatic
+    /// media β and r_u take each channel's ratio to it (spectral MIS); in gray media they are 1.
+    #[inline]
+    pub(super) fn scatter_collision(&mut self, t_maj: C, sigma_s: C, chromatic: bool) {
+        if chromatic {
+            let pdf = t_maj[self.hero] * sigma_s[self.hero];
+            self.beta *= t_maj * sigma_s / pdf;
+            self.r_u *= t_maj * sigma_s / pdf;
+        }
+    }
+
+    /// A null collision (σn the null coefficient), chosen with the hero channel's
+    /// probability: β and r_u as [`PathState::scatter_collision`]'s. Returns that probability
+    /// density; where it is 0, β is 0 and the path ends.
+    #[inline]
+    pub(super) fn null_collision(&mut self, t_maj: C, sigma_n: C, chromatic: bool) -> f32 {
+        let pdf = t_maj[self.hero] * sigma_n[self.hero];
+        if pdf == 0.0 {
+            self.beta = C::ZERO;
+        } else if chromatic {
+            self.beta *= t_maj * sigma_n / pdf;
+            self.r_u *= t_maj * sigma_n / pdf;
+        }
+        pdf
+    }
+}
+
 /// One copy of a path between events: where it goes, what it carries, and what the next
 /// events need to know of the vertices before.
 struct Walk<C: Channels> {
@@ -419,13 +447,7 @@ impl<C: Channels, O: PathObserver<C>> Tracer<'_, C, O> {
                     return false;
                 }
                 *depth += 1;
-                // In a gray medium these ratios are 1: only chromatic media pay for spectral
-                // MIS.
-                if m.chromatic {
-                    let pdf = t_maj[hero] * mp.sigma_s[hero];
-                    st.beta *= t_maj * mp.sigma_s / pdf;
-                    st.r_u *= t_maj * mp.sigma_s / pdf;
-                }
+                st.scatter_collision(t_maj, mp.sigma_s, m.chromatic);
                 scattered = true;
                 scatter_p = p;
                 false
@@ -433,15 +455,14 @@ impl<C: Channels, O: PathObserver<C>> Tracer<'_, C, O> {
                 let sigma_n = (sigma_maj - mp.sigma_a - mp.sigma_s).max(C::ZERO);
                 let sigma_r = (sigma_maj - c.sigma_c).max(C::ZERO);
                 tau_l += c.tau_c;
-                let pdf = t_maj[hero] * sigma_n[hero];
-                if pdf == 0.0 {
-                    st.beta = C::ZERO;
-                } else if m.chromatic {
-                    st.beta *= t_maj * sigma_n / pdf;
-                    st.r_u *= t_maj * sigma_n / pdf;
-                    st.r_l *= t_maj * sigma_r / pdf;
-                } else {
-                    st.r_l *= sigma_r[hero] / sigma_n[hero];
+                let pdf = st.null_collision(t_maj, sigma_n, m.chromatic);
+                // The light technique's r_l takes the residual σr (above).
+                if pdf != 0.0 {
+                    if m.chromatic {
+                        st.r_l *= t_maj * sigma_r / pdf;
+                    } else {
+                        st.r_l *= sigma_r[hero] / sigma_n[hero];
+                    }
                 }
                 !st.beta.is_zero() && !st.r_u.is_zero()
             }

@@ -7,6 +7,7 @@ pub mod media;
 pub mod observer;
 pub mod path;
 mod shadow;
+mod state;
 
 pub use observer::{
     EmissionEvent, GuidedSample, NeeEvent, NoObserver, PathObserver, PathRecorder, PathStrategy, VertexEvent,

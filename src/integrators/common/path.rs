@@ -13,6 +13,7 @@ use super::camera_line::{line_direct, line_emission};
 use super::direct::{Scatterer, extra_direct, sample_direct};
 use super::media::{Collision, Tracking};
 use super::observer::{EmissionEvent, PathObserver, VertexEvent};
+use super::state::PathState;
 use super::{MAX_SUBSURFACE_EVENTS, RayStats};
 use crate::accel::{Found, Hit, NONE};
 use crate::camera::Differentials;
@@ -21,8 +22,8 @@ use crate::geometry::Ray;
 use crate::lights::LightContext;
 use crate::materials::bxdf::{Bxdf, ReflTransFlags, TransportMode};
 use crate::math::Frame;
+use crate::media::MediumView;
 use crate::media::phase::HenyeyGreenstein;
-use crate::media::{MediumPoint, MediumView};
 use crate::samplers::Sampler;
 use crate::sampling::rng::{Pcg32, hash_sample};
 use crate::scene::Scene;
@@ -103,53 +104,6 @@ pub fn medium_after(scene: &Scene, hit: &Hit, w: Vec3, current: u32) -> u32 {
     }
     let [inside, outside] = scene.interfaces[hit.prim.interface as usize];
     if w.dot(hit.surface.n) > 0.0 { outside } else { inside }
-}
-
-/// Per-path state shared by the loop and its helpers.
-#[derive(Clone, Copy)]
-pub(super) struct PathState<C: Channels> {
-    pub(super) beta: C,
-    pub(super) r_u: C,
-    pub(super) r_l: C,
-    pub(super) hero: usize,
-    /// What Russian roulette multiplies β by: the inverse of the factors path guiding put
-    /// into β. Roulette on a guided path's β would kill the paths guiding sent towards the
-    /// light (their factor is small because the guide's density there is high) and undo the
-    /// guiding; on β·scale it survives as an unguided path would. 1 on unguided paths.
-    rr_scale: f32,
-    /// The path's time (its camera ray's): every ray of the path sees moving shapes there.
-    pub(super) time: f32,
-    /// The coefficients of the medium the path is in when that medium takes them from where
-    /// the path entered it ([`crate::media::Medium::from_entry`], a textured `subsurface`).
-    pub(super) entered: Option<MediumPoint<C>>,
-}
-
-impl<C: Channels> PathState<C> {
-    /// A real-scattering collision, chosen with the hero channel's probability: in chromatic
-    /// media β and r_u take each channel's ratio to it (spectral MIS); in gray media they are 1.
-    #[inline]
-    pub(super) fn scatter_collision(&mut self, t_maj: C, sigma_s: C, chromatic: bool) {
-        if chromatic {
-            let pdf = t_maj[self.hero] * sigma_s[self.hero];
-            self.beta *= t_maj * sigma_s / pdf;
-            self.r_u *= t_maj * sigma_s / pdf;
-        }
-    }
-
-    /// A null collision (σn the null coefficient), chosen with the hero channel's
-    /// probability: β and r_u as [`PathState::scatter_collision`]'s. Returns that probability
-    /// density; where it is 0, β is 0 and the path ends.
-    #[inline]
-    pub(super) fn null_collision(&mut self, t_maj: C, sigma_n: C, chromatic: bool) -> f32 {
-        let pdf = t_maj[self.hero] * sigma_n[self.hero];
-        if pdf == 0.0 {
-            self.beta = C::ZERO;
-        } else if chromatic {
-            self.beta *= t_maj * sigma_n / pdf;
-            self.r_u *= t_maj * sigma_n / pdf;
-        }
-        pdf
-    }
 }
 
 /// One copy of a path between events: where it goes, what it carries, and what the next

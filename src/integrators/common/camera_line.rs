@@ -7,9 +7,8 @@
 use glam::Vec2;
 
 use super::RayStats;
-use super::direct::{Scatterer, sample_direct};
+use super::direct::{Scatterer, light_sample_alone};
 use super::media::{Collision, Tracking, line_transmittance};
-use super::observer::NoObserver;
 use super::path::medium_after;
 use super::state::PathState;
 use crate::accel::{Hit, NONE};
@@ -70,11 +69,7 @@ pub(super) fn line_direct<C: Channels>(
         if s.beta.is_zero() || s.r_u.is_zero() {
             continue;
         }
-        let u = (rng.uniform(), Vec2::new(rng.uniform(), rng.uniform()));
-        let stream = (u64::from(rng.next_u32()) << 32 | u64::from(rng.next_u32())) | 1;
-        if let Some(c) =
-            sample_direct(scene, p, None, medium, &scatterer, u, &s, lambda, 0, &mut NoObserver, stats, Some(stream))
-        {
+        if let Some(c) = light_sample_alone(scene, p, None, medium, &scatterer, &s, lambda, &mut rng, stats) {
             sum += c;
             squares += f64::from(c.average()).powi(2);
         }

@@ -68,15 +68,31 @@ pub(super) fn extra_direct<C: Channels>(
     let mut rng = Pcg32::new(hash_sample(sampler.get_1d(), Vec2::new(0.25, 0.75)), 0x9e37_79b9);
     let mut sum = C::ZERO;
     for _ in 0..config.extra_direct {
-        let u = (rng.uniform(), Vec2::new(rng.uniform(), rng.uniform()));
-        let stream = (u64::from(rng.next_u32()) << 32 | u64::from(rng.next_u32())) | 1;
-        if let Some(c) =
-            sample_direct(scene, p, hit, medium, scatterer, u, st, lambda, 0, &mut NoObserver, stats, Some(stream))
-        {
+        if let Some(c) = light_sample_alone(scene, p, hit, medium, scatterer, st, lambda, &mut rng, stats) {
             sum += c;
         }
     }
     sum / config.extra_direct as f32
+}
+
+/// One light sample at a vertex by light sampling alone (unbiased without the BSDF/phase
+/// technique), its random numbers and its shadow ray's stream drawn from `rng`: the extra
+/// samples' ([`extra_direct`], the camera line's extra first vertices).
+#[allow(clippy::too_many_arguments)]
+pub(super) fn light_sample_alone<C: Channels>(
+    scene: &Scene,
+    p: Vec3,
+    hit: Option<&Hit>,
+    medium: u32,
+    scatterer: &Scatterer<'_, C>,
+    st: &PathState<C>,
+    lambda: &C::Lambda,
+    rng: &mut Pcg32,
+    stats: &mut RayStats,
+) -> Option<C> {
+    let u = (rng.uniform(), Vec2::new(rng.uniform(), rng.uniform()));
+    let stream = (u64::from(rng.next_u32()) << 32 | u64::from(rng.next_u32())) | 1;
+    sample_direct(scene, p, hit, medium, scatterer, u, st, lambda, 0, &mut NoObserver, stats, Some(stream))
 }
 
 /// One light sample at a vertex at `p` (on the surface `hit`, or inside `medium` when there

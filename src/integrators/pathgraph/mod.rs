@@ -509,9 +509,8 @@ impl Integrator for PathGraph {
         lines.push(match (self.settings.line_samples, line.chosen(), line.measured) {
             (Some(n), ..) => format!("pathgraph   {n} extra first vertices per camera ray (linesamples)"),
             (None, Some(n), Some((v_d, total))) => format!(
-                "pathgraph   {n} extra first vertices per camera ray, chosen after {} samples with {}: one first \
-                 vertex's direct light has variance {v_d:.3e}, the pixels {total:.3e} per sample",
-                2,
+                "pathgraph   {n} extra first vertices per camera ray, chosen after the first two samples (with {} \
+                 each): one first vertex's direct light has variance {v_d:.3e}, the pixels {total:.3e} per sample",
                 line::PROBE
             ),
             _ => format!("pathgraph   {} extra first vertices per camera ray (measuring)", line.samples()),

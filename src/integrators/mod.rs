@@ -147,6 +147,15 @@ pub trait ImageIntegrator: Sync {
         pass: &image_pass::ImagePass<'_>,
         out: &mut dyn FnMut(PixelValue),
     ) -> RayStats;
+
+    /// Whether the next samples should be whole-image ones, for a method that pairs a biased
+    /// estimate with an unbiased one ([`PixelValue::unbiased`]), given the film's [`Outlook`]
+    /// (None until it can tell). False: the renderer takes them per camera ray from `li`,
+    /// which must then be the same unbiased estimate, and the film pools them with the
+    /// unbiased side of its combination. Other methods keep the default.
+    fn image_sample_pays(&self, _outlook: Option<Outlook>) -> bool {
+        true
+    }
 }
 
 /// One camera sample's value for the film, from an [`ImageIntegrator`].
@@ -163,6 +172,19 @@ pub struct PixelValue {
     /// `l` as far as its measured disagreement with this estimate allows, so that the image
     /// converges whatever `l`'s bias (`render/combine.rs`). None: `l` is the estimate.
     pub unbiased: Option<Rgb>,
+}
+
+/// For a method that hands the film a biased estimate beside an unbiased one
+/// ([`PixelValue::unbiased`]): what one more sample of each kind would take off the film's
+/// combined image's squared error, summed over the pixels from the samples so far
+/// (`render/combine.rs`). A method whose paired sample costs k times an unbiased one alone
+/// pays for the pair while `paired > (k − 1) · unpaired`.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Outlook {
+    /// One more sample of the unbiased estimate alone.
+    pub unpaired: f64,
+    /// What a paired sample takes off beyond that: the biased estimate's share.
+    pub paired: f64,
 }
 
 /// A method that estimates radiance one camera ray at a time, written once for every

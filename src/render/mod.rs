@@ -244,6 +244,21 @@ impl Accumulator {
         }
     }
 
+    /// The film's [`combine::outlook`], when a method hands it unbiased estimates beside its own.
+    fn outlook(&self) -> Option<crate::integrators::Outlook> {
+        (!self.pairs.is_empty()).then(|| combine::outlook(self.width as usize, &self.pairs)).flatten()
+    }
+
+    /// Adds pixel `i`'s sums over `count` samples of a paired method's unbiased estimate alone
+    /// (taken per camera ray: [`ImageIntegrator::image_sample_pays`]).
+    fn add_unpaired(&mut self, i: usize, film: &FilmSum, count: u32) {
+        if self.pairs.is_empty() {
+            self.pairs.resize(self.pixels.len(), combine::PairSums::default());
+        }
+        self.pairs[i].add_unpaired(film.rgb, film.weight, count);
+        self.pixels[i].nonfinite += film.nonfinite;
+    }
+
     /// pbrt-v4's spectral-film channels `S0.<λ>nm` (band centres, ',' for the decimal point as
     /// the OpenEXR spectral layout asks): each band's weighted mean radiance.
     fn band_channels(&self, (n, min, max): (usize, f32, f32)) -> Vec<(String, Vec<f32>)> {
@@ -269,13 +284,12 @@ impl Accumulator {
         let combined = (!self.pairs.is_empty())
             .then(|| combine::combine(self.width as usize, self.pixels.iter().map(|p| (p.rgb, p.weight)), &self.pairs));
         for (i, (o, p)) in img.pixels.iter_mut().zip(&self.pixels).enumerate() {
-            if p.weight != 0.0 {
-                let mean = match &combined {
-                    Some(c) => glam::DVec3::from_array(c[i]),
-                    None => glam::DVec3::from_array(p.rgb) / p.weight,
-                };
-                *o = (output * mean).as_vec3();
-            }
+            let mean = match &combined {
+                Some(c) => glam::DVec3::from_array(c[i]),
+                None if p.weight != 0.0 => glam::DVec3::from_array(p.rgb) / p.weight,
+                None => continue,
+            };
+            *o = (output * mean).as_vec3();
         }
         img
     }
@@ -470,18 +484,25 @@ pub fn render_with_passes(
         if count == 0 {
             break;
         }
-        let results: Vec<TileResult> = if let Some(method) = integrator.whole_image() {
-            // A whole-image method: `count` samples of the whole image, one after another, each
-            // added to the film before the next is taken (holding a pass's samples until its
-            // end held up to 64 images' sums: memory growing with the pass length).
-            for s in spp_done..spp_done + count {
-                let stats = image_sample(scene, method, &base_sampler, &tiles, &mut acc, s);
+        // A whole-image method takes `count` samples of the whole image, one after another,
+        // each added to the film before the next is taken (holding a pass's samples until its
+        // end held up to 64 images' sums: memory growing with the pass length), for as long
+        // as it says they pay; the rest of the pass, and any other method's, per camera ray.
+        let mut per_ray_from = spp_done;
+        let whole = integrator.whole_image();
+        if let Some(method) = whole {
+            while per_ray_from < spp_done + count && method.image_sample_pays(acc.outlook()) {
+                let stats = image_sample(scene, method, &base_sampler, &tiles, &mut acc, per_ray_from);
                 if let Some(pb) = &progress {
                     pb.inc(tiles.len() as u64);
                 }
                 rays.fetch_add(stats.total(), Ordering::Relaxed);
                 total_stats.add(&stats);
+                per_ray_from += 1;
             }
+        }
+        let per_ray = spp_done + count - per_ray_from;
+        let results: Vec<TileResult> = if per_ray == 0 {
             Vec::new()
         } else {
             tiles
@@ -502,23 +523,29 @@ pub fn render_with_passes(
                         acc.origin,
                         acc.width,
                         *tile,
-                        spp_done,
-                        count,
+                        per_ray_from,
+                        per_ray,
                         &mut out,
                         &mut band_sums,
                         &mut stats,
                     );
                     if let Some(pb) = &progress {
-                        pb.inc(count as u64);
+                        pb.inc(per_ray as u64);
                     }
                     rays.fetch_add(stats.total(), Ordering::Relaxed);
                     (out, band_sums, stats)
                 })
                 .collect()
         };
+        // A whole-image method's samples per camera ray carry its unbiased estimate alone.
+        let unpaired = whole.is_some();
         for (out, band_sums, stats) in &results {
             total_stats.add(stats);
             for (i, s) in out {
+                if unpaired {
+                    acc.add_unpaired(*i as usize, &s.film, per_ray);
+                    continue;
+                }
                 acc.pixels[*i as usize].merge(&s.film);
                 if let Some(spread) = acc.spread.get_mut(*i as usize) {
                     spread.merge(&s.spread);

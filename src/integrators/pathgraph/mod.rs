@@ -12,6 +12,7 @@ mod nearest;
 mod record;
 mod settings;
 mod solve;
+mod unpaired;
 
 pub use settings::PathGraphSettings;
 
@@ -20,10 +21,10 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
-use super::common::{NoObserver, PathConfig, RayStats, trace_path};
+use super::common::{PathConfig, RayStats, trace_path};
 use super::image_pass::{ImagePass, RenderChannels};
 use super::registry::{Method, MethodSettings};
-use super::{ImageIntegrator, Integrator, PixelValue};
+use super::{ImageIntegrator, Integrator, Outlook, PixelValue};
 use crate::accel::NONE;
 use crate::color::Rgb;
 use crate::geometry::Ray;
@@ -107,6 +108,20 @@ struct Report {
     resident_peak: Option<usize>,
     /// The most vertices one sample recorded.
     max_vertices: usize,
+    /// This render's graph samples, the rays they traced, the vertices they recorded and
+    /// their paths: their work, which sets what a graph costs beyond its paths ([`unpaired`]).
+    work: (u32, u64, u64, u64),
+    /// The graph samples this render took before the rest were left to the paths' own
+    /// estimate alone ([`unpaired`]), if it did.
+    stopped_after: Option<u32>,
+}
+
+impl Report {
+    /// A graph sample's cost beyond its paths, over theirs, from this render's graph samples.
+    fn extra_cost(&self) -> f64 {
+        let (_, rays, vertices, paths) = self.work;
+        unpaired::extra_cost(rays as f64, vertices as f64, paths as f64)
+    }
 }
 
 /// Creates the integrator.
@@ -116,7 +131,8 @@ pub fn create(settings: &PathGraphSettings, scene: &Scene) -> crate::Result<Path
         config: PathConfig {
             extra_direct: settings.extra_direct,
             hero_per_segment: true,
-            camera_line: true,
+            // It estimates area lights seen through media; without any, it only costs.
+            camera_line: scene.lights.iter().any(|l| matches!(l.kind, crate::lights::LightKind::Area { .. })),
             ..PathConfig::volpath(settings.max_depth, settings.regularize)
         },
         without_media: scene.media.is_empty(),
@@ -258,6 +274,24 @@ fn resident_bytes(field: &str) -> Option<usize> {
 }
 
 impl ImageIntegrator for PathGraph {
+    /// While the graph's share of the combined image pays for what the graph costs beyond its
+    /// paths, counted from this render's graph samples (rays traced, vertices recorded), not
+    /// timed, so that the image does not depend on the machine's speed ([`unpaired`]).
+    fn image_sample_pays(&self, outlook: Option<Outlook>) -> bool {
+        if !self.settings.combine {
+            return true;
+        }
+        let mut r = lock(&self.report);
+        if r.stopped_after.is_some() {
+            return false;
+        }
+        let pays = unpaired::graph_pays(outlook, r.work.0, r.extra_cost());
+        if !pays {
+            r.stopped_after = Some(r.work.0);
+        }
+        pays
+    }
+
     fn sample_image(&self, scene: &Scene, pass: &ImagePass<'_>, out: &mut dyn FnMut(PixelValue)) -> RayStats {
         if let Ok(mut r) = self.report.lock()
             && r.samples == 0
@@ -265,6 +299,10 @@ impl ImageIntegrator for PathGraph {
             r.resident_before = resident_bytes("VmRSS:");
         }
         let start = Instant::now();
+        if pass.sample_index() == 0 {
+            let mut r = lock(&self.report);
+            (r.work, r.stopped_after) = ((0, 0, 0, 0), None);
+        }
         // Taken, not held: a concurrent sample (none today) would record into fresh arrays.
         let mut stores = std::mem::take(&mut *lock(&self.stores));
         // A render's first sample measures afresh: rendering the same image again gives it again.
@@ -399,7 +437,11 @@ impl ImageIntegrator for PathGraph {
             },
         );
         if self.settings.line_samples.is_none() {
-            let pixels = paths.pixel.iter().zip(&paths.before).map(|(&i, l)| (i, l.element_sum() / 3.0));
+            // Each pixel's L and U (NaN without the combination: no U to measure).
+            let pixels = paths.pixel.iter().zip(paths.before.iter().zip(&paths.beta)).map(|(&i, (l, d))| {
+                let u = if combine { (*l + *d).element_sum() / 3.0 } else { f32::NAN };
+                (i, [l.element_sum() / 3.0, u])
+            });
             lock(&self.line).observe(spread, paths.len(), pixels);
         }
         for (((&index, &weight), &l), &d) in paths.pixel.iter().zip(&paths.weight).zip(&paths.before).zip(&paths.beta) {
@@ -412,6 +454,10 @@ impl ImageIntegrator for PathGraph {
         *lock(&self.stores) = stores;
         if let Ok(mut r) = self.report.lock() {
             r.samples += 1;
+            r.work.0 += 1;
+            r.work.1 += stats.total();
+            r.work.2 += vertices as u64;
+            r.work.3 += npaths as u64;
             r.vertices += vertices as u64;
             r.clusters += clusters as u64;
             r.paths += npaths as u64;
@@ -425,15 +471,37 @@ impl ImageIntegrator for PathGraph {
     }
 }
 
+impl PathGraph {
+    /// The paths' own estimate along `ray`: U as a graph sample makes it, the path's first
+    /// direct light averaged with the camera line's extra first vertices, for the samples the
+    /// graph no longer pays for (and scenes without media).
+    fn own_estimate<C: RenderChannels>(
+        &self,
+        scene: &Scene,
+        ray: Ray,
+        lambda: &mut C::Lambda,
+        sampler: &mut Sampler,
+        stats: &mut RayStats,
+    ) -> C {
+        let line_direct = match self.settings.line_samples {
+            Some(n) => n,
+            None => lock(&self.line).own_samples(),
+        };
+        let config = PathConfig { extra_direct: 0, line_direct, ..self.config };
+        let mut own = unpaired::OwnEstimate::<C>::default();
+        let l = trace_path::<C, _>(scene, ray, scene.camera_medium, lambda, sampler, &config, &mut own, stats);
+        own.finish(l)
+    }
+}
+
 impl Integrator for PathGraph {
     fn name(&self) -> &'static str {
         METHOD.name
     }
 
-    /// Per-ray callers get the path-traced estimate the graph starts from.
+    /// Per-ray callers get the paths' own estimate (the samples the graph no longer pays for).
     fn li_rgb(&self, scene: &Scene, ray: Ray, lambda: &mut (), sampler: &mut Sampler, stats: &mut RayStats) -> Rgb {
-        let config = PathConfig { extra_direct: 0, line_direct: 0, ..self.config };
-        trace_path(scene, ray, scene.camera_medium, lambda, sampler, &config, &mut NoObserver, stats)
+        self.own_estimate::<Rgb>(scene, ray, lambda, sampler, stats)
     }
 
     fn li_spectral(
@@ -444,17 +512,7 @@ impl Integrator for PathGraph {
         sampler: &mut Sampler,
         stats: &mut RayStats,
     ) -> SampledSpectrum {
-        let config = PathConfig { extra_direct: 0, line_direct: 0, ..self.config };
-        trace_path::<SampledSpectrum, _>(
-            scene,
-            ray,
-            scene.camera_medium,
-            lambda,
-            sampler,
-            &config,
-            &mut NoObserver,
-            stats,
-        )
+        self.own_estimate::<SampledSpectrum>(scene, ray, lambda, sampler, stats)
     }
 
     fn whole_image(&self) -> Option<&dyn ImageIntegrator> {
@@ -505,12 +563,21 @@ impl Integrator for PathGraph {
                 added as f64 / r.max_vertices.max(1) as f64
             ));
         }
+        if let Some(n) = r.stopped_after {
+            lines.push(format!(
+                "pathgraph   graph samples stopped after {n}: the graph's share of the combined image no longer paid for \
+                 its own work ({:.2} times its paths', counted), so the rest are the paths' own estimate alone, per camera ray",
+                r.extra_cost()
+            ));
+        }
         let line = lock(&self.line);
         lines.push(match (self.settings.line_samples, line.chosen(), line.measured) {
             (Some(n), ..) => format!("pathgraph   {n} extra first vertices per camera ray (linesamples)"),
             (None, Some(n), Some((v_d, total))) => format!(
-                "pathgraph   {n} extra first vertices per camera ray, chosen after the first two samples (with {} \
-                 each): one first vertex's direct light has variance {v_d:.3e}, the pixels {total:.3e} per sample",
+                "pathgraph   {n} extra first vertices per camera ray ({} for the paths' own estimate alone), chosen \
+                 after the first two samples (with {} each): one first vertex's direct light has variance {v_d:.3e}, \
+                 the pixels {total:.3e} per sample",
+                line.own_samples(),
                 line::PROBE
             ),
             _ => format!("pathgraph   {} extra first vertices per camera ray (measuring)", line.samples()),

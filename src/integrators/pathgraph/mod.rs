@@ -3,7 +3,9 @@
 //! observer ([`record`]) + clustering ([`cluster`]) + aggregation and propagation iterated as
 //! Eq. 28 ([`solve`]); each pixel takes the refined indirect radiance of its path's first
 //! vertex plus the path's own (non-aggregated) direct light there (Sec. 4). More spp average
-//! independent graph samples.
+//! independent graph samples, which the film combines with the paths' own unbiased estimate;
+//! once the graph no longer pays for its cost, the rest of the samples are that estimate
+//! alone, per camera ray ([`unpaired`]).
 
 mod cluster;
 mod lanes;

@@ -150,10 +150,11 @@ pub trait ImageIntegrator: Sync {
 
     /// Whether the next samples should be whole-image ones, for a method that pairs a biased
     /// estimate with an unbiased one ([`PixelValue::unbiased`]), given the film's [`Outlook`]
-    /// (None until it can tell). False: the renderer takes them per camera ray from `li`,
+    /// (computed only when `outlook` is called; None until it can tell). False: the renderer
+    /// takes them per camera ray from `li`,
     /// which must then be the same unbiased estimate, and the film pools them with the
     /// unbiased side of its combination. Other methods keep the default.
-    fn image_sample_pays(&self, _outlook: Option<Outlook>) -> bool {
+    fn image_sample_pays(&self, _outlook: &dyn Fn() -> Option<Outlook>) -> bool {
         true
     }
 }

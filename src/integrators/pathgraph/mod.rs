@@ -279,7 +279,7 @@ impl ImageIntegrator for PathGraph {
     /// While the graph's share of the combined image pays for what the graph costs beyond its
     /// paths, counted from this render's graph samples (rays traced, vertices recorded), not
     /// timed, so that the image does not depend on the machine's speed ([`unpaired`]).
-    fn image_sample_pays(&self, outlook: Option<Outlook>) -> bool {
+    fn image_sample_pays(&self, outlook: &dyn Fn() -> Option<Outlook>) -> bool {
         if !self.settings.combine {
             return true;
         }

@@ -42,11 +42,11 @@ pub(super) const MIN_GRAPH_SAMPLES: u32 = 64;
 /// graph's share of a paired sample's gain pays for what the graph costs beyond its paths
 /// (`extra`, from [`extra_cost`]), and always until the film can tell and for the first
 /// [`MIN_GRAPH_SAMPLES`].
-pub(super) fn graph_pays(outlook: Option<Outlook>, samples: u32, extra: f64) -> bool {
+pub(super) fn graph_pays(outlook: &dyn Fn() -> Option<Outlook>, samples: u32, extra: f64) -> bool {
     if samples < MIN_GRAPH_SAMPLES {
         return true;
     }
-    let Some(o) = outlook else { return true };
+    let Some(o) = outlook() else { return true };
     // A paired sample costs 1 + extra unpaired ones; it pays while paired > extra·unpaired.
     o.paired > extra * o.unpaired
 }

@@ -89,6 +89,14 @@ impl Sphere {
         // arithmetic quadratic).
         let a = d.length_squared();
         let b = 2.0 * d.dot(o);
+        let c = o.length_squared() - r * r;
+        if c > 0.0 && b > 0.0 {
+            // Outside and moving away: both roots are negative (their product c/a is
+            // positive, their sum −b/a negative), so the test below would find none either.
+            // Every ray that has just left a medium's sphere bound (shadow rays through the
+            // Disney cloud's) asks this.
+            return None;
+        }
         // c = |o|^2 - r^2 computed as the distance to the closest point on the line, which
         // avoids cancellation for far-away origins.
         let v = o - b / (2.0 * a) * d;
@@ -98,7 +106,6 @@ impl Sphere {
         }
         let root = disc.sqrt();
         let q = if b < 0.0 { -0.5 * (b - root) } else { -0.5 * (b + root) };
-        let c = o.length_squared() - r * r;
         let (mut t0, mut t1) = (q / a, c / q);
         if t0 > t1 {
             std::mem::swap(&mut t0, &mut t1);

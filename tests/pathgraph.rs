@@ -433,8 +433,9 @@ fn the_combination_removes_the_graphs_bias() {
     );
     assert_agree("the combined image against volpath", &combined, &reference, GRAPH_BIAS, "pathgraph README");
     // Here the graph's weight falls fast enough that graph samples stop paying within the
-    // render: the rest are the paths' own estimate alone, pooled with the paired ones'.
+    // render: from then on one in `unpaired::THIN` builds a graph, the rest are the paths' own
+    // estimate alone, pooled with the paired ones'.
     for r in &reports {
-        assert!(r.iter().any(|l| l.contains("graph samples stopped after")), "{r:#?}");
+        assert!(r.iter().any(|l| l.contains("graph samples thinned after")), "{r:#?}");
     }
 }

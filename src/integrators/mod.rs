@@ -148,13 +148,14 @@ pub trait ImageIntegrator: Sync {
         out: &mut dyn FnMut(PixelValue),
     ) -> RayStats;
 
-    /// Whether the next samples should be whole-image ones, for a method that pairs a biased
+    /// Whether the next sample, the render's `sample_index`th (paired and unpaired samples
+    /// counted), should be a whole-image one, for a method that pairs a biased
     /// estimate with an unbiased one ([`PixelValue::unbiased`]), given the film's [`Outlook`]
     /// (computed only when `outlook` is called; None until it can tell). False: the renderer
     /// takes them per camera ray from `li`,
     /// which must then be the same unbiased estimate, and the film pools them with the
     /// unbiased side of its combination. Other methods keep the default.
-    fn image_sample_pays(&self, _outlook: &dyn Fn() -> Option<Outlook>) -> bool {
+    fn image_sample_pays(&self, _sample_index: u32, _outlook: &dyn Fn() -> Option<Outlook>) -> bool {
         true
     }
 }

@@ -491,7 +491,7 @@ pub fn render_with_passes(
         let mut per_ray_from = spp_done;
         let whole = integrator.whole_image();
         if let Some(method) = whole {
-            while per_ray_from < spp_done + count && method.image_sample_pays(&|| acc.outlook()) {
+            while per_ray_from < spp_done + count && method.image_sample_pays(per_ray_from, &|| acc.outlook()) {
                 let stats = image_sample(scene, method, &base_sampler, &tiles, &mut acc, per_ray_from);
                 if let Some(pb) = &progress {
                     pb.inc(tiles.len() as u64);

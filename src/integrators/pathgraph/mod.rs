@@ -279,13 +279,13 @@ impl ImageIntegrator for PathGraph {
     /// While the graph's share of the combined image pays for what the graph costs beyond its
     /// paths, counted from this render's graph samples (rays traced, vertices recorded), not
     /// timed, so that the image does not depend on the machine's speed ([`unpaired`]).
-    fn image_sample_pays(&self, outlook: &dyn Fn() -> Option<Outlook>) -> bool {
+    fn image_sample_pays(&self, sample_index: u32, outlook: &dyn Fn() -> Option<Outlook>) -> bool {
         if !self.settings.combine {
             return true;
         }
         let mut r = lock(&self.report);
         if r.stopped_after.is_some() {
-            return false;
+            return unpaired::thinned_graph_sample(outlook, sample_index, r.work.0, r.extra_cost());
         }
         let pays = unpaired::graph_pays(outlook, r.work.0, r.extra_cost());
         if !pays {
@@ -567,9 +567,12 @@ impl Integrator for PathGraph {
         }
         if let Some(n) = r.stopped_after {
             lines.push(format!(
-                "pathgraph   graph samples stopped after {n}: the graph's share of the combined image no longer paid for \
-                 its own work ({:.2} times its paths', counted), so the rest are the paths' own estimate alone, per camera ray",
-                r.extra_cost()
+                "pathgraph   graph samples thinned after {n}: the graph's share of the combined image no longer paid for \
+                 its own work ({:.2} times its paths', counted), so from then on one sample in {} builds a graph ({} in \
+                 all) and the rest are the paths' own estimate alone, per camera ray",
+                r.extra_cost(),
+                unpaired::THIN,
+                r.work.0
             ));
         }
         let line = lock(&self.line);

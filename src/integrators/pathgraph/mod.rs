@@ -278,7 +278,10 @@ fn resident_bytes(field: &str) -> Option<usize> {
 impl ImageIntegrator for PathGraph {
     /// While the graph's share of the combined image pays for what the graph costs beyond its
     /// paths, counted from this render's graph samples (rays traced, vertices recorded), not
-    /// timed, so that the image does not depend on the machine's speed ([`unpaired`]).
+    /// timed, so that the image does not depend on the machine's speed ([`unpaired`]). Once it
+    /// stops paying, graph samples thin out rather than stop: at most one sample in
+    /// [`unpaired::THIN`] still builds a graph, so that the film's judgement of the graph's bias
+    /// keeps sharpening with the unbiased estimate it is weighed against.
     fn image_sample_pays(&self, sample_index: u32, outlook: &dyn Fn() -> Option<Outlook>) -> bool {
         if !self.settings.combine {
             return true;
@@ -568,9 +571,10 @@ impl Integrator for PathGraph {
         if let Some(n) = r.stopped_after {
             lines.push(format!(
                 "pathgraph   graph samples thinned after {n}: the graph's share of the combined image no longer paid for \
-                 its own work ({:.2} times its paths', counted), so from then on one sample in {} builds a graph ({} in \
-                 all) and the rest are the paths' own estimate alone, per camera ray",
+                 its own work ({:.2} times its paths', counted), so from then on at most one sample in {} builds a graph, \
+                 and only while the graph's share still pays an {}th of its cost ({} in all); the rest are the paths' own estimate alone, per camera ray",
                 r.extra_cost(),
+                unpaired::THIN,
                 unpaired::THIN,
                 r.work.0
             ));

@@ -132,12 +132,13 @@ pub trait PathStrategy {
     fn split_medium(&mut self, _medium: u32, _p: Vec3, _beta: f32) -> u32 {
         1
     }
-    /// Whether this method ends a path at its first real scattering event in a medium with
-    /// its own estimate of the radiance scattered there ([`PathStrategy::medium_estimate`]):
-    /// a radiance cache read where the path enters the medium, everything before it
-    /// (surfaces, their light sampling, emission) traced as volpath traces it.
+    /// Whether this method ends a path at a real scattering event in a medium, the path's
+    /// `depth`-th scattering event (surfaces counted; 1 for the first), with its own estimate
+    /// of the radiance scattered there ([`PathStrategy::medium_estimate`]): a radiance cache
+    /// read where the path enters the medium or after a few events traced exactly, everything
+    /// before it (surfaces, their light sampling, emission) traced as volpath traces it.
     #[inline]
-    fn ends_in_medium(&self) -> bool {
+    fn ends_in_medium(&self, _depth: u32) -> bool {
         false
     }
     /// Where [`PathStrategy::ends_in_medium`]: the radiance scattered at `p` in `medium`

@@ -475,7 +475,7 @@ impl<C: Channels, O: PathObserver<C>> Tracer<'_, C, O> {
         }
         let wo = -w.ray.d;
         // A cached estimate ends the path here (radiance graphs).
-        if self.observer.ends_in_medium() {
+        if self.observer.ends_in_medium(w.depth) {
             let u = self.sampler.get_1d();
             let v = self.observer.medium_estimate::<C>(medium, p, wo, self.lambda, u);
             if !v.is_zero() {

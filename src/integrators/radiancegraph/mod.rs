@@ -14,6 +14,7 @@ pub mod lighting;
 pub mod render;
 pub mod search_range;
 pub mod sh;
+pub mod similarity;
 pub mod sizing;
 pub mod transport;
 pub mod volume;
@@ -133,6 +134,14 @@ fn check_estimator(estimator: render::Estimator, volume: &Volume) -> crate::Resu
                 .into(),
         ));
     }
+    if let (render::Estimator::Collision, Some(s)) = (estimator, volume.similarity) {
+        return Err(crate::Error::Unsupported(format!(
+            "the radiance-graph method's \"collision\" estimator reads the graph all along the camera ray; a medium \
+             with g = {} is read after {} exact scattering events (the similar medium), which only the default \
+             \"deltatracking\" estimator does",
+            s.g, s.read_at
+        )));
+    }
     Ok(())
 }
 
@@ -214,6 +223,9 @@ pub fn render_integrator(volume: &Volume, cache: RadianceCache) -> render::Radia
         .map(|l| *l.radiance())
         .collect();
     let integrator = render::RadianceGraphIntegrator::new(cache, lights, sky);
+    if let Some(s) = volume.similarity {
+        return integrator.with_similarity(s);
+    }
     if volume.medium.g == 0.0 {
         return integrator;
     }
@@ -374,7 +386,8 @@ pub fn build(
         .zip(&volume.lights)
         .map(|(d, light)| {
             if g == 0.0 {
-                transport.neumann(d, bounces)
+                // The similar medium's graph transports light until it has left (`similarity`).
+                transport.neumann(d, bounces, volume.similarity.map(|_| similarity::TAIL))
             } else {
                 transport.neumann_directional(&positions, d, source(light), g, bounces)
             }

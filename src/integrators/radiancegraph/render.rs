@@ -6,6 +6,7 @@
 
 use glam::{IVec3, Vec2, Vec3};
 
+use super::similarity::Similarity;
 use super::transport::Source;
 use super::volume::{MAX_LIGHTS, collision_walk, sample_area_lights, transmittance_from_inside};
 use crate::channels::Channels;
@@ -200,6 +201,9 @@ pub struct RadianceGraphIntegrator {
     path: PathConfig,
     /// A warning for the render's summary (a graph sized too coarse for its medium).
     note: Option<String>,
+    /// Where the graph holds the similar medium of a strongly forward-scattering one: camera
+    /// paths read it at this scattering event, not the first.
+    similarity: Option<Similarity>,
 }
 
 impl RadianceGraphIntegrator {
@@ -217,7 +221,16 @@ impl RadianceGraphIntegrator {
             phase: None,
             path: PathConfig::volpath(5, false),
             note: None,
+            similarity: None,
         }
+    }
+
+    /// The same over the graph of the similar isotropic medium: camera paths read it at their
+    /// `similarity.read_at`-th scattering event, the events before it traced exactly.
+    pub fn with_similarity(mut self, similarity: Similarity) -> RadianceGraphIntegrator {
+        self.similarity = Some(similarity);
+        let depth = self.path.max_depth;
+        self.with_max_depth(depth)
     }
 
     /// The same in a medium scattering by HG with asymmetry `g`, its lights coming from
@@ -234,9 +247,11 @@ impl RadianceGraphIntegrator {
         self
     }
 
-    /// The same with paths of at most `max_depth` scattering events before the medium.
+    /// The same with paths of at most `max_depth` scattering events before the medium: at
+    /// least as many as reach the event that reads the graph of a similar medium, which
+    /// transports light to convergence whatever the scene's depth.
     pub fn with_max_depth(mut self, max_depth: u32) -> RadianceGraphIntegrator {
-        self.path.max_depth = max_depth;
+        self.path.max_depth = max_depth.max(self.similarity.map_or(0, |s| s.read_at));
         self
     }
 
@@ -283,6 +298,22 @@ impl RayIntegrator for RadianceGraphIntegrator {
             self.cache.memory_bytes() as f64 / (1 << 20) as f64,
             self.graph_bytes as f64 / (1 << 20) as f64
         )];
+        if let Some(s) = self.similarity {
+            lines.push(format!(
+                "similarity  the medium's g = {} is beyond the directional graph's {}: the graph holds the similar \
+                 isotropic medium (σs(1 − g)), read at each camera path's scattering event {}, the events before it \
+                 traced exactly",
+                s.g,
+                super::volume::MAX_G,
+                s.read_at
+            ));
+            lines.push(format!(
+                "warning     the similar medium's graph transports light until it leaves the medium, not to the scene's \
+                 maxdepth {}: compare with volpath at a maxdepth long enough for its paths to end by themselves \
+                 (on the Disney cloud maxdepth 100 cuts off 26 % of the light)",
+                self.path.max_depth
+            ));
+        }
         lines.extend(self.note.as_ref().map(|n| format!("warning     {n}")));
         lines
     }
@@ -320,8 +351,8 @@ struct CacheReader<'a> {
 }
 
 impl PathStrategy for CacheReader<'_> {
-    fn ends_in_medium(&self) -> bool {
-        true
+    fn ends_in_medium(&self, depth: u32) -> bool {
+        depth >= self.graph.similarity.map_or(1, |s| s.read_at)
     }
 
     fn medium_estimate<C: Channels>(&mut self, _medium: u32, p: Vec3, wo: Vec3, lambda: &C::Lambda, u: f32) -> C {
@@ -408,7 +439,7 @@ fn single_scattering(scene: &Scene, p: Vec3, wo: Vec3, g: f32, source: &Source, 
         Source::Area(lights) => {
             // One light sample, as the graph's direct light.
             let Some((wi, dist, pdf)) = sample_area_lights(scene, lights, p, rng) else { return 0.0 };
-            let t = transmittance_from_inside(scene, &Ray::new(p, wi), dist, rng);
+            let t = transmittance_from_inside(scene, &scene.media[0], &Ray::new(p, wi), dist, rng);
             return t * super::sh::hg(-wi.dot(wo), g) / pdf;
         }
         Source::Reflected(light) => {
@@ -422,7 +453,7 @@ fn single_scattering(scene: &Scene, p: Vec3, wo: Vec3, g: f32, source: &Source, 
         Source::Point(pos) => {
             let (v, d2) = (*pos - p, pos.distance_squared(p));
             let to_light = v / d2.sqrt();
-            let t = transmittance_from_inside(scene, &Ray::new(p, to_light), d2.sqrt(), rng);
+            let t = transmittance_from_inside(scene, &scene.media[0], &Ray::new(p, to_light), d2.sqrt(), rng);
             return t * super::sh::hg(-to_light.dot(wo), g) / d2;
         }
         Source::Everywhere => {
@@ -433,7 +464,7 @@ fn single_scattering(scene: &Scene, p: Vec3, wo: Vec3, g: f32, source: &Source, 
             }
         }
     };
-    phase * transmittance_from_inside(scene, &Ray::new(p, toward_light), f32::INFINITY, rng)
+    phase * transmittance_from_inside(scene, &scene.media[0], &Ray::new(p, toward_light), f32::INFINITY, rng)
 }
 
 #[cfg(test)]

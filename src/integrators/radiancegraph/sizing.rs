@@ -150,6 +150,8 @@ fn occupied_volume(points: &[Vec3], radius: f32) -> f32 {
 /// otherwise).
 pub fn size(volume: &Volume, seed: u64, max_depth: Option<u32>) -> Sizing {
     let mut config = GraphConfig::default();
+    // The similar medium's graph transports light to convergence, whatever the scene's depth.
+    let max_depth = if volume.similarity.is_some() { Some(super::similarity::BOUNCES + 1) } else { max_depth };
     if let Some(d) = max_depth {
         config.lighting_calculator.bounces = vec![d.saturating_sub(1)];
         // Light paths as long as the scene's paths: truncated ones leave the light that has

@@ -18,6 +18,8 @@ use crate::sampling::rng::Pcg32;
 use crate::scene::Scene;
 use crate::spectra::SpectrumValue;
 
+use super::similarity::{self, Similarity};
+
 /// The most lights a graph carries scalars for (camera rays keep their radiance on the stack).
 pub const MAX_LIGHTS: usize = 8;
 
@@ -28,6 +30,7 @@ pub const MAX_SURFACE_BOUNCES: usize = 8;
 /// The largest |g| the graph's directional radiance holds (README: the test cloud's mean at
 /// g = −0.5, 0.6, 0.75 and 0.877 was +1.0 %, +0.4 %, −1.2 % and −9.7 % off volpath's; the
 /// Disney cloud's at 0.877, +64 %; +29 % with the direct light at the nodes' kept vertices).
+/// Beyond it, up to [`similarity::MAX_G`], the graph holds the similar isotropic medium.
 pub const MAX_G: f32 = 0.75;
 
 /// A light the graph carries one radiance scalar per node for.
@@ -94,8 +97,11 @@ impl GraphLight {
 pub struct Volume<'a> {
     /// The scene.
     pub scene: &'a Scene,
-    /// Its one medium.
-    pub medium: &'a Medium,
+    /// Its one medium, as the graph transports it: the scene's, or where it scatters forward
+    /// beyond [`MAX_G`] the similar isotropic medium ([`similarity`]).
+    pub medium: std::borrow::Cow<'a, Medium>,
+    /// Set where `medium` is the similar medium of the scene's.
+    pub similarity: Option<Similarity>,
     /// The medium's index in `scene.media`.
     pub medium_index: u32,
     /// Bounds of the medium's boundary surfaces.
@@ -136,11 +142,20 @@ impl<'a> Volume<'a> {
             }
         };
         if let Some(m) = medium {
-            if m.g.abs() > MAX_G {
+            if m.g < -MAX_G || m.g > similarity::MAX_G {
                 violated.push(format!(
-                    "a phase function with |g| ≤ {MAX_G} (medium \"{}\" has g = {}; the graph's directional radiance, \
-                     spherical harmonics to band 2, is 29 % bright on the \
-                     Disney cloud at g = 0.877)",
+                    "a phase function with g in [−{MAX_G}, {}] (medium \"{}\" has g = {}; the graph's directional \
+                     radiance, spherical harmonics to band 2, holds |g| ≤ {MAX_G}, and the similar isotropic medium \
+                     stands in for forward scattering up to {})",
+                    similarity::MAX_G,
+                    m.name,
+                    m.g,
+                    similarity::MAX_G
+                ));
+            } else if m.g > MAX_G && matches!(m.kind, MediumKind::RgbGrid(_)) {
+                violated.push(format!(
+                    "a phase function with |g| ≤ {MAX_G} in an `rgbgrid` medium (medium \"{}\" has g = {}: the similar \
+                     medium that stands in for stronger forward scattering needs density-scaled coefficients)",
                     m.name, m.g
                 ));
             }
@@ -241,7 +256,8 @@ impl<'a> Volume<'a> {
             ));
         }
         // In an anisotropic medium the light the surfaces reflect into it is a light of its own.
-        if medium.is_some_and(|m| has_opaque && m.g != 0.0) {
+        // (The similar medium is isotropic: its light paths bounce off the surfaces.)
+        if medium.is_some_and(|m| has_opaque && m.g != 0.0 && m.g <= MAX_G) {
             let reflected: Vec<GraphLight> =
                 lights.iter().map(|l| GraphLight::Reflected { of: Box::new(l.clone()) }).collect();
             lights.extend(reflected);
@@ -261,7 +277,11 @@ impl<'a> Volume<'a> {
         }
         Ok(Volume {
             scene,
-            medium: medium.expect("checked"),
+            medium: match medium.expect("checked") {
+                m if m.g > MAX_G => std::borrow::Cow::Owned(similarity::similar(m).expect("checked")),
+                m => std::borrow::Cow::Borrowed(m),
+            },
+            similarity: medium.filter(|m| m.g > MAX_G).map(|m| Similarity::new(m.g)),
             medium_index: 0,
             bounds,
             radius: 0.5 * (bounds.max - bounds.min).length(),
@@ -396,7 +416,7 @@ impl<'a> Volume<'a> {
     /// a real scattering point, or the end of the path.
     pub fn sample_scatter(&self, ray: &Ray, t_max: f32, rng: &mut Pcg32) -> Event {
         let u = rng.uniform();
-        sample_event(self.medium, ray, t_max, u, rng)
+        sample_event(&self.medium, ray, t_max, u, rng)
     }
 
     /// Transmittance along `ray` to distance `t_max` inside the medium, one ratio-tracking
@@ -406,7 +426,7 @@ impl<'a> Volume<'a> {
     /// pbrt-v4's): unbiased, and walks deep into a dense cloud stop early instead of
     /// multiplying ever smaller ratios to the far side. The thesis tracks to the end.
     pub fn transmittance(&self, ray: &Ray, t_max: f32, rng: &mut Pcg32) -> f32 {
-        ratio_tracked(self.medium, ray, t_max, rng)
+        ratio_tracked(&self.medium, ray, t_max, rng)
     }
 }
 
@@ -421,8 +441,8 @@ fn ratio_tracked(medium: &Medium, ray: &Ray, t_max: f32, rng: &mut Pcg32) -> f32
 /// Transmittance along `ray`, from a point inside `scene`'s one medium, to distance `t_end`
 /// (∞: out of the scene): ratio tracking through each stretch of medium, the boundary
 /// crossed as often as it is met; 0 behind an opaque surface.
-pub fn transmittance_from_inside(scene: &Scene, ray: &Ray, t_end: f32, rng: &mut Pcg32) -> f32 {
-    match walk(scene, ray, t_end, true, rng) {
+pub fn transmittance_from_inside(scene: &Scene, medium: &Medium, ray: &Ray, t_end: f32, rng: &mut Pcg32) -> f32 {
+    match walk(scene, medium, ray, t_end, true, rng) {
         (t, None) => t,
         (_, Some(_)) => 0.0,
     }
@@ -431,8 +451,14 @@ pub fn transmittance_from_inside(scene: &Scene, ray: &Ray, t_end: f32, rng: &mut
 /// Along `ray` from a point inside the medium (`inside`) or outside it, to distance `t_end`:
 /// the transmittance up to where it stops, and the opaque surface it stops at, if any, with
 /// whether that surface is inside the medium.
-pub fn walk(scene: &Scene, ray: &Ray, t_end: f32, inside: bool, rng: &mut Pcg32) -> (f32, Option<(Hit, bool)>) {
-    let medium = &scene.media[0];
+pub fn walk(
+    scene: &Scene,
+    medium: &Medium,
+    ray: &Ray,
+    t_end: f32,
+    inside: bool,
+    rng: &mut Pcg32,
+) -> (f32, Option<(Hit, bool)>) {
     let (mut ray, mut inside, mut tr, mut left) = (*ray, inside, 1.0f32, t_end);
     // A closed boundary is crossed an even number of times; 64 bounds a pathological mesh.
     for _ in 0..64 {
@@ -615,7 +641,7 @@ pub fn emission_along(scene: &Scene, ray: &Ray, unit: Rgb, rng: &mut Pcg32) -> f
 /// (where) when the surface reflects colored light.
 pub fn reflected_along(scene: &Scene, ray: &Ray, light: &GraphLight, rng: &mut Pcg32) -> Result<f32, Vec3> {
     let d = ray.d;
-    let (t_to, Some((mut hit, inside))) = walk(scene, ray, f32::INFINITY, true, rng) else {
+    let (t_to, Some((mut hit, inside))) = walk(scene, &scene.media[0], ray, f32::INFINITY, true, rng) else {
         return Ok(0.0);
     };
     if t_to <= 0.0 {
@@ -655,7 +681,7 @@ pub fn reflected_along(scene: &Scene, ray: &Ray, light: &GraphLight, rng: &mut P
     if f.max_element() - f.min_element() > 1e-3 * f.max_element() {
         return Err(y);
     }
-    let (t_from, stopped) = walk(scene, &hit.surface.spawn_ray(wi), dist, inside, rng);
+    let (t_from, stopped) = walk(scene, &scene.media[0], &hit.surface.spawn_ray(wi), dist, inside, rng);
     if stopped.is_some() {
         return Ok(0.0);
     }

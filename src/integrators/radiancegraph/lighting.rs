@@ -241,7 +241,7 @@ impl Node<'_> {
         let mut rng = Pcg32::new(stream, seed ^ 0x0073_7572_6661_6365);
         self.directional(&mut rng, sh_out, |x, rng| {
             let d = warp::uniform_sphere(Vec2::new(rng.uniform(), rng.uniform()));
-            Ok((reflected_along(volume.scene, &Ray::new(x, d), of, rng)?, d))
+            Ok((reflected_along(volume.scene, &volume.medium, &Ray::new(x, d), of, rng)?, d))
         })
     }
 }

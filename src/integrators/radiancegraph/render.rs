@@ -448,7 +448,8 @@ fn single_scattering(scene: &Scene, p: Vec3, wo: Vec3, g: f32, source: &Source, 
             // one it never met counts as dark here.
             let u = Vec2::new(rng.uniform(), rng.uniform());
             let Some(s) = HenyeyGreenstein::new(g).sample_p(wo, u) else { return 0.0 };
-            return super::volume::reflected_along(scene, &Ray::new(p, s.wi), light, rng).unwrap_or(0.0);
+            return super::volume::reflected_along(scene, &scene.media[0], &Ray::new(p, s.wi), light, rng)
+                .unwrap_or(0.0);
         }
         Source::Point(pos) => {
             let (v, d2) = (*pos - p, pos.distance_squared(p));

@@ -26,6 +26,11 @@
 //! light to convergence ([`BOUNCES`]): it renders what volpath renders with paths long
 //! enough to end by themselves, and says so in the render's summary. On the Disney cloud,
 //! maxdepth 100 cuts off 26 % of that light.
+//!
+//! Everything the graph's build computes goes through the similar medium, the light the
+//! surfaces reflect into it included (through the scene's medium the Disney cloud came out
+//! 3.5 % dark). With that, the Disney cloud at 160×90 and 128 spp: image mean +1.0 %, MAE 4.9 %
+//! of the mean, volpath to depth 10 000 80× slower to the same MAE (README).
 
 use crate::media::{Medium, MediumKind};
 

@@ -638,10 +638,17 @@ pub fn emission_along(scene: &Scene, ray: &Ray, unit: Rgb, rng: &mut Pcg32) -> f
 /// sample of T_r(x, y) f(y) |cos| T_r(y, light) L / pdf_light at the first opaque surface y
 /// along the ray. Light that crosses the medium on its way to a surface, and from there back
 /// into the medium, is in the graph's transport no further than this one reflection. `Err`
-/// (where) when the surface reflects colored light.
-pub fn reflected_along(scene: &Scene, ray: &Ray, light: &GraphLight, rng: &mut Pcg32) -> Result<f32, Vec3> {
+/// (where) when the surface reflects colored light. Transmittance through `medium`: the
+/// graph's (the similar medium where it stands in for the scene's).
+pub fn reflected_along(
+    scene: &Scene,
+    medium: &Medium,
+    ray: &Ray,
+    light: &GraphLight,
+    rng: &mut Pcg32,
+) -> Result<f32, Vec3> {
     let d = ray.d;
-    let (t_to, Some((mut hit, inside))) = walk(scene, &scene.media[0], ray, f32::INFINITY, true, rng) else {
+    let (t_to, Some((mut hit, inside))) = walk(scene, medium, ray, f32::INFINITY, true, rng) else {
         return Ok(0.0);
     };
     if t_to <= 0.0 {
@@ -681,7 +688,7 @@ pub fn reflected_along(scene: &Scene, ray: &Ray, light: &GraphLight, rng: &mut P
     if f.max_element() - f.min_element() > 1e-3 * f.max_element() {
         return Err(y);
     }
-    let (t_from, stopped) = walk(scene, &scene.media[0], &hit.surface.spawn_ray(wi), dist, inside, rng);
+    let (t_from, stopped) = walk(scene, medium, &hit.surface.spawn_ray(wi), dist, inside, rng);
     if stopped.is_some() {
         return Ok(0.0);
     }

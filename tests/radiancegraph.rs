@@ -45,19 +45,37 @@ const GRAPH_BIAS: f64 = 0.015;
 /// and 4), and checks every channel's image mean agrees within four standard errors plus
 /// GRAPH_BIAS. Returns the graph's relative difference.
 fn assert_graph_matches_volpath(text: &str) -> f64 {
+    graph_against_volpath(
+        text,
+        SMALL_CONFIG,
+        "the radiance graph's node averaging, thesis Sec. 4.7",
+        |_, graphs, stats| {
+            assert_eq!(graphs.graphs.iter().map(|g| g.bounces).collect::<Vec<_>>(), [9, 1]);
+            assert!(stats.vertices > 1000 && stats.edges > stats.vertices, "{stats:?}");
+        },
+    )
+}
+
+/// [`assert_graph_matches_volpath`] with `config`, the bias bound's `cause`, and `check` of
+/// each build (its volume, graphs and stats) before it renders.
+fn graph_against_volpath(
+    text: &str,
+    config: &str,
+    cause: &str,
+    check: impl Fn(&Volume, &radiancegraph::Graphs, &radiancegraph::GraphStats),
+) -> f64 {
     let desc = nimbus::parser::load_str(text, "cube.pbrt").unwrap();
     let scene = |seed| {
         nimbus::setup::build(&desc, &BuildOptions { spp: Some(64), seed: Some(seed), ..Default::default() }).unwrap()
     };
-    let config = GraphConfig::from_json(SMALL_CONFIG).unwrap();
+    let config = GraphConfig::from_json(config).unwrap();
     let graph_renders: Vec<_> = [(7, 1), (8, 2)]
         .into_iter()
         .map(|(build_seed, seed)| {
             let scene = scene(seed);
             let (graphs, stats) = radiancegraph::build(&scene, &config, None, build_seed).unwrap();
-            assert_eq!(graphs.graphs.iter().map(|g| g.bounces).collect::<Vec<_>>(), [9, 1]);
-            assert!(stats.vertices > 1000 && stats.edges > stats.vertices, "{stats:?}");
             let volume = Volume::new(&scene).unwrap();
+            check(&volume, &graphs, &stats);
             render_with(&scene, &radiancegraph::render_integrator(&volume, graphs.into_largest()))
         })
         .collect();
@@ -67,7 +85,7 @@ fn assert_graph_matches_volpath(text: &str) -> f64 {
         &Estimate::from_seeds(&graph_renders),
         &Estimate::from_seeds(&volpath),
         GRAPH_BIAS,
-        "the radiance graph's node averaging, thesis Sec. 4.7",
+        cause,
     )
 }
 
@@ -114,37 +132,16 @@ fn assert_similar_cube_matches_volpath(extra: &str) -> f64 {
     let text = cube_text(8.0, "volpath", extra)
         .replace(r#""rgb sigma_a" [0 0 0]"#, r#""rgb sigma_a" [0 0 0] "float g" 0.85"#)
         .replace(r#""integer maxdepth" 10"#, r#""integer maxdepth" 1000"#);
-    let desc = nimbus::parser::load_str(&text, "cube.pbrt").unwrap();
-    let scene = |seed| {
-        nimbus::setup::build(&desc, &BuildOptions { spp: Some(64), seed: Some(seed), ..Default::default() }).unwrap()
-    };
     // As SMALL_CONFIG, with the bounces and light paths the similar medium needs to converge.
-    let config = GraphConfig::from_json(
-        r#"{
+    let config = r#"{
         "graphBuilder": {"dimensionSteps": 100, "iterationsPerStep": 20, "maxDepth": 200, "radiusModifier": 20},
         "lightingCalculator": {"lightIterations": 4, "pointsOnRadiusLight": 1, "bounces": [200]}
-    }"#,
-    )
-    .unwrap();
-    let graph_renders: Vec<_> = [(7, 1), (8, 2)]
-        .into_iter()
-        .map(|(build_seed, seed)| {
-            let scene = scene(seed);
-            let volume = Volume::new(&scene).unwrap();
-            let s = volume.similarity.expect("g = 0.85 is beyond the directional graph");
-            assert_eq!((volume.medium.g, s.read_at), (0.0, 9));
-            let (graphs, _) = radiancegraph::build(&scene, &config, None, build_seed).unwrap();
-            render_with(&scene, &radiancegraph::render_integrator(&volume, graphs.into_largest()))
-        })
-        .collect();
-    let volpath: Vec<_> = [3, 4].into_iter().map(|seed| render_scene(&scene(seed))).collect();
-    assert_agree(
-        "radiance graph of the similar medium against volpath",
-        &Estimate::from_seeds(&graph_renders),
-        &Estimate::from_seeds(&volpath),
-        GRAPH_BIAS,
-        "the radiance graph's node averaging, thesis Sec. 4.7, and the similarity relation",
-    )
+    }"#;
+    let cause = "the radiance graph's node averaging, thesis Sec. 4.7, and the similarity relation";
+    graph_against_volpath(&text, config, cause, |volume, _, _| {
+        let s = volume.similarity.expect("g = 0.85 is beyond the directional graph");
+        assert_eq!((volume.medium.g, s.read_at), (0.0, 9));
+    })
 }
 
 /// Beyond the thesis: a point light beside the cube (with the sun), light paths started from

@@ -204,6 +204,8 @@ pub struct RadianceGraphIntegrator {
     /// Where the graph holds the similar medium of a strongly forward-scattering one: camera
     /// paths read it at this scattering event, not the first.
     similarity: Option<Similarity>,
+    /// The scene's path depth, which `path.max_depth` raises to reach that event.
+    scene_max_depth: u32,
 }
 
 impl RadianceGraphIntegrator {
@@ -222,6 +224,7 @@ impl RadianceGraphIntegrator {
             path: PathConfig::volpath(5, false),
             note: None,
             similarity: None,
+            scene_max_depth: 5,
         }
     }
 
@@ -229,7 +232,7 @@ impl RadianceGraphIntegrator {
     /// `similarity.read_at`-th scattering event, the events before it traced exactly.
     pub fn with_similarity(mut self, similarity: Similarity) -> RadianceGraphIntegrator {
         self.similarity = Some(similarity);
-        let depth = self.path.max_depth;
+        let depth = self.scene_max_depth;
         self.with_max_depth(depth)
     }
 
@@ -251,6 +254,7 @@ impl RadianceGraphIntegrator {
     /// least as many as reach the event that reads the graph of a similar medium, which
     /// transports light to convergence whatever the scene's depth.
     pub fn with_max_depth(mut self, max_depth: u32) -> RadianceGraphIntegrator {
+        self.scene_max_depth = max_depth;
         self.path.max_depth = max_depth.max(self.similarity.map_or(0, |s| s.read_at));
         self
     }
@@ -311,7 +315,7 @@ impl RayIntegrator for RadianceGraphIntegrator {
                 "warning     the similar medium's graph transports light until it leaves the medium, not to the scene's \
                  maxdepth {}: compare with volpath at a maxdepth long enough for its paths to end by themselves \
                  (on the Disney cloud maxdepth 100 cuts off 26 % of the light)",
-                self.path.max_depth
+                self.scene_max_depth
             ));
         }
         lines.extend(self.note.as_ref().map(|n| format!("warning     {n}")));

@@ -20,9 +20,10 @@
 //! 16 (64 spp each, ±0.4 %).
 //!
 //! The similar medium has no counterpart of a path depth: one of its events stands for about
-//! 1/(1 − g) of the real medium's, and no count of them reproduces volpath's cut at the
-//! scene's `maxdepth` (on the Disney cloud, 16 similar events after 8 exact ones matched
-//! maxdepth 100 within noise, 19 came out +4.9 %, 22 +8.5 %). So such a graph transports
+//! 1/(1 − g) of the real medium's, but the count that reproduces volpath's cut at the scene's
+//! `maxdepth` is not the one the relation predicts (on the Disney cloud, after 8 exact events,
+//! 8 similar ones matched maxdepth 100 within noise; the 11 that (100 − 8)(1 − g) gives came
+//! out +4.9 %, 14 +8.5 %), and one that matches one cloud need not match another. So such a graph transports
 //! light to convergence ([`BOUNCES`]): it renders what volpath renders with paths long
 //! enough to end by themselves, and says so in the render's summary. On the Disney cloud,
 //! maxdepth 100 cuts off 26 % of that light.

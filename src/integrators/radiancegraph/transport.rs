@@ -107,17 +107,17 @@ impl Transport {
     }
 }
 
-/// Algorithm 1's loop for each bounce count in `bounces`: `step(done, current, next)` computes
-/// the next bounce from the current one (`done` bounces so far: 0 from the direct light), and
-/// the running sum starts at `total` (the current bounce's values too). A bounce whose values
-/// overflow to ∞ or NaN ends the series (the thesis's "numerical limits reached"): counts
-/// beyond it get the last finite sum; so does a `tail` reached ([`Transport::neumann`]).
 /// A ratio of consecutive bounces' totals has settled when it moves by less than this (times
 /// 1 − r, which the extrapolated rest divides by) from one bounce to the next …
 pub const SETTLED: f64 = 1e-3;
 /// … for this many bounces in a row.
 pub const SETTLED_BOUNCES: u32 = 4;
 
+/// Algorithm 1's loop for each bounce count in `bounces`: `step(done, current, next)` computes
+/// the next bounce from the current one (`done` bounces so far: 0 from the direct light), and
+/// the running sum starts at `total` (the current bounce's values too). A bounce whose values
+/// overflow to ∞ or NaN ends the series (the thesis's "numerical limits reached"): counts
+/// beyond it get the last finite sum; so does a `tail` reached ([`Transport::neumann`]).
 fn series(
     bounces: &[u32],
     total: Vec<f32>,

@@ -23,9 +23,9 @@
 //! 1/(1 − g) of the real medium's, but the count that reproduces volpath's cut at the scene's
 //! `maxdepth` is not the one the relation predicts (on the Disney cloud, after 8 exact events,
 //! 8 similar ones matched maxdepth 100 within noise; the 11 that (100 − 8)(1 − g) gives came
-//! out +4.9 %, 14 +8.5 %), and one that matches one cloud need not match another. So such a graph transports
-//! light to convergence ([`BOUNCES`]): it renders what volpath renders with paths long
-//! enough to end by themselves, and says so in the render's summary. On the Disney cloud,
+//! out +4.9 %, 14 +8.5 %), and one that matches one cloud need not match another. So such a
+//! graph transports light to convergence ([`BOUNCES`]): it renders what volpath renders with
+//! paths long enough to end by themselves, and says so in the render's summary. On the Disney cloud,
 //! maxdepth 100 cuts off 26 % of that light.
 //!
 //! Everything the graph's build computes goes through the similar medium, the light the

@@ -19,7 +19,7 @@ use rayon::prelude::*;
 use super::config::LightingCalculator;
 use super::graph::Members;
 use super::sh;
-use super::volume::{GraphLight, Volume, reflected_along, sample_area_lights, transmittance_from_inside};
+use super::volume::{GraphLight, Volume, sample_area_lights};
 use crate::geometry::Ray;
 use crate::sampling::rng::Pcg32;
 use crate::sampling::warp;
@@ -81,13 +81,7 @@ pub fn direct_light(
                 let v = match light {
                     GraphLight::Distant { dir, .. } => {
                         node.scalar(&mut rng, |x, rng| {
-                            transmittance_from_inside(
-                                volume.scene,
-                                &volume.medium,
-                                &Ray::new(x, -*dir),
-                                f32::INFINITY,
-                                rng,
-                            )
+                            volume.transmittance_out(&Ray::new(x, -*dir), f32::INFINITY, rng)
                         }) * INV_4PI
                     }
                     GraphLight::Point { pos, .. } => {
@@ -96,16 +90,7 @@ pub fn direct_light(
                     // ∫ p T_r dω: uniform directions, the transmittance out along each.
                     GraphLight::Uniform { .. } => node.directional(&mut rng, &mut c, |x, rng| {
                         let d = warp::uniform_sphere(Vec2::new(rng.uniform(), rng.uniform()));
-                        Ok((
-                            transmittance_from_inside(
-                                volume.scene,
-                                &volume.medium,
-                                &Ray::new(x, d),
-                                f32::INFINITY,
-                                rng,
-                            ),
-                            d,
-                        ))
+                        Ok((volume.transmittance_out(&Ray::new(x, d), f32::INFINITY, rng), d))
                     })?,
                     // One light chosen by area, a point by its own sampling: T_r/pdf times the
                     // isotropic phase function; an opaque surface between (the light's own shape
@@ -114,7 +99,7 @@ pub fn direct_light(
                         let Some((wi, dist, pdf)) = sample_area_lights(volume.scene, lights, x, rng) else {
                             return Ok((0.0, Vec3::Z));
                         };
-                        let t = transmittance_from_inside(volume.scene, &volume.medium, &Ray::new(x, wi), dist, rng);
+                        let t = volume.transmittance_out(&Ray::new(x, wi), dist, rng);
                         Ok((t / pdf * INV_4PI, wi))
                     })?,
                     // The emission reaching the point along a uniform direction (isotropic
@@ -165,7 +150,7 @@ fn point(volume: &Volume, c: Vec3, radius: f32, light: Vec3, estimates: usize, r
     let at = |x: Vec3, rng: &mut Pcg32| {
         let d2 = x.distance_squared(light);
         let ray = Ray::new(x, (light - x) / d2.sqrt());
-        f64::from(transmittance_from_inside(volume.scene, &volume.medium, &ray, d2.sqrt(), rng) / d2)
+        f64::from(volume.transmittance_out(&ray, d2.sqrt(), rng) / d2)
     };
     let (mut sum, mut count) = (0.0f64, 0u32);
     for _ in 0..estimates {
@@ -241,7 +226,7 @@ impl Node<'_> {
         let mut rng = Pcg32::new(stream, seed ^ 0x0073_7572_6661_6365);
         self.directional(&mut rng, sh_out, |x, rng| {
             let d = warp::uniform_sphere(Vec2::new(rng.uniform(), rng.uniform()));
-            Ok((reflected_along(volume.scene, &volume.medium, &Ray::new(x, d), of, rng)?, d))
+            Ok((volume.reflected_along(&Ray::new(x, d), of, rng)?, d))
         })
     }
 }

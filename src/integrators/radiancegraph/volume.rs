@@ -275,13 +275,15 @@ impl<'a> Volume<'a> {
                 violated.iter().map(|v| format!("\n  - {v}")).collect::<String>()
             )));
         }
+        let medium = medium.expect("checked");
+        let similarity = (medium.g > MAX_G).then(|| Similarity::new(medium.g));
         Ok(Volume {
             scene,
-            medium: match medium.expect("checked") {
-                m if m.g > MAX_G => std::borrow::Cow::Owned(similarity::similar(m).expect("checked")),
-                m => std::borrow::Cow::Borrowed(m),
+            medium: match similarity {
+                Some(_) => std::borrow::Cow::Owned(similarity::similar(medium).expect("checked")),
+                None => std::borrow::Cow::Borrowed(medium),
             },
-            similarity: medium.filter(|m| m.g > MAX_G).map(|m| Similarity::new(m.g)),
+            similarity,
             medium_index: 0,
             bounds,
             radius: 0.5 * (bounds.max - bounds.min).length(),
@@ -427,6 +429,17 @@ impl<'a> Volume<'a> {
     /// multiplying ever smaller ratios to the far side. The thesis tracks to the end.
     pub fn transmittance(&self, ray: &Ray, t_max: f32, rng: &mut Pcg32) -> f32 {
         ratio_tracked(&self.medium, ray, t_max, rng)
+    }
+
+    /// [`transmittance_from_inside`] through the graph's medium (the similar one where it
+    /// stands in for the scene's): what the build's direct light asks.
+    pub fn transmittance_out(&self, ray: &Ray, t_end: f32, rng: &mut Pcg32) -> f32 {
+        transmittance_from_inside(self.scene, &self.medium, ray, t_end, rng)
+    }
+
+    /// [`reflected_along`] through the graph's medium.
+    pub fn reflected_along(&self, ray: &Ray, light: &GraphLight, rng: &mut Pcg32) -> Result<f32, Vec3> {
+        reflected_along(self.scene, &self.medium, ray, light, rng)
     }
 }
 

@@ -245,7 +245,7 @@ fn check_reports_every_error_and_the_first_one_render_stops_at() {
             "constraints.pbrt",
             format!(
                 "{head}Integrator \"radiancegraph\"\nWorldBegin\nLightSource \"distant\" \"rgb L\" [1 1 1]\n\
-                 MakeNamedMedium \"m\" \"string type\" \"homogeneous\" \"float g\" 0.95\n\
+                 MakeNamedMedium \"m\" \"string type\" \"homogeneous\" \"float g\" 0.98\n\
                  AttributeBegin\nMediumInterface \"m\" \"\"\nMaterial \"interface\"\nShape \"sphere\"\nAttributeEnd\n"
             ),
             1,

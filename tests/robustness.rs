@@ -11,7 +11,7 @@ const NO_MEDIUM: &str = "one medium (the scene has none)";
 const BOUNDED: &str = "a medium bounded by `interface` surfaces (the scene has none)";
 const ONE_BOUNDARY: &str = "surfaces that change the medium only as its boundary";
 const NO_LIGHT: &str = "at least one light (the scene has none)";
-const MILD_PHASE: &str = "a phase function with g in [−0.75, 0.9]";
+const MILD_PHASE: &str = "a phase function with g in [−0.75, 0.95]";
 const GRAY: &str = "gray coefficients";
 const NON_EMISSIVE: &str = "a non-emissive medium";
 const EMPTY_GRAPH: &str = "no light path scattered in the medium: the graph is empty";
@@ -155,11 +155,12 @@ fn stress_conditions_render_finite_or_refuse() {
     let iface = "Material \"interface\"";
     let (a, s) = ("0.01 0.01 0.01", "2 2 2");
     // Each condition with the constraints the radiance graph must name (none: it renders).
-    let conditions: [(&str, String, &[&str]); 13] = [
+    let conditions: [(&str, String, &[&str]); 14] = [
         ("albedo 0.5", base("2 2 2", s, 0.0, "", sun_sky, iface), &[]),
         ("albedo 0.999", base("0.002 0.002 0.002", s, 0.0, "", sun_sky, iface), &[]),
         ("g -0.5", base(a, s, -0.5, "", sun_sky, iface), &[]),
-        ("g 0.95", base(a, s, 0.95, "", sun_sky, iface), &[MILD_PHASE]),
+        ("g 0.95", base(a, s, 0.95, "", sun_sky, iface), &[]),
+        ("g 0.98", base(a, s, 0.98, "", sun_sky, iface), &[MILD_PHASE]),
         ("optically thin", base(a, "0.1 0.1 0.1", 0.0, "", sun_sky, iface), &[]),
         ("optically thick", base("0.1 0.1 0.1", "100 100 100", 0.0, "", sun_sky, iface), &[]),
         ("small light", base(a, s, 0.0, "", small, iface), &[]),

@@ -589,7 +589,7 @@ fn a_config_less_graph_is_sized_from_the_medium_and_the_camera() {
     // Part of the cube's 8 units³: ten events from the lit face reach only so deep.
     assert!((2.0..8.0).contains(&thick.occupied_volume), "{thick:?}");
     for s in [&thick, &fine, &sized(2.0, 32), &sized(20.0, 1024)] {
-        let budget = (f64::from(s.occupied_volume) / NODE_BUDGET).cbrt() as f32;
+        let budget = sizing::budget_radius(s.occupied_volume);
         let candidates = [(s.free_path / 5.0, "free path"), (s.footprint, "pixel footprint"), (budget, "node budget")];
         let largest = candidates.iter().copied().fold((0.0, ""), |a, c| if c.0 > a.0 { c } else { a });
         assert_eq!((s.radius, s.radius_from), largest, "{s:?}");

@@ -115,6 +115,8 @@ mod tests {
         assert_eq!(exact_events(0.9), 14);
         // 0.9^14 = 0.229 ≤ 1/4 < 0.9^13 = 0.254.
         assert!(0.9f32.powi(14) <= 0.25 && 0.9f32.powi(13) > 0.25);
+        // At MAX_G: 0.95^28 = 0.238 ≤ 1/4 < 0.95^27 = 0.250 3.
+        assert_eq!(exact_events(MAX_G), 28);
     }
 
     #[test]

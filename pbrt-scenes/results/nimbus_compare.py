@@ -120,6 +120,19 @@ def compare(scene, integrators, out, time=None, spp=None, seeds=3, seed=1, refer
     return Comparison(command, out, results)
 
 
+def render_seconds(scene, out, method, spp, extra=()):
+    """`nimbus render` of `scene` with `method` at `spp` spp, seed 1, into `out`: the render
+    time nimbus reports (a frame's time, no error measured, so no comparison is needed)."""
+    import re
+
+    args = ["render", scene, "--integrator", method, "--spp", str(spp), "--seed", "1", "--nthreads", THREADS,
+            "--outfile", out] + list(extra)
+    r = subprocess.run([NIMBUS] + [str(a) for a in args], capture_output=True, text=True)
+    if r.returncode != 0:
+        sys.exit(f"nimbus {' '.join(map(str, args))} failed:\n{r.stderr}")
+    return float(re.search(r"in ([0-9.]+) s", r.stderr).group(1))
+
+
 def pm(stat, fmt="{:.3g}", unit=""):
     """'mean ± standard error' of a results.json stat (the mean alone for one seed)."""
     if stat is None:

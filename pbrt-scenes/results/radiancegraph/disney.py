@@ -34,7 +34,6 @@ import json
 import math
 import os
 import re
-import subprocess
 import sys
 
 import matplotlib
@@ -44,7 +43,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, ".."))
-from nimbus_compare import NIMBUS, SCENES, THREADS, compare, rel, run, variant  # noqa: E402
+from nimbus_compare import SCENES, THREADS, compare, rel, render_seconds, run, variant  # noqa: E402
 
 WORK = os.path.join(HERE, ".work")
 OUT = os.path.join(HERE, "disney")
@@ -90,16 +89,6 @@ def orbit_frame(i):
     ])
 
 
-def render_seconds(scene_file, out, graph):
-    """One frame from the saved graph at SPP spp, seed 1: the render time nimbus reports."""
-    args = ["render", scene_file, "--integrator", "radiancegraph", "--precomputed", graph, "--spp", str(SPP),
-            "--seed", "1", "--nthreads", THREADS, "--outfile", out]
-    r = subprocess.run([NIMBUS] + args, capture_output=True, text=True)
-    if r.returncode != 0:
-        sys.exit(f"nimbus {' '.join(args)} failed:\n{r.stderr}")
-    return float(re.search(r"in ([0-9.]+) s", r.stderr).group(1))
-
-
 def orbit(graph, build, frame0):
     """Section 3: every frame from `graph`; the measured ones against volpath (frame 0 is the
     comparison of section 2, `frame0`)."""
@@ -107,7 +96,7 @@ def orbit(graph, build, frame0):
     for i in range(ORBIT):
         scene_file = orbit_frame(i)
         exr = os.path.join(WORK, f"disney-orbit-{i:02d}.exr")
-        frame = {"frame": i, "graph_s": render_seconds(scene_file, exr, graph)}
+        frame = {"frame": i, "graph_s": render_seconds(scene_file, exr, "radiancegraph", SPP, ["--precomputed", graph])}
         png = os.path.join(WORK, f"disney-orbit-{i:02d}.png")
         run(["convert", exr, png])
         os.remove(exr)

@@ -32,9 +32,7 @@ Writes results.md and results.json. Scene variants and their cached references l
 import json
 import math
 import os
-import re
 import shutil
-import subprocess
 import sys
 
 import matplotlib
@@ -44,7 +42,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, ".."))
-from nimbus_compare import NIMBUS, SCENES, THREADS, compare, pm, run, variant  # noqa: E402
+from nimbus_compare import SCENES, compare, pm, render_seconds, run, variant  # noqa: E402
 
 WORK = os.path.join(HERE, ".work")
 SEEDS = 3
@@ -229,7 +227,7 @@ def main():
         times = {}
         for method, extra in [("radiancegraph", ["--precomputed", graph]), ("volpath", [])]:
             img = os.path.join(WORK, "orbit", f"frame-{i}-{method}.exr")
-            times[method] = render_seconds(frame, img, method, extra)
+            times[method] = render_seconds(frame, img, method, SPP, extra)
             if method == "radiancegraph" and i % 4 == 0:
                 run(["convert", img, os.path.join(HERE, f"orbit-{i:02d}.png")])
             os.remove(img)
@@ -243,17 +241,6 @@ def main():
         json.dump(results, f, indent=2)
     charts(radius_rows, volume_rows, orbit, build_s, break_even)
     table(results)
-
-
-def render_seconds(scene, out, method, extra):
-    """`nimbus render` at SPP spp, seed 1: the seconds it reports (a frame's time, no error
-    measured, so no comparison is needed)."""
-    args = ["render", scene, "--integrator", method, "--spp", str(SPP), "--seed", "1", "--nthreads", THREADS,
-            "--outfile", out] + extra
-    r = subprocess.run([NIMBUS] + args, capture_output=True, text=True)
-    if r.returncode != 0:
-        sys.exit(f"nimbus {' '.join(args)} failed:\n{r.stderr}")
-    return float(re.search(r"in ([0-9.]+) s", r.stderr).group(1))
 
 
 def charts(radius_rows, volume_rows, orbit, build_s, break_even):

@@ -29,6 +29,7 @@
 //! (Gu, Iglesias-Guitian and Moon, "Neural James-Stein Combiner for Unbiased and Biased
 //! Renderings", ACM TOG 41(6), 2022), here with the closed-form weight and no network.
 
+use super::correction::Correction;
 use crate::color::Rgb;
 use crate::integrators::Outlook;
 
@@ -53,19 +54,17 @@ struct Moments {
 
 impl Moments {
     /// Per-sample estimates from this half, or None below two samples: −Cov(U, D) = A,
-    /// Var(U), Var(D), and D̄².
+    /// Var(U) and Var(D) (its D̄ is [`gray_fields`]'s).
     fn estimate(&self) -> Option<Estimates> {
         if self.n < 2 {
             return None;
         }
         let (n, x, y) = (self.n as f64, self.x as f64, self.y as f64);
         let var = |sq: f32, a: f64, b: f64| (sq as f64 - a * b / n) / (n - 1.0);
-        let d = y / n;
         Some(Estimates {
             a: -var(self.xy, x, y),
             var_u: var(self.xx, x, x).max(0.0),
             var_d: var(self.yy, y, y).max(0.0),
-            d2: d * d,
         })
     }
 }
@@ -76,7 +75,6 @@ struct Estimates {
     a: f64,
     var_u: f64,
     var_d: f64,
-    d2: f64,
 }
 
 /// One pixel's sums over its paired samples (the film keeps Σ w·L and Σ w of all of them),
@@ -143,9 +141,9 @@ impl PairSums {
     }
 }
 
-/// Σ over the (2·RADIUS + 1)² window around each pixel of a `width`-wide image of `values`
+/// Σ over the (2·`radius` + 1)² window around each pixel of a `width`-wide image of `values`
 /// (row-major; None counts as nothing), by a summed-area table.
-fn window_sums<const K: usize>(width: usize, values: &[Option<[f64; K]>]) -> Vec<[f64; K]> {
+pub(super) fn window_sums<const K: usize>(width: usize, values: &[Option<[f64; K]>], radius: usize) -> Vec<[f64; K]> {
     let height = values.len().checked_div(width).unwrap_or(0);
     let stride = width + 1;
     let mut sat = vec![[0.0f64; K]; stride * (height + 1)];
@@ -163,9 +161,9 @@ fn window_sums<const K: usize>(width: usize, values: &[Option<[f64; K]>]) -> Vec
     }
     let mut out = vec![[0.0; K]; values.len()];
     for y in 0..height {
-        let (y0, y1) = (y.saturating_sub(RADIUS), (y + RADIUS + 1).min(height));
+        let (y0, y1) = (y.saturating_sub(radius), (y + radius + 1).min(height));
         for x in 0..width {
-            let (x0, x1) = (x.saturating_sub(RADIUS), (x + RADIUS + 1).min(width));
+            let (x0, x1) = (x.saturating_sub(radius), (x + radius + 1).min(width));
             out[y * width + x] = std::array::from_fn(|k| {
                 sat[y1 * stride + x1][k] - sat[y0 * stride + x1][k] - sat[y1 * stride + x0][k]
                     + sat[y0 * stride + x0][k]
@@ -204,21 +202,47 @@ fn error(var_u: f64, a: f64, var_d: f64, b2: f64, n: f64, all: f64) -> f64 {
     (base - (a / all).powi(2) / den).max(0.0)
 }
 
+/// Each half's gray D̄ per pixel: its samples' unweighted mean of L − U, as its moments take
+/// it; None where the half has no samples.
+fn gray_fields(pairs: &[PairSums]) -> [Vec<Option<[f64; 1]>>; 2] {
+    [0, 1].map(|h| {
+        pairs
+            .iter()
+            .map(|p| {
+                let m = &p.halves[h];
+                (m.n > 0).then(|| [m.y as f64 / m.n as f64])
+            })
+            .collect()
+    })
+}
+
+/// The bias correction fitted to the halves' gray D̄ ([`Correction`]), and each half's gray
+/// correction per pixel.
+fn corrections(width: usize, pairs: &[PairSums]) -> (Correction, [Vec<[f64; 1]>; 2]) {
+    let [even, odd] = gray_fields(pairs);
+    let fit = Correction::fit(width, [&even, &odd]);
+    let shifts = [fit.apply(0, &odd), fit.apply(1, &even)];
+    (fit, shifts)
+}
+
 /// Each pixel's λ from the even passes' and from the odd passes' samples, in a `width`-wide
 /// image (row-major `pairs`): [`optimum`] with each half's estimates summed over the window,
-/// the half taken as if it were all the paired samples there are (n_h of N_h = n_h / r); 1
-/// where a half has fewer than two samples.
-fn weights(width: usize, pairs: &[PairSums]) -> Vec<[f64; 2]> {
+/// E[D̄²] taken from its corrected D̄ (`shifts`, [`corrections`]), the half taken as if it were
+/// all the paired samples there are (n_h of N_h = n_h / r); 1 where a half has fewer than two
+/// samples.
+fn weights(width: usize, pairs: &[PairSums], shifts: &[Vec<[f64; 1]>; 2]) -> Vec<[f64; 2]> {
     let [even, odd] = [0, 1].map(|h| {
         let terms: Vec<Option<[f64; 3]>> = pairs
             .iter()
-            .map(|p| {
+            .zip(&shifts[h])
+            .map(|(p, [shift])| {
                 let e = p.halves[h].estimate()?;
                 let n = p.halves[h].n as f64;
-                Some([e.d2, e.a / n, (2.0 * e.a - e.var_u) / n])
+                let d = p.halves[h].y as f64 / n + shift;
+                Some([d * d, e.a / n, (2.0 * e.a - e.var_u) / n])
             })
             .collect();
-        let sums = window_sums(width, &terms);
+        let sums = window_sums(width, &terms, RADIUS);
         pairs
             .iter()
             .zip(&terms)
@@ -237,19 +261,47 @@ fn weights(width: usize, pairs: &[PairSums]) -> Vec<[f64; 2]> {
 
 /// The combined mean of every pixel of a `width`-wide image: `totals` are the film's Σ w·L
 /// and Σ w per pixel (over the paired samples), `pairs` the same pixels' paired and unpaired
-/// sums. C = Ū_N + Σ_h w_h λ_h' (L̄_h − Ū_N), w_h half h's share of the paired weight, each
-/// half's term weighted by the other half's λ. The term is written D̄_h + (1 − r)(Ū_h − Ū_m)
-/// (Ū_m the unpaired samples' mean; the other half's Ū in Ū_N replaced by this half's, which
-/// has its expectation), so that no λ weighs the samples it was estimated from.
+/// sums. C = Ū_N + Σ_h w_h λ_h' (L̃_h − Ū_N), w_h half h's share of the paired weight, L̃_h
+/// half h's mean of L with its bias correction ([`Correction`], fitted to the gray D̄ and
+/// applied to each channel's), each half's term weighted by the other half's λ. The term is
+/// written D̄_h + shift_h + (1 − r)(Ū_h − Ū_m) (Ū_m the unpaired samples' mean; the other
+/// half's Ū in Ū_N replaced by this half's, which has its expectation), so that no λ weighs
+/// the samples it was estimated from.
 pub(super) fn combine(
     width: usize,
     totals: impl Iterator<Item = ([f64; 3], f64)>,
     pairs: &[PairSums],
 ) -> Vec<[f64; 3]> {
-    let lambda = weights(width, pairs);
+    let totals: Vec<([f64; 3], f64)> = totals.collect();
+    let (fit, gray) = corrections(width, pairs);
+    let lambda = weights(width, pairs, &gray);
+    // Each half's Σ w·(L − U) per channel, and its weighted mean D̄ (the field the correction
+    // reads).
+    let diffs: Vec<[[f64; 3]; 2]> = totals
+        .iter()
+        .zip(pairs)
+        .map(|((l, _), p)| {
+            let even = p.diff_even.map(|d| d as f64);
+            [even, std::array::from_fn(|c| l[c] - p.unbiased[c] - even[c])]
+        })
+        .collect();
+    let [even_d, odd_d]: [Vec<Option<[f64; 3]>>; 2] = [0, 1].map(|h| {
+        diffs
+            .iter()
+            .zip(totals.iter().zip(pairs))
+            .map(|(d, ((_, w), p))| {
+                let wh = if h == 0 { p.weight_even } else { w - p.weight_even };
+                (wh > 0.0).then(|| d[h].map(|x| x / wh))
+            })
+            .collect()
+    });
+    let shifts = [fit.apply(0, &odd_d), fit.apply(1, &even_d)];
     totals
+        .iter()
         .zip(pairs.iter().zip(&lambda))
-        .map(|((l, w), (p, &[even, odd]))| {
+        .zip(&diffs)
+        .enumerate()
+        .map(|(i, ((&(_, w), (p, &[even, odd])), &[diff_even, diff_odd]))| {
             let all = w + p.alone_weight;
             if all == 0.0 {
                 return [0.0; 3];
@@ -263,11 +315,12 @@ pub(super) fn combine(
                 }
                 let alone_mean = if p.alone_weight > 0.0 { p.alone[c] / p.alone_weight } else { 0.0 };
                 let (u_even, u_odd) = (p.unbiased_even[c], p.unbiased[c] - p.unbiased_even[c]);
-                let diff_even = p.diff_even[c] as f64;
-                let diff_odd = l[c] - p.unbiased[c] - diff_even;
-                // Half h's Σ w·(L − U) + (1 − r) Σ w·(U − Ū_m).
-                let term = |diff: f64, u: f64, wh: f64| diff + (1.0 - r) * (u - wh * alone_mean);
-                pooled + (odd * term(diff_even, u_even, w_even) + even * term(diff_odd, u_odd, w_odd)) / w
+                // Half h's Σ w·(L̃ − U) + (1 − r) Σ w·(U − Ū_m).
+                let term =
+                    |diff: f64, shift: f64, u: f64, wh: f64| diff + wh * shift + (1.0 - r) * (u - wh * alone_mean);
+                let even_term = term(diff_even[c], shifts[0][i][c], u_even, w_even);
+                let odd_term = term(diff_odd[c], shifts[1][i][c], u_odd, w_odd);
+                pooled + (odd * even_term + even * odd_term) / w
             })
         })
         .collect()
@@ -279,20 +332,24 @@ pub(super) fn combine(
 /// e(n, N) − e(n, N + 1) off, a paired one e(n, N) − e(n + 1, N + 1). Pixels with fewer than
 /// two samples in a half are left out; None when that is every pixel.
 pub(super) fn outlook(width: usize, pairs: &[PairSums]) -> Option<Outlook> {
-    // Per pixel, both halves' per-sample estimates pooled, and the bias² their D̄² shows.
+    // Per pixel, both halves' per-sample estimates pooled, and the bias² their corrected D̄²
+    // shows (what the correction leaves, with the noise it adds).
+    let (_, [shift_even, shift_odd]) = corrections(width, pairs);
     let terms: Vec<Option<[f64; 5]>> = pairs
         .iter()
-        .map(|p| {
+        .zip(shift_even.iter().zip(&shift_odd))
+        .map(|(p, ([se], [so]))| {
             let [e, o] = [0, 1].map(|h| p.halves[h].estimate());
             let (e, o) = (e?, o?);
             let (ne, no) = (p.halves[0].n as f64, p.halves[1].n as f64);
             let mean = |f: fn(&Estimates) -> f64| (f(&e) * ne + f(&o) * no) / (ne + no);
-            // Each half's D̄² estimates b² + σ²_D/n_h.
-            let b2 = (e.d2 - e.var_d / ne + o.d2 - o.var_d / no) / 2.0;
+            // Each half's corrected D̄² estimates b̃² + σ²_D/n_h.
+            let (de, d_o) = (p.halves[0].y as f64 / ne + se, p.halves[1].y as f64 / no + so);
+            let b2 = (de * de - e.var_d / ne + d_o * d_o - o.var_d / no) / 2.0;
             Some([mean(|x| x.a), mean(|x| x.var_u), mean(|x| x.var_d), b2, 1.0])
         })
         .collect();
-    let sums = window_sums(width, &terms);
+    let sums = window_sums(width, &terms, RADIUS);
     let mut o = Outlook::default();
     let mut counted = false;
     for ((p, t), s) in pairs.iter().zip(&terms).zip(&sums) {
@@ -324,20 +381,27 @@ mod tests {
         ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
     }
 
-    /// A `side`² image of `n` samples per pixel whose L is `l()` and U `u()` (gray), combined:
-    /// the images' mean and the weight at its centre from the even passes.
+    /// The sign of a checkerboard's pixel `i` in a `side`-wide image: a bias that alternates
+    /// from pixel to pixel, which the neighbours' D̄ cannot estimate ([`Correction`] leaves it),
+    /// so that the tests of the weights see the bias whole.
+    fn checker(i: usize, side: usize) -> f64 {
+        if (i % side + i / side).is_multiple_of(2) { 1.0 } else { -1.0 }
+    }
+
+    /// A `side`² image of `n` samples per pixel whose L at pixel i is `l(i)` and U `u()`
+    /// (gray), combined: the image, and the weight at its centre from the even passes.
     fn render(
         side: usize,
         n: u32,
-        mut l: impl FnMut(&mut u64) -> f64,
+        mut l: impl FnMut(&mut u64, usize) -> f64,
         mut u: impl FnMut(&mut u64) -> f64,
-    ) -> (f64, f64) {
+    ) -> (Vec<[f64; 3]>, f64) {
         let mut state = 7;
         let mut pairs = vec![PairSums::default(); side * side];
         let mut totals = vec![([0.0; 3], 0.0); side * side];
-        for (p, t) in pairs.iter_mut().zip(totals.iter_mut()) {
+        for (i, (p, t)) in pairs.iter_mut().zip(totals.iter_mut()).enumerate() {
             for pass in 0..n {
-                let (lv, uv) = (l(&mut state) as f32, u(&mut state) as f32);
+                let (lv, uv) = (l(&mut state, i) as f32, u(&mut state) as f32);
                 p.add(Rgb::splat(lv), Rgb::splat(uv), 1.0, pass);
                 for c in 0..3 {
                     t.0[c] += lv as f64;
@@ -346,13 +410,18 @@ mod tests {
             }
         }
         let image = combine(side, totals.iter().copied(), &pairs);
-        let mean = image.iter().map(|c| c[0]).sum::<f64>() / image.len() as f64;
-        (mean, weights(side, &pairs)[side * side / 2 + side / 2][0])
+        let (_, shifts) = corrections(side, &pairs);
+        (image, weights(side, &pairs, &shifts)[side * side / 2 + side / 2][0])
     }
 
-    /// L = 1 + `bias` exactly, U = 1 ± 0.5 (uniform): Var(Ū) = 1/12n, Cov(Ū, D̄) = −Var(Ū).
+    /// L = 1 ± `bias` exactly (a checkerboard), U = 1 ± 0.5 (uniform): Var(Ū) = 1/12n,
+    /// Cov(Ū, D̄) = −Var(Ū). Returns 1 + the bias left in the image (along the checkerboard's
+    /// sign) and ω at the centre.
     fn biased(bias: f64, n: u32) -> (f64, f64) {
-        render(16, n, |_| 1.0 + bias, |s| 0.5 + uniform(s))
+        let side = 16;
+        let (image, omega) = render(side, n, |_, i| 1.0 + bias * checker(i, side), |s| 0.5 + uniform(s));
+        let left = image.iter().enumerate().map(|(i, c)| checker(i, side) * (c[0] - 1.0)).sum::<f64>();
+        (1.0 + left / image.len() as f64, omega)
     }
 
     #[test]
@@ -374,23 +443,35 @@ mod tests {
         assert!((many_mean - 1.0).abs() < 0.002, "{many_mean}");
     }
 
+    /// A bias the same over the image is taken off before the combination, long before the
+    /// weights could drop it: at n = 66, where a checkerboard's keeps half its bias (above),
+    /// the image is within its noise of 1 (each pixel's σ: √(1/12/66) = 0.036 before the
+    /// graph's; the image mean's 0.0022), and the weight stays with L.
+    #[test]
+    fn a_smooth_bias_is_taken_off_before_the_combination() {
+        let (image, omega) = render(16, 66, |_, _| 1.05, |s| 0.5 + uniform(s));
+        let mean = image.iter().map(|c| c[0]).sum::<f64>() / image.len() as f64;
+        assert!((mean - 1.0).abs() < 0.005, "{mean}");
+        assert!(omega > 0.8, "{omega}");
+    }
+
     #[test]
     fn a_pixel_grows_by_152_bytes() {
         assert_eq!(std::mem::size_of::<PairSums>(), 152);
     }
 
-    /// `side`² pixels of `n` paired samples (L = 1 + `bias` ± `noise`/2, U = 1 ± 0.5, both
-    /// uniform and independent) and then `m` unpaired ones (U alone): the combined image's
-    /// mean, its pixels' RMS distance from 1 (the truth without bias) and the outlook before
-    /// the unpaired ones.
+    /// `side`² pixels of `n` paired samples (L = 1 ± `bias` in a checkerboard, ± `noise`/2,
+    /// U = 1 ± 0.5, both uniform and independent) and then `m` unpaired ones (U alone): 1 +
+    /// the bias left in the combined image (along the checkerboard's sign), its pixels' RMS
+    /// distance from 1 (the truth without bias) and the outlook before the unpaired ones.
     fn with_unpaired(bias: f64, noise: f64, n: u32, m: u32) -> (f64, f64, Option<Outlook>) {
         let side = 16;
         let mut state = 11;
         let mut pairs = vec![PairSums::default(); side * side];
         let mut totals = vec![([0.0; 3], 0.0); side * side];
-        for (p, t) in pairs.iter_mut().zip(totals.iter_mut()) {
+        for (i, (p, t)) in pairs.iter_mut().zip(totals.iter_mut()).enumerate() {
             for pass in 0..n {
-                let l = (1.0 + bias + noise * (uniform(&mut state) - 0.5)) as f32;
+                let l = (1.0 + bias * checker(i, side) + noise * (uniform(&mut state) - 0.5)) as f32;
                 let u = (0.5 + uniform(&mut state)) as f32;
                 p.add(Rgb::splat(l), Rgb::splat(u), 1.0, pass);
                 t.0 = t.0.map(|x| x + l as f64);
@@ -405,7 +486,8 @@ mod tests {
         let image = combine(side, totals.iter().copied(), &pairs);
         let k = image.len() as f64;
         let rms = (image.iter().map(|c| (c[0] - 1.0).powi(2)).sum::<f64>() / k).sqrt();
-        (image.iter().map(|c| c[0]).sum::<f64>() / k, rms, outlook)
+        let left = image.iter().enumerate().map(|(i, c)| checker(i, side) * (c[0] - 1.0)).sum::<f64>();
+        (1.0 + left / k, rms, outlook)
     }
 
     /// Unpaired samples join the unbiased mean, and the biased estimate's weight falls with

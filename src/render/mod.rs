@@ -3,6 +3,7 @@
 //! budget.
 
 mod combine;
+mod correction;
 mod gbuffer;
 
 use std::sync::atomic::{AtomicU64, Ordering};

@@ -28,7 +28,9 @@
 //! The combination's weights then see the corrected D̄ (its bias left over, and the ring's
 //! noise), and still tend to U as the samples grow: the image converges whatever is left.
 
-use super::combine::window_sums;
+use rayon::prelude::*;
+
+use super::window::{Rings, Table};
 
 /// Ring radii the regression chooses among.
 const RADII: [usize; 3] = [1, 2, 4];
@@ -51,69 +53,69 @@ pub(super) struct Correction {
 
 impl Correction {
     /// Fits each half's κ and radius to its own D̄ field (`fields[h]`, one value per pixel of a
-    /// `width`-wide image, None where the half has no samples).
-    pub fn fit(width: usize, fields: [&[Option<[f64; 1]>]; 2]) -> Correction {
-        let shifts = fields.map(|field| {
-            let mut best: Vec<(f64, Option<Shift>)> = vec![(0.0, None); field.len()];
-            for radius in RADII {
-                let ring = ring_means(width, field, radius);
-                let terms: Vec<Option<[f64; 2]>> = field
-                    .iter()
-                    .zip(&ring)
-                    .map(|(d, c)| Some([d.as_ref()?[0] * c.as_ref()?[0], c.as_ref()?[0].powi(2)]))
-                    .collect();
-                let sums = window_sums(width, &terms, FIT_RADIUS);
-                for ((b, [num, den]), d) in best.iter_mut().zip(sums).zip(field) {
-                    if d.is_none() || num <= 0.0 || den <= 0.0 {
-                        continue;
-                    }
-                    let removed = num * num / den;
-                    if removed > b.0 {
-                        *b = (removed, Some(Shift { kappa: (num / den).min(1.0), radius }));
-                    }
-                }
-            }
-            best.into_iter().map(|(_, s)| s).collect()
-        });
-        Correction { width, shifts }
+    /// `width`-wide image, None where the half has no samples); with it, each half's
+    /// correction of that field (its gray D̄), from the rings the fit already took.
+    pub fn fit(width: usize, fields: [&[Option<[f64; 1]>]; 2]) -> (Correction, [Vec<[f64; 1]>; 2]) {
+        let rings = fields.map(|f| Rings::new(width, f));
+        let shifts = [0, 1].map(|h| fit_half(width, fields[h], &rings[h]));
+        let fit = Correction { width, shifts };
+        let gray = [fit.shift_with(0, fields[1], &rings[1]), fit.shift_with(1, fields[0], &rings[0])];
+        (fit, gray)
     }
 
     /// Half `h`'s correction at every pixel, −κ · ring_r(`other`), `other` being the other
-    /// half's field (any channels; its gray D̄ or its per-channel one); 0 where there is none.
+    /// half's field (any channels: its per-channel D̄); 0 where there is none.
     pub fn apply<const K: usize>(&self, h: usize, other: &[Option<[f64; K]>]) -> Vec<[f64; K]> {
-        let rings = RADII.map(|r| {
-            let used = self.shifts[h].iter().any(|s| s.is_some_and(|s| s.radius == r));
-            if used { ring_means(self.width, other, r) } else { Vec::new() }
-        });
+        self.shift_with(h, other, &Rings::new(self.width, other))
+    }
+
+    fn shift_with<const K: usize>(&self, h: usize, other: &[Option<[f64; K]>], rings: &Rings<K>) -> Vec<[f64; K]> {
         self.shifts[h]
-            .iter()
+            .par_iter()
+            .zip(other)
             .enumerate()
-            .map(|(i, s)| {
-                let Some(s) = s else { return [0.0; K] };
-                let k = RADII.iter().position(|&r| r == s.radius).expect("a radius of RADII");
-                match rings[k][i] {
-                    Some(c) => c.map(|c| -s.kappa * c),
-                    None => [0.0; K],
-                }
+            .map(|(i, (s, own))| match s {
+                Some(s) => rings.mean(i, s.radius, own.as_ref()).map_or([0.0; K], |c| c.map(|c| -s.kappa * c)),
+                None => [0.0; K],
             })
             .collect()
     }
 }
 
-/// The mean of `values` (a `width`-wide image; None counts as nothing) over the (2r + 1)²
-/// pixels around each pixel, the pixel itself left out; None where none of them has a value.
-fn ring_means<const K: usize>(width: usize, values: &[Option<[f64; K]>], r: usize) -> Vec<Option<[f64; K]>> {
-    let ones: Vec<Option<[f64; 1]>> = values.iter().map(|v| v.map(|_| [1.0])).collect();
-    let counts = window_sums(width, &ones, r);
-    let sums = window_sums(width, values, r);
-    values
-        .iter()
-        .zip(counts)
-        .zip(sums)
-        .map(|((v, [count]), sum)| {
-            let own = v.unwrap_or([0.0; K]);
-            let n = count - if v.is_some() { 1.0 } else { 0.0 };
-            (n > 0.5).then(|| std::array::from_fn(|k| (sum[k] - own[k]) / n))
+/// One half's κ and radius at every pixel: the regression of its D̄ (`field`) on the ring
+/// means of it (`rings`) at each radius, summed over the fit's window, the radius that
+/// removes the most kept.
+fn fit_half(width: usize, field: &[Option<[f64; 1]>], rings: &Rings<1>) -> Vec<Option<Shift>> {
+    // Per pixel, D̄·ring and ring² at each radius, side by side, summed over the window.
+    let terms = Table::from_fn(width, field.len(), |i| {
+        let d = field[i].as_ref()?;
+        let mut t = [0.0; 2 * RADII.len()];
+        for (k, &r) in RADII.iter().enumerate() {
+            if let Some([c]) = rings.mean(i, r, Some(d)) {
+                t[2 * k] = d[0] * c;
+                t[2 * k + 1] = c * c;
+            }
+        }
+        Some(t)
+    });
+    field
+        .par_iter()
+        .enumerate()
+        .map(|(i, d)| {
+            d.as_ref()?;
+            let s = terms.window(i, FIT_RADIUS);
+            let mut best: (f64, Option<Shift>) = (0.0, None);
+            for (k, &radius) in RADII.iter().enumerate() {
+                let (num, den) = (s[2 * k], s[2 * k + 1]);
+                if num <= 0.0 || den <= 0.0 {
+                    continue;
+                }
+                let removed = num * num / den;
+                if removed > best.0 {
+                    best = (removed, Some(Shift { kappa: (num / den).min(1.0), radius }));
+                }
+            }
+            best.1
         })
         .collect()
 }
@@ -121,17 +123,6 @@ fn ring_means<const K: usize>(width: usize, values: &[Option<[f64; K]>], r: usiz
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn a_ring_leaves_out_its_centre_and_the_missing() {
-        // 3×3: the centre's ring is the mean of the other eight, one of them missing.
-        let mut v: Vec<Option<[f64; 1]>> = (0..9).map(|i| Some([i as f64])).collect();
-        v[0] = None;
-        let ring = ring_means(3, &v, 1);
-        assert_eq!(ring[4], Some([(1.0 + 2.0 + 3.0 + 5.0 + 6.0 + 7.0 + 8.0) / 7.0]));
-        // The corner (0, 0) has no value of its own: its ring is its three neighbours.
-        assert_eq!(ring[0], Some([(1.0 + 3.0 + 4.0) / 3.0]));
-    }
 
     /// A uniform bias is fitted with κ near 1 at the widest ring; a bias alternating from
     /// pixel to pixel (a checkerboard, whose rings average out) gets no correction.
@@ -144,7 +135,7 @@ mod tests {
             ((state >> 11) as f64 / (1u64 << 53) as f64 - 0.5) * 0.1
         };
         let smooth: Vec<Option<[f64; 1]>> = (0..side * side).map(|_| Some([0.05 + noise()])).collect();
-        let c = Correction::fit(side, [&smooth, &smooth]);
+        let (c, _) = Correction::fit(side, [&smooth, &smooth]);
         let s = c.shifts[0][side * side / 2 + side / 2].unwrap();
         assert!(s.kappa > 0.9 && s.radius == 4, "{s:?}");
         let shift = c.apply(0, &smooth)[side * side / 2 + side / 2][0];
@@ -152,7 +143,7 @@ mod tests {
 
         let rough: Vec<Option<[f64; 1]>> =
             (0..side * side).map(|i| Some([if (i % side + i / side) % 2 == 0 { 0.05 } else { -0.05 }])).collect();
-        let c = Correction::fit(side, [&rough, &rough]);
+        let (c, _) = Correction::fit(side, [&rough, &rough]);
         assert!(c.apply(0, &rough).iter().all(|v| v[0].abs() < 0.01));
     }
 }

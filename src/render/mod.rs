@@ -5,6 +5,7 @@
 mod combine;
 mod correction;
 mod gbuffer;
+mod window;
 
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;

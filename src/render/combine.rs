@@ -28,6 +28,11 @@
 //! The idea is the James-Stein-style combination of a biased and an unbiased rendering
 //! (Gu, Iglesias-Guitian and Moon, "Neural James-Stein Combiner for Unbiased and Biased
 //! Renderings", ACM TOG 41(6), 2022), here with the closed-form weight and no network.
+//!
+//! Before it, each half's L̄ is corrected by the bias that the neighbouring pixels' D̄ of the
+//! other half show ([`super::correction`]): the weights then weigh what that leaves, which at
+//! few samples is far less than the bias itself (a dense cloud lit from behind at 3 s: MSE
+//! 2.5× below volpath's with it, 1.6× without).
 
 use super::correction::Correction;
 use super::window::Table;

@@ -151,3 +151,71 @@ fn bench_removes_the_noise_of_reference_halves() {
     assert!(stderr.contains("speed.json") && stderr.contains("scenes.tiny.reference"), "{stderr}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// `--pbrt PATH` times that executable in the same run, on bench's seeds, spp and threads,
+/// and takes its figures from it: here a stand-in that renders with nimbus itself in RGB, so
+/// its MSE must equal nimbus's RGB row's (the same seeds give the same images) and the ratios
+/// follow from the measured columns. A stand-in that fails makes the scene's row a failure
+/// with its message.
+#[cfg(unix)]
+#[test]
+fn bench_times_pbrt_in_the_same_run() {
+    use std::os::unix::fs::PermissionsExt;
+    let dir = scratch_dir("bench-pbrt");
+    std::fs::create_dir_all(dir.join("scenes")).unwrap();
+    std::fs::create_dir_all(dir.join("images")).unwrap();
+    let scene = dir.join("scenes/tiny.pbrt");
+    std::fs::write(
+        &scene,
+        "LookAt 0 0 4  0 0 0  0 1 0\nCamera \"perspective\"\nFilm \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8\nWorldBegin\nLightSource \"infinite\" \"rgb L\" [1 1 1]\nMaterial \"diffuse\" \"rgb reflectance\" [0.7 0.2 0.1]\nShape \"sphere\"\n",
+    )
+    .unwrap();
+    let reference = dir.join("images/tiny.exr");
+    let out = nimbus(&[
+        "render",
+        scene.to_str().unwrap(),
+        "--spp",
+        "64",
+        "--quiet",
+        "--outfile",
+        reference.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    std::fs::write(dir.join("speed.json"), r#"{"spp": 4, "scenes": {"tiny": {"seconds": 1000.0, "mse": 1.0}}}"#)
+        .unwrap();
+    let script = |name: &str, body: String| {
+        let p = dir.join(name);
+        std::fs::write(&p, body).unwrap();
+        std::fs::set_permissions(&p, std::fs::Permissions::from_mode(0o755)).unwrap();
+        p
+    };
+    let stand_in =
+        script("pbrt", format!("#!/bin/sh\nexec '{}' render --spectral off \"$@\"\n", env!("CARGO_BIN_EXE_nimbus")));
+    let json = dir.join("out.json");
+    let args = ["bench", "--references", dir.to_str().unwrap(), "--nthreads", "1", "--json", json.to_str().unwrap()];
+    let mut args: Vec<&str> = args.to_vec();
+    args.extend(["--pbrt", stand_in.to_str().unwrap(), scene.to_str().unwrap()]);
+    let out = nimbus(&args);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let rows = v["rows"].as_array().unwrap();
+    let rgb = rows.iter().find(|r| r["mode"] == "off").expect("an RGB row");
+    let (t, mse) = (rgb["seconds"].as_f64().unwrap(), rgb["mse"].as_f64().unwrap());
+    let (tp, msep) = (rgb["pbrt_seconds"].as_f64().unwrap(), rgb["pbrt_mse"].as_f64().unwrap());
+    assert!(tp > 0.0 && tp < 1000.0, "pbrt-v4's time is measured, not speed.json's: {rgb}");
+    assert!((msep / mse - 1.0).abs() < 1e-9, "the stand-in's MSE is nimbus's RGB MSE: {rgb}");
+    assert!((rgb["speedup_equal_error"].as_f64().unwrap() / (tp * msep / (t * mse)) - 1.0).abs() < 1e-9, "{rgb}");
+
+    let failing = script("pbrt-fails", "#!/bin/sh\necho 'Error: cannot open scene' >&2\nexit 3\n".into());
+    let out = nimbus(&[
+        "bench",
+        "--references",
+        dir.to_str().unwrap(),
+        "--pbrt",
+        failing.to_str().unwrap(),
+        scene.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains("| tiny | 4 | pbrt-v4 | failed:") && stdout.contains("cannot open scene"), "{stdout}");
+}

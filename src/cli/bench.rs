@@ -5,6 +5,10 @@
 //! reference images at that spp) and `pbrt-scenes/disney-cloud` (the real Disney cloud at 16 spp,
 //! MSE against two independent reference halves with their own noise removed).
 //!
+//! With `--pbrt PATH` pbrt-v4 itself is timed in the same run instead, scene by scene just
+//! before nimbus, on the same seeds, spp and thread count: ratios that the machine's speed on
+//! the day does not move.
+//!
 //! Equal error: for an unbiased Monte Carlo estimator MSE ∝ 1/time, so nimbus needs
 //! `t × mse / mse_pbrt` seconds to reach pbrt-v4's MSE, and its speed-up at equal error is
 //! `(t_pbrt × mse_pbrt) / (t × mse)`.
@@ -48,6 +52,11 @@ pub struct BenchArgs {
     /// training, counts in the time), against pbrt-v4's VolPath figures.
     #[arg(long)]
     integrator: Option<String>,
+    /// A pbrt-v4 executable to time in this run, interleaved scene by scene with nimbus
+    /// (`--quiet --nthreads N --spp S --seed 1|2 --outfile ...`, wall seconds, MSE against
+    /// the same references), instead of the speed.json figures from another day.
+    #[arg(long)]
+    pbrt: Option<PathBuf>,
 }
 
 /// pbrt-v4's figures for one scene.
@@ -199,6 +208,49 @@ fn run_once(path: &Path, opts: &BuildOptions) -> Result<(f64, nimbus::imageio::I
     Ok((t.elapsed().as_secs_f64(), r.image, scene.transport.transport.name()))
 }
 
+/// pbrt-v4 run `repeat` (at least 2) times on `scene`, seeds 1 and 2 alternating: the median
+/// wall time (start-up and exit included, as the stored figures) and the MSE of the first two
+/// images against `reference`.
+fn run_pbrt(
+    pbrt: &Path,
+    scene: &Path,
+    spp: u32,
+    args: &BenchArgs,
+    reference: &[PathBuf],
+) -> Result<PbrtFigures, String> {
+    let scene = std::fs::canonicalize(scene).map_err(|e| format!("{}: {e}", scene.display()))?;
+    let dir = scene.parent().unwrap_or(Path::new("."));
+    let mut times = Vec::new();
+    let mut images = Vec::new();
+    for k in 0..args.repeat.max(2) {
+        let out = std::env::temp_dir().join(format!("nimbus-bench-pbrt-{}-{k}.exr", std::process::id()));
+        let t = Instant::now();
+        let status = std::process::Command::new(pbrt)
+            .current_dir(dir)
+            .args(["--quiet", "--nthreads", &args.nthreads.to_string(), "--spp", &spp.to_string()])
+            .args(["--seed", &(1 + k % 2).to_string(), "--outfile"])
+            .arg(&out)
+            .arg(&scene)
+            .stdout(std::process::Stdio::null())
+            .output()
+            .map_err(|e| format!("{}: cannot run: {e}", pbrt.display()))?;
+        times.push(t.elapsed().as_secs_f64());
+        let image = nimbus::imageio::read_exr(&out);
+        let _ = std::fs::remove_file(&out);
+        if !status.status.success() {
+            let err = String::from_utf8_lossy(&status.stderr);
+            let last = err.lines().last().unwrap_or("").trim().to_string();
+            return Err(format!("{} exited with {}: {last}", pbrt.display(), status.status));
+        }
+        let image = image.map_err(|e| format!("{}: no image: {e}", pbrt.display()))?;
+        if k < 2 {
+            images.push(image);
+        }
+    }
+    let mse = mse_against(&images, reference)?;
+    Ok(PbrtFigures { seconds: median(&mut times), mse })
+}
+
 /// One scene and transport, measured.
 #[derive(Debug)]
 struct Row {
@@ -295,6 +347,10 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode> {
     let base = baseline_seconds();
     let spp_note = args.spp.map_or("each speed.json's spp".to_string(), |s| format!("{s} spp"));
     println!("baseline (fixed CPU workload): {base:.3} s; {} threads, {spp_note}", args.nthreads);
+    match &args.pbrt {
+        Some(p) => println!("pbrt-v4: {} timed in this run, before nimbus on each scene", p.display()),
+        None => println!("pbrt-v4: the speed.json figures (measured on another day: compare within one run)"),
+    }
     if let Some(i) = &args.integrator {
         println!("integrator: {i} (the scenes' own otherwise); pbrt-v4's figures are its VolPath's");
     }
@@ -306,13 +362,25 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode> {
     let mut rows = Vec::new();
     let mut failures = Vec::new();
     for entry in &entries {
-        let (name, path, figures) = (&entry.name, &entry.scene, entry.figures);
+        let (name, path) = (&entry.name, &entry.scene);
         let spp = args.spp.unwrap_or(entry.spp);
         // No reference means no MSE: say why instead of leaving a silent "-".
         let missing = entry.reference.iter().find(|p| !p.exists());
         if let Some(p) = missing {
             eprintln!("note: {name}: no MSE ({}: no such file)", p.display());
         }
+        let figures = match (&args.pbrt, missing) {
+            (None, _) => entry.figures,
+            (Some(_), Some(_)) => None,
+            (Some(pbrt), None) => match run_pbrt(pbrt, path, spp, args, &entry.reference) {
+                Ok(f) => Some(f),
+                Err(e) => {
+                    println!("| {name} | {spp} | pbrt-v4 | failed: {e} | | | | | |");
+                    failures.push(serde_json::json!({ "scene": name, "mode": "pbrt-v4", "error": e }));
+                    continue;
+                }
+            },
+        };
         for &mode in &args.spectral {
             // Seeds 1 and 2 as pbrt-v4's MSE figure; the timed runs alternate them.
             let mut times = Vec::new();

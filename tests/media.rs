@@ -300,7 +300,12 @@ fn media_scenes_match_pbrt_v4_with(guided: Option<&str>, pairs: i32, only: &[&st
         ("grid-cloud", 16, 0.01, 1.5),
         ("graph-cloud", 16, 0.01, 1.5),
         ("fog-spotlight", 16, 0.01, 1.5),
-        // Emission inside the cloud is heavy-tailed: judged at the README's 32 spp.
+        // Emission inside the cloud is heavy-tailed: judged at the README's 32 spp. The
+        // medium's box also sits in the floor's plane (its bottom face at y = −1, as the
+        // floor), a tie nimbus and pbrt-v4 resolve differently: with the emission switched
+        // off, at 256 spp × 2 seeds a side, nimbus is 1.7 % darker on the floor and 0.85 % in
+        // the medium (up to 6 % in 8×16 blocks at the box's bottom). The emission's noise
+        // hides it here; an estimator with half the noise lifts the excess to 1.75.
         ("emissive-grid", 32, 0.01, 1.5),
         ("vdb-cloud", 16, 0.01, 1.5),
         // Chromatic media: spectral transport in `auto` mode, judged like the others (RGB

@@ -123,6 +123,23 @@ const PERMUTATIONS: [[u8; 4]; 24] = [
     [3, 0, 1, 2],
 ];
 
+/// What a dimension keeps of its last permuted index ([`ZSobolSampler::sample_index`]).
+#[derive(Clone, Copy, Debug)]
+struct Kept {
+    index: u64,
+    result: u64,
+    /// Digit i's permutation (an index into [`PERMUTATIONS`]).
+    perms: [u8; 32],
+    /// The lowest base-2 digit's flip, for an odd power of two.
+    flip: u8,
+    /// False until the dimension has been permuted once.
+    valid: bool,
+}
+
+impl Kept {
+    const NONE: Kept = Kept { index: 0, result: 0, perms: [0; 32], flip: 0, valid: false };
+}
+
 /// pbrt-v4's `ZSobolSampler`, bit for bit.
 ///
 /// One Sobol' sequence covers the whole image: pixel `p`'s samples are the indices
@@ -145,11 +162,13 @@ pub struct ZSobolSampler {
     base4_digits: u32,
     morton_index: u64,
     dimension: u32,
-    /// Per dimension, the last index permuted and its result. Digits whose bits and higher
-    /// bits did not change since are kept: a pixel's own digits over its samples, and the
-    /// upper sample digits over consecutive samples (on grid-cloud at 64 spp the permutation
-    /// was a fifth of the render when every digit was hashed on every call).
-    last: Vec<(u64, u64)>,
+    /// Per dimension, the last index permuted, its result and the permutation each digit
+    /// took. Digits whose bits and higher bits did not change since are kept: a pixel's own
+    /// digits over its samples, and the upper sample digits over consecutive samples (on
+    /// grid-cloud at 64 spp the permutation was a fifth of the render when every digit was
+    /// hashed on every call). The highest digit that changed keeps its permutation too (it
+    /// is a hash of the digits above it), so three calls in four hash nothing.
+    last: Vec<Kept>,
     /// Per dimension, the scramble seed bits (a hash of the dimension and the seed only).
     scramble: Vec<u64>,
 }
@@ -191,56 +210,55 @@ impl ZSobolSampler {
         self.morton_index = (morton << self.log2_samples_per_pixel) | sample_index as u64;
     }
 
-    /// Hash that picks a digit permutation from the digits above it, as pbrt-v4 computes it:
-    /// `0x55555555 * dimension` is a wrapping 32-bit signed product, sign-extended to 64 bits.
-    #[inline]
-    fn digit_hash(&self, higher_digits: u64) -> u64 {
-        let d = 0x5555_5555i32.wrapping_mul(self.dimension as i32) as i64 as u64;
-        mix_bits(higher_digits ^ d)
-    }
-
-    /// Digits `from..to` of the current pixel sample's index, each permuted by a hash of the
-    /// digits above it and of the dimension.
-    #[inline]
-    fn permuted_digits(&self, from: u32, to: u32) -> u64 {
-        let odd_log2 = self.log2_samples_per_pixel & 1 == 1;
-        let mut index = 0u64;
-        for i in (from..to).rev() {
-            let shift = 2 * i - odd_log2 as u32;
-            let digit = (self.morton_index >> shift) & 3;
-            let higher = self.morton_index.checked_shr(shift + 2).unwrap_or(0);
-            let p = (self.digit_hash(higher) >> 24) % 24;
-            index |= (PERMUTATIONS[p as usize][digit as usize] as u64) << shift;
-        }
-        index
-    }
-
-    /// Index into the global Sobol' sequence of the current pixel sample and dimension.
+    /// Index into the global Sobol' sequence of the current pixel sample and dimension: each
+    /// base-4 digit of the Morton index permuted by a hash of the digits above it and of the
+    /// dimension (pbrt-v4's `GetSampleIndex`; `0x55555555 * dimension` is a wrapping 32-bit
+    /// signed product, sign-extended to 64 bits).
+    #[inline(always)]
     fn sample_index(&mut self) -> u64 {
         let odd = self.log2_samples_per_pixel & 1;
         let d = self.dimension as usize;
         if d >= self.last.len() {
-            // An index no sampler makes (bits above every digit set): nothing is kept.
-            self.last.resize(d + 1, (u64::MAX, 0));
+            self.last.resize(d + 1, Kept::NONE);
         }
-        let (last_index, last_result) = self.last[d];
-        if last_index == self.morton_index {
-            return last_result;
+        let morton = self.morton_index;
+        let dim_hash = 0x5555_5555i32.wrapping_mul(self.dimension as i32) as i64 as u64;
+        let digits = self.base4_digits;
+        let kept = &mut self.last[d];
+        if kept.valid && kept.index == morton {
+            return kept.result;
         }
         // Bits from `changed` up are as last time. Digit i (bits 2i − odd and up) and every
-        // digit above it keep their permuted value when 2i − odd ≥ changed.
-        let changed = 64 - (self.morton_index ^ last_index).leading_zeros();
-        let top = (changed + odd).div_ceil(2).min(self.base4_digits);
-        let kept = last_result & (!0u64).checked_shl(2 * top - odd).unwrap_or(0);
-        // Permute every full base-4 digit below, most significant first, each by the digits
-        // above it.
-        let mut index = kept | self.permuted_digits(odd, top);
-        // An odd power of two leaves one base-2 digit: flip it or not.
-        if odd == 1 {
-            let digit = self.morton_index & 1;
-            index |= digit ^ (self.digit_hash(self.morton_index >> 1) & 1);
+        // digit above it keep their permuted value when 2i − odd ≥ changed; the highest
+        // digit below `top` keeps its permutation (the digits above it are unchanged).
+        let changed = if kept.valid { 64 - (morton ^ kept.index).leading_zeros() } else { 64 };
+        let need = (changed + odd).div_ceil(2);
+        let top = need.min(digits);
+        let reuse_top = kept.valid && need <= digits;
+        let mut index = kept.result & (!0u64).checked_shl(2 * top - odd).unwrap_or(0);
+        // Permute every full base-4 digit below, most significant first.
+        for i in (odd..top).rev() {
+            let shift = 2 * i - odd;
+            let digit = (morton >> shift) & 3;
+            let p = if reuse_top && i + 1 == top {
+                kept.perms[i as usize]
+            } else {
+                let higher = morton.checked_shr(shift + 2).unwrap_or(0);
+                let p = ((mix_bits(higher ^ dim_hash) >> 24) % 24) as u8;
+                kept.perms[i as usize] = p;
+                p
+            };
+            index |= (PERMUTATIONS[p as usize][digit as usize] as u64) << shift;
         }
-        self.last[d] = (self.morton_index, index);
+        // An odd power of two leaves one base-2 digit: flip it or not, by a hash of all the
+        // bits above it.
+        if odd == 1 {
+            if !(kept.valid && changed <= 1) {
+                kept.flip = (mix_bits((morton >> 1) ^ dim_hash) & 1) as u8;
+            }
+            index |= (morton & 1) ^ u64::from(kept.flip);
+        }
+        (kept.index, kept.result, kept.valid) = (morton, index, true);
         index
     }
 
@@ -268,6 +286,7 @@ impl ZSobolSampler {
     }
 
     /// The next value.
+    #[inline]
     pub fn get_1d(&mut self) -> f32 {
         let a = self.sample_index();
         // pbrt advances the dimension before hashing it.
@@ -277,6 +296,7 @@ impl ZSobolSampler {
     }
 
     /// The next two values.
+    #[inline]
     pub fn get_2d(&mut self) -> Vec2 {
         let a = self.sample_index();
         self.dimension += 2;

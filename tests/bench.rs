@@ -2,12 +2,9 @@
 
 use crate::common::{nimbus, scratch_dir};
 
-/// A one-pixel-per-sample scene bench can time in a moment, against its own image as
-/// reference: the JSON's equal-error ratio must be (t_pbrt·mse_pbrt)/(t·mse) of its own
-/// columns, and a malformed speed.json an error naming the file.
-#[test]
-fn bench_reports_equal_spp_and_equal_error_ratios() {
-    let dir = scratch_dir("bench");
+/// A tiny scene at `dir`/scenes/tiny.pbrt with its own 64-spp render as the reference,
+/// `dir`/images/tiny.exr (as a speed.json folder lays them out).
+fn tiny_scene(dir: &std::path::Path) -> std::path::PathBuf {
     std::fs::create_dir_all(dir.join("scenes")).unwrap();
     std::fs::create_dir_all(dir.join("images")).unwrap();
     let scene = dir.join("scenes/tiny.pbrt");
@@ -27,6 +24,16 @@ fn bench_reports_equal_spp_and_equal_error_ratios() {
         reference.to_str().unwrap(),
     ]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    scene
+}
+
+/// A one-pixel-per-sample scene bench can time in a moment, against its own image as
+/// reference: the JSON's equal-error ratio must be (t_pbrt·mse_pbrt)/(t·mse) of its own
+/// columns, and a malformed speed.json an error naming the file.
+#[test]
+fn bench_reports_equal_spp_and_equal_error_ratios() {
+    let dir = scratch_dir("bench");
+    let scene = tiny_scene(&dir);
     std::fs::write(dir.join("speed.json"), r#"{"spp": 4, "scenes": {"tiny": {"seconds": 2.0, "mse": 0.001}}}"#)
         .unwrap();
     let json = dir.join("out.json");
@@ -162,25 +169,7 @@ fn bench_removes_the_noise_of_reference_halves() {
 fn bench_times_pbrt_in_the_same_run() {
     use std::os::unix::fs::PermissionsExt;
     let dir = scratch_dir("bench-pbrt");
-    std::fs::create_dir_all(dir.join("scenes")).unwrap();
-    std::fs::create_dir_all(dir.join("images")).unwrap();
-    let scene = dir.join("scenes/tiny.pbrt");
-    std::fs::write(
-        &scene,
-        "LookAt 0 0 4  0 0 0  0 1 0\nCamera \"perspective\"\nFilm \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8\nWorldBegin\nLightSource \"infinite\" \"rgb L\" [1 1 1]\nMaterial \"diffuse\" \"rgb reflectance\" [0.7 0.2 0.1]\nShape \"sphere\"\n",
-    )
-    .unwrap();
-    let reference = dir.join("images/tiny.exr");
-    let out = nimbus(&[
-        "render",
-        scene.to_str().unwrap(),
-        "--spp",
-        "64",
-        "--quiet",
-        "--outfile",
-        reference.to_str().unwrap(),
-    ]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let scene = tiny_scene(&dir);
     std::fs::write(dir.join("speed.json"), r#"{"spp": 4, "scenes": {"tiny": {"seconds": 1000.0, "mse": 1.0}}}"#)
         .unwrap();
     let script = |name: &str, body: String| {

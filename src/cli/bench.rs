@@ -225,7 +225,7 @@ fn run_pbrt(
     for k in 0..args.repeat.max(2) {
         let out = std::env::temp_dir().join(format!("nimbus-bench-pbrt-{}-{k}.exr", std::process::id()));
         let t = Instant::now();
-        let status = std::process::Command::new(pbrt)
+        let output = std::process::Command::new(pbrt)
             .current_dir(dir)
             .args(["--quiet", "--nthreads", &args.nthreads.to_string(), "--spp", &spp.to_string()])
             .args(["--seed", &(1 + k % 2).to_string(), "--outfile"])
@@ -237,10 +237,10 @@ fn run_pbrt(
         times.push(t.elapsed().as_secs_f64());
         let image = nimbus::imageio::read_exr(&out);
         let _ = std::fs::remove_file(&out);
-        if !status.status.success() {
-            let err = String::from_utf8_lossy(&status.stderr);
+        if !output.status.success() {
+            let err = String::from_utf8_lossy(&output.stderr);
             let last = err.lines().last().unwrap_or("").trim().to_string();
-            return Err(format!("{} exited with {}: {last}", pbrt.display(), status.status));
+            return Err(format!("{} exited with {}: {last}", pbrt.display(), output.status));
         }
         let image = image.map_err(|e| format!("{}: no image: {e}", pbrt.display()))?;
         if k < 2 {

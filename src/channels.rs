@@ -50,6 +50,8 @@ pub trait Channels:
     const ONE: Self;
     /// Name of the representation, for `--stats` and image metadata.
     const NAME: &'static str;
+    /// Whether [`Self::sample_lambda`] reads its sample (RGB has no wavelengths to draw).
+    const SAMPLES_WAVELENGTHS: bool;
 
     /// `v` in every channel.
     fn splat(v: f32) -> Self;
@@ -150,6 +152,7 @@ impl Channels for Rgb {
     const ZERO: Rgb = Rgb::ZERO;
     const ONE: Rgb = Rgb::ONE;
     const NAME: &'static str = "rgb";
+    const SAMPLES_WAVELENGTHS: bool = false;
 
     #[inline]
     fn splat(v: f32) -> Rgb {
@@ -268,6 +271,7 @@ impl Channels for SampledSpectrum {
     const ZERO: SampledSpectrum = SampledSpectrum::ZERO;
     const ONE: SampledSpectrum = SampledSpectrum::ONE;
     const NAME: &'static str = "spectral";
+    const SAMPLES_WAVELENGTHS: bool = true;
 
     #[inline]
     fn splat(v: f32) -> SampledSpectrum {

@@ -113,6 +113,12 @@ impl Camera {
         self.motion.is_some()
     }
 
+    /// True when [`Self::generate_ray`] reads its lens sample: a realistic camera's, or a
+    /// thin lens (perspective and orthographic cameras with a lens radius).
+    pub fn samples_lens(&self) -> bool {
+        self.realistic.is_some() || (self.spherical.is_none() && self.lens_radius > 0.0)
+    }
+
     /// The ray time for a camera sample's time `u` in [0, 1): pbrt-v4's lerp over the
     /// shutter interval.
     #[inline]

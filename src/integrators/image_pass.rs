@@ -69,16 +69,20 @@ pub fn camera_ray<C: Channels>(
     s: u32,
 ) -> (Option<CameraRay>, C::Lambda, f32) {
     sampler.start_pixel_sample(pixel, s, 0);
-    // pbrt-v4 draws the wavelengths first; RGB draws the same dimension so the two
+    // pbrt-v4 draws the wavelengths first; RGB skips the same dimension so the two
     // representations see the same samples afterwards.
-    let u = sampler.get_1d();
-    let u = if scene.disable_wavelength_jitter { 0.5 } else { u };
+    let u = if C::SAMPLES_WAVELENGTHS && !scene.disable_wavelength_jitter {
+        sampler.get_1d()
+    } else {
+        sampler.skip_1d();
+        0.5
+    };
     // The spectral film samples its range uniformly, as pbrt-v4's does.
     let lambda = match scene.film.kind {
         FilmKind::Spectral { lambda_min, lambda_max, .. } => C::sample_lambda_uniform(u, lambda_min, lambda_max),
         _ => C::sample_lambda(u),
     };
-    let cs = get_camera_sample(sampler, pixel, &scene.filter);
+    let cs = get_camera_sample(sampler, pixel, &scene.filter, scene.camera_sample_use);
     (scene.camera.generate_ray(cs.p_film, cs.p_lens, scene.camera.time(cs.time)), lambda, cs.filter_weight)
 }
 

@@ -459,6 +459,12 @@ impl LightBvh {
         }
     }
 
+    /// Whether [`LightBvh::sample`] reads its `u`: with one light or none to choose from it
+    /// does not (a tree of n leaves has 2n − 1 nodes).
+    pub fn reads_sample(&self) -> bool {
+        self.infinite.len() + self.nodes.len() > 1
+    }
+
     /// The probability that [`LightBvh::sample`] picks light `light` for `p` and `n`.
     pub fn pmf(&self, p: Vec3, n: Vec3, light: usize) -> f32 {
         if self.is_infinite[light] {
@@ -585,6 +591,35 @@ mod tests {
                 assert!((c as f64 - expected).abs() <= 3.0 + 1e-3 * expected, "light {i}: {c} vs {expected}");
             }
             assert!((none as f64 - N as f64 * (1.0 - total)).abs() <= 3.0 + 1e-3 * N as f64);
+        }
+    }
+
+    /// With one light to choose (in the tree or beside it) or none, the pick does not depend
+    /// on `u` and the sampler says it does not read it (the path loop then skips the
+    /// dimension); with two it does.
+    #[test]
+    fn a_single_light_is_picked_whatever_u() {
+        let mut rng = Pcg32::new(5, 9);
+        let (all, shapes) = many_lights(&mut rng);
+        let (distant, uniform) = (all[all.len() - 2].clone(), all[all.len() - 1].clone());
+        let (point, spot) = (all[0].clone(), all[1].clone());
+        let p = Vec3::new(0.3, -0.2, 0.1);
+        for (lights, reads) in [
+            (vec![], false),
+            (vec![uniform.clone()], false),
+            (vec![distant.clone(), uniform.clone()], false),
+            (vec![uniform.clone(), point.clone()], false),
+            (vec![point.clone(), distant.clone()], true),
+            (vec![point.clone(), spot.clone()], true),
+        ] {
+            let bvh = LightBvh::new(&lights, &shapes);
+            assert_eq!(bvh.reads_sample(), reads, "{} lights", lights.len());
+            if !reads {
+                let first = bvh.sample(p, Vec3::ZERO, 0.5);
+                for k in 0..100 {
+                    assert_eq!(bvh.sample(p, Vec3::ZERO, k as f32 / 100.0), first);
+                }
+            }
         }
     }
 

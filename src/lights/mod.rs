@@ -183,6 +183,19 @@ impl Light {
         !matches!(self.kind, LightKind::UniformInfinite { .. })
     }
 
+    /// Whether [`Self::sample_li`] reads its `u`: lights at a point or from one direction
+    /// have one sample to give.
+    pub fn reads_sample(&self) -> bool {
+        !matches!(
+            self.kind,
+            LightKind::Point { .. }
+                | LightKind::Goniometric { .. }
+                | LightKind::Projection { .. }
+                | LightKind::Spot { .. }
+                | LightKind::Distant { .. }
+        )
+    }
+
     /// Total emitted power (channel average), for choosing lights in proportion to it.
     pub fn power(&self, scene: &SceneSphere) -> f32 {
         let p = match &self.kind {

@@ -74,6 +74,14 @@ impl LightSampler {
         }
     }
 
+    /// Whether [`Self::sample`] reads its `u`: not when there is one light or none to pick.
+    pub fn reads_sample(&self) -> bool {
+        match self {
+            LightSampler::Table(t) => t.as_ref().is_some_and(|t| t.len() > 1),
+            LightSampler::Bvh(bvh) => bvh.reads_sample(),
+        }
+    }
+
     /// Probability of picking light `index` for a point `p` with shading normal `n`.
     #[inline]
     pub fn pmf(&self, p: Vec3, n: Vec3, index: usize) -> f32 {

@@ -110,8 +110,10 @@ impl<T: GridValue> DenseGrid<T> {
         // compiler left uninlined here: a spectral rgbgrid lookup converts 8 corners per grid.
         if let Some(i) = self.corner_indices(c) {
             // A cell inside the grid (nearly every lookup).
-            let v = &self.values;
-            [f(v[i[0]]), f(v[i[1]]), f(v[i[2]]), f(v[i[3]]), f(v[i[4]]), f(v[i[5]]), f(v[i[6]]), f(v[i[7]])]
+            // SAFETY: as in `lookup`, the indices of a cell inside the grid are below
+            // `values.len()`.
+            let v = |k: usize| f(unsafe { *self.values.get_unchecked(i[k]) });
+            [v(0), v(1), v(2), v(3), v(4), v(5), v(6), v(7)]
         } else {
             let at = |x: i32, y: i32, z: i32| f(self.at(c.x + x, c.y + y, c.z + z));
             [at(0, 0, 0), at(1, 0, 0), at(0, 1, 0), at(1, 1, 0), at(0, 0, 1), at(1, 0, 1), at(0, 1, 1), at(1, 1, 1)]
@@ -141,7 +143,14 @@ impl<T: GridValue> DenseGrid<T> {
         if let Some(c) = self.corner_indices(i) {
             // Inside: the eight samples without a bounds test each (the same values, the same
             // arithmetic).
-            let v = |k: usize| self.values[c[k]];
+            let v = |k: usize| {
+                debug_assert!(c[k] < self.values.len());
+                // SAFETY: `corner_indices` returns indices only for a cell whose corners all
+                // lie inside the grid (0 ≤ c and c + 1 < n per axis), so each is below
+                // n.x·n.y·n.z = `values.len()` (`new` checks that length). Eight bounds
+                // checks per lookup were a quarter of its instructions (callgrind, graph-cloud).
+                unsafe { *self.values.get_unchecked(c[k]) }
+            };
             let d00 = lerp(d.x, v(0), v(1));
             let d10 = lerp(d.x, v(2), v(3));
             let d01 = lerp(d.x, v(4), v(5));

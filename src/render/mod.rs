@@ -172,7 +172,7 @@ fn spectral_bands(scene: &Scene) -> Option<(usize, f32, f32)> {
 fn camera_sample(scene: &Scene, sampler: &mut Sampler, pixel: UVec2, s: u32) -> CameraSample {
     sampler.start_pixel_sample(pixel, s, 0);
     sampler.get_1d();
-    get_camera_sample(sampler, pixel, &scene.filter)
+    get_camera_sample(sampler, pixel, &scene.filter, scene.camera_sample_use)
 }
 
 /// One whole-image sample from `method`, added to the film's pixels as the method hands

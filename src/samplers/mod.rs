@@ -25,7 +25,7 @@ use glam::{UVec2, Vec2};
 
 use crate::samplers::settings::{SamplerKind, SamplerSettings};
 
-pub use camera_sample::{CameraSample, get_camera_sample};
+pub use camera_sample::{CameraSample, CameraSampleUse, get_camera_sample};
 pub(crate) use halton::radical_inverse;
 pub use halton::{HaltonRandomization, HaltonSampler};
 pub use independent::IndependentSampler;
@@ -129,6 +129,33 @@ impl Sampler {
             Sampler::Halton(s) => s.get_2d(),
             Sampler::PaddedSobol(s) => s.get_2d(),
             Sampler::Pmj02bn(s) => s.get_2d(),
+        }
+    }
+
+    /// Passes over the next dimension whose value would go unused: the dimensions after it
+    /// are the ones [`Self::get_1d`] would have left (pbrt-v4 draws such values anyway, e.g.
+    /// a pinhole camera's lens sample, so that every path sees the same dimensions).
+    /// Generating a ZSobol value (its digit permutations and scramble) costs about as much as
+    /// a grid lookup; skipping it is free.
+    #[inline]
+    pub fn skip_1d(&mut self) {
+        match self {
+            Sampler::ZSobol(s) => s.skip(1),
+            // Halton wraps its dimension inside `get_*`: skip by drawing.
+            _ => {
+                self.get_1d();
+            }
+        }
+    }
+
+    /// Passes over the next two dimensions, as [`Self::get_2d`] would (see [`Self::skip_1d`]).
+    #[inline]
+    pub fn skip_2d(&mut self) {
+        match self {
+            Sampler::ZSobol(s) => s.skip(2),
+            _ => {
+                self.get_2d();
+            }
         }
     }
 

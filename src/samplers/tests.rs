@@ -130,11 +130,50 @@ fn camera_samples_come_in_pbrt_order() {
     for (name, mut s) in all(16) {
         let pixel = UVec2::new(6, 2);
         s.start_pixel_sample(pixel, 5, 0);
-        let cs = get_camera_sample(&mut s, pixel, &filter);
+        let cs = get_camera_sample(&mut s, pixel, &filter, CameraSampleUse::ALL);
+        let after = s.get_1d();
         s.start_pixel_sample(pixel, 5, 0);
         let p = s.get_pixel_2d();
         assert!((cs.p_film - (pixel.as_vec2() + p)).abs().max_element() < 1e-5, "{name}");
         assert_eq!((cs.time, cs.p_lens, cs.filter_weight), (s.get_1d(), s.get_2d(), 1.0));
+        // Values a scene has no use for are skipped: the same dimensions follow.
+        for uses in [(false, true), (true, false), (false, false)] {
+            let uses = CameraSampleUse { time: uses.0, lens: uses.1 };
+            s.start_pixel_sample(pixel, 5, 0);
+            let skipped = get_camera_sample(&mut s, pixel, &filter, uses);
+            assert_eq!(skipped.p_film, cs.p_film, "{name}");
+            assert_eq!(s.get_1d(), after, "{name} {uses:?}");
+        }
+    }
+}
+
+/// Skipping a dimension leaves the sampler where drawing it would: over a long path (past
+/// Halton's wrap-around of its dimensions), whatever mix of draws and skips.
+#[test]
+fn skipped_dimensions_are_the_drawn_ones() {
+    for (name, mut s) in all(16) {
+        let pixel = UVec2::new(5, 3);
+        for sample in [0, 7] {
+            let mut drawn = Vec::new();
+            s.start_pixel_sample(pixel, sample, 0);
+            for _ in 0..700 {
+                drawn.push((s.get_1d(), s.get_2d()));
+            }
+            s.start_pixel_sample(pixel, sample, 0);
+            for (k, &(a, b)) in drawn.iter().enumerate() {
+                match k % 3 {
+                    0 => assert_eq!((s.get_1d(), s.get_2d()), (a, b), "{name}, pair {k}"),
+                    1 => {
+                        s.skip_1d();
+                        assert_eq!(s.get_2d(), b, "{name}, pair {k}");
+                    }
+                    _ => {
+                        assert_eq!(s.get_1d(), a, "{name}, pair {k}");
+                        s.skip_2d();
+                    }
+                }
+            }
+        }
     }
 }
 

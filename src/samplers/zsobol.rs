@@ -285,6 +285,12 @@ impl ZSobolSampler {
         self.scramble[d]
     }
 
+    /// Passes over `n` dimensions without generating their values.
+    #[inline]
+    pub fn skip(&mut self, n: u32) {
+        self.dimension += n;
+    }
+
     /// The next value.
     #[inline]
     pub fn get_1d(&mut self) -> f32 {

@@ -82,6 +82,9 @@ pub struct Scene {
     pub sensor: PixelSensor,
     /// RGB or spectral transport, and why.
     pub transport: TransportChoice,
+    /// Which camera-sample values the scene uses (the time where something moves, the lens
+    /// position for a camera with a lens).
+    pub camera_sample_use: crate::samplers::CameraSampleUse,
     /// pbrt-v4's `Option "disablewavelengthjitter"`: every path gets the wavelengths of u = ½.
     pub disable_wavelength_jitter: bool,
     /// Build statistics.
@@ -93,7 +96,7 @@ pub struct Scene {
 impl Scene {
     /// True when shapes or the camera move over the shutter interval (motion blur).
     pub fn has_motion(&self) -> bool {
-        self.camera.moves() || self.surfaces.instances.iter().any(|i| i.motion.is_some())
+        self.camera_sample_use.time
     }
 
     /// A medium whose coefficients a path takes from where it enters it (a `subsurface`

@@ -75,6 +75,15 @@ pub(super) fn extra_direct<C: Channels>(
     sum / config.extra_direct as f32
 }
 
+/// The random numbers of a light sample: given (the extra samples draw theirs from a
+/// generator), or drawn from the path's sampler as pbrt-v4 draws them (one dimension to pick
+/// the light, two to sample it), a value the sample would not read skipped rather than
+/// generated (one light to pick, a distant or point light to sample).
+pub(super) enum LightRandoms<'s> {
+    Given(f32, Vec2),
+    Sampler(&'s mut Sampler),
+}
+
 /// One light sample at a vertex by light sampling alone (unbiased without the BSDF/phase
 /// technique), its random numbers and its shadow ray's stream drawn from `rng`: the extra
 /// samples' ([`extra_direct`], the camera line's extra first vertices).
@@ -92,6 +101,7 @@ pub(super) fn light_sample_alone<C: Channels>(
 ) -> Option<C> {
     let u = (rng.uniform(), Vec2::new(rng.uniform(), rng.uniform()));
     let stream = (u64::from(rng.next_u32()) << 32 | u64::from(rng.next_u32())) | 1;
+    let u = LightRandoms::Given(u.0, u.1);
     sample_direct(scene, p, hit, medium, scatterer, u, st, lambda, 0, &mut NoObserver, stats, Some(stream))
 }
 
@@ -109,7 +119,7 @@ pub(super) fn sample_direct<C: Channels, O: PathObserver<C>>(
     hit: Option<&Hit>,
     medium: u32,
     scatterer: &Scatterer<'_, C>,
-    (u_pick, u_light): (f32, Vec2),
+    randoms: LightRandoms<'_>,
     st: &PathState<C>,
     lambda: &C::Lambda,
     depth: u32,
@@ -118,7 +128,26 @@ pub(super) fn sample_direct<C: Channels, O: PathObserver<C>>(
     extra: Option<u64>,
 ) -> Option<C> {
     let n_ctx = hit.map_or(Vec3::ZERO, |h| h.surface.ns);
-    let (index, pmf) = scene.light_sampler.sample(p, n_ctx, u_pick)?;
+    let (picked, u_light) = match randoms {
+        LightRandoms::Given(u_pick, u_light) => (scene.light_sampler.sample(p, n_ctx, u_pick), u_light),
+        LightRandoms::Sampler(sampler) => {
+            let u_pick = if scene.light_sampler.reads_sample() {
+                sampler.get_1d()
+            } else {
+                sampler.skip_1d();
+                0.5
+            };
+            let picked = scene.light_sampler.sample(p, n_ctx, u_pick);
+            let u_light = if picked.is_some_and(|(i, _)| scene.lights[i].reads_sample()) {
+                sampler.get_2d()
+            } else {
+                sampler.skip_2d();
+                Vec2::splat(0.5)
+            };
+            (picked, u_light)
+        }
+    };
+    let (index, pmf) = picked?;
     let light = &scene.lights[index];
     let ls = light.sample_li::<C>(&LightContext { p }, u_light, &scene.surfaces, &scene.sphere, lambda)?;
     if ls.pdf == 0.0 || ls.l.is_zero() {

@@ -10,7 +10,7 @@
 use glam::{Vec2, Vec3};
 
 use super::camera_line::{line_direct, line_emission};
-use super::direct::{Scatterer, extra_direct, sample_direct};
+use super::direct::{LightRandoms, Scatterer, extra_direct, sample_direct};
 use super::media::{Collision, Tracking};
 use super::observer::{EmissionEvent, PathObserver, VertexEvent};
 use super::state::PathState;
@@ -448,7 +448,7 @@ impl<C: Channels, O: PathObserver<C>> Tracer<'_, C, O> {
     #[inline]
     fn next_event(&mut self, w: &mut Walk<C>, p: Vec3, hit: Option<&Hit>, sc: &Scatterer<'_, C>, prob: f32) {
         let (scene, config, medium) = (self.scene, self.config, w.medium);
-        let u = (self.sampler.get_1d(), self.sampler.get_2d());
+        let u = LightRandoms::Sampler(&mut *self.sampler);
         let (st, depth) = (&w.st, w.depth - 1);
         if let Some(c) =
             sample_direct(scene, p, hit, medium, sc, u, st, self.lambda, depth, self.observer, self.stats, None)
@@ -753,13 +753,16 @@ fn rr<C: Channels>(st: &mut PathState<C>, eta_scale: f32, depth: u32, sampler: &
     }
     let rr_beta = st.beta * (eta_scale * st.rr_scale) / st.r_u.average();
     let rr_max = rr_beta.max_element();
-    let u_rr = sampler.get_1d();
+    // pbrt-v4 draws the roulette's dimension at every vertex; where no roulette is played it
+    // is skipped, not generated.
     if rr_max < 1.0 && depth > 1 {
         let q = (1.0 - rr_max).max(0.0);
-        if u_rr < q {
+        if sampler.get_1d() < q {
             return true;
         }
         st.beta /= 1.0 - q;
+    } else {
+        sampler.skip_1d();
     }
     false
 }

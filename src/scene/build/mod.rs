@@ -249,7 +249,12 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions, needs: &SceneNe
     let bumps = shading.iter().any(|s| matches!(s, ShadingPerturbation::Bump(_)));
     let footprint = (tb.textures.uses_footprint() || bumps)
         .then(|| crate::camera::Footprint::new(&camera, film.resolution, sampler.pixel_samples));
+    let camera_sample_use = crate::samplers::CameraSampleUse {
+        time: camera.moves() || surfaces.instances.iter().any(|i| i.motion.is_some()),
+        lens: camera.samples_lens(),
+    };
     Ok(Scene {
+        camera_sample_use,
         camera,
         film,
         pixel_bounds,

@@ -681,8 +681,14 @@ impl<C: Channels, O: PathObserver<C>> Tracer<'_, C, O> {
             self.next_event(w, s.p, Some(&hit), &Scatterer::Surface { bxdf: &bxdf, frame: &frame, wo_local }, 1.0);
         }
 
-        // Continue the path by sampling the BSDF.
-        let uc = self.sampler.get_1d();
+        // Continue the path by sampling the BSDF (a BxDF of one lobe has no lobe to choose:
+        // its dimension is skipped).
+        let uc = if bxdf.reads_uc() {
+            self.sampler.get_1d()
+        } else {
+            self.sampler.skip_1d();
+            0.5
+        };
         let u = self.sampler.get_2d();
         let Some(bs) = bxdf.sample_f(wo_local, uc, u, TransportMode::Radiance, ReflTransFlags::ALL) else {
             return false;

@@ -244,5 +244,7 @@ mod tests {
         let Bxdf::Conductor(c) = &b else { unreachable!() };
         assert_eq!(c.distribution().alpha_x(), 0.1);
         testing::check_all(&b, Vec3::new(0.3, 0.4, 0.85).normalize(), Check::default());
+        testing::check_ignores_uc(&b);
+        testing::check_ignores_uc(&Bxdf::from(ConductorBxdf::new(TrowbridgeReitz::new(0.0, 0.0), eta, k)));
     }
 }

@@ -86,6 +86,7 @@ mod tests {
         for wo in test_directions() {
             testing::check_all(&b, wo, Check::default());
         }
+        testing::check_ignores_uc(&b);
     }
 
     #[test]

@@ -202,6 +202,7 @@ mod tests {
     #[test]
     fn sampling_density_and_evaluation_agree() {
         let b = bxdf();
+        crate::materials::bxdf::testing::check_ignores_uc(&b);
         let (mode, flags) = (TransportMode::Radiance, ReflTransFlags::ALL);
         for wo in test_directions() {
             let n = 512;

@@ -367,6 +367,12 @@ impl<C: Channels> Bxdf<C> {
         }
     }
 
+    /// Whether [`Self::sample_f`] reads its lobe sample `uc`: BxDFs of one lobe do not.
+    #[inline]
+    pub fn reads_uc(&self) -> bool {
+        !matches!(self, Bxdf::Diffuse(_) | Bxdf::Conductor(_) | Bxdf::Measured(_))
+    }
+
     /// Samples an incident direction for `wo` from the uniform samples `uc` (lobe choice) and
     /// `u` (direction), restricted to `sample_flags`.
     #[inline]

@@ -35,6 +35,23 @@ pub(crate) fn stratified_2d(n: usize) -> impl Iterator<Item = Vec2> {
     (0..n * n).map(move |k| Vec2::new(((k % n) as f32 + 0.5) / n as f32, ((k / n) as f32 + 0.5) / n as f32))
 }
 
+/// A BxDF that says it does not read its lobe sample `uc` (the path loop then skips that
+/// dimension) samples the same directions whatever `uc` is.
+pub(crate) fn check_ignores_uc(b: &Bxdf) {
+    assert!(!b.reads_uc());
+    for wo in test_directions() {
+        for u in stratified_2d(8) {
+            let at = |uc: f32| {
+                b.sample_f(wo, uc, u, TransportMode::Radiance, ReflTransFlags::ALL).map(|s| (s.wi, s.pdf, s.flags))
+            };
+            let first = at(0.0);
+            for uc in [0.3, 0.7, ONE_MINUS_EPSILON] {
+                assert_eq!(at(uc), first, "wo {wo}, u {u}, uc {uc}");
+            }
+        }
+    }
+}
+
 /// The unit vector with polar angle θ and azimuth φ.
 fn spherical(theta: f64, phi: f64) -> Vec3 {
     let (st, ct) = theta.sin_cos();

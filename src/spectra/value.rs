@@ -8,7 +8,7 @@ use std::sync::{Mutex, OnceLock};
 use glam::Vec4;
 
 use super::SampledWavelengths;
-use super::blackbody::planck;
+use super::blackbody::normalized_planck4;
 use super::sigmoid::SigmoidPolynomial;
 use crate::color::Rgb;
 
@@ -104,7 +104,7 @@ pub enum Sampled {
     Blackbody {
         /// Temperature in Kelvin.
         t: f32,
-        /// `scale` divided by the blackbody's peak value.
+        /// The multiplier (the blackbody's own peak is 1).
         scale: f32,
     },
 }
@@ -130,8 +130,7 @@ impl Sampled {
 
     /// pbrt-v4's peak-normalised blackbody at `t` K (zero for non-positive temperatures).
     pub fn blackbody(t: f32) -> Sampled {
-        let peak = planck(2.8977721e-3 / f64::from(t) * 1e9, f64::from(t));
-        Sampled::Blackbody { t, scale: if peak > 0.0 { (1.0 / peak) as f32 } else { 0.0 } }
+        Sampled::Blackbody { t, scale: if t > 0.0 { 1.0 } else { 0.0 } }
     }
 
     /// The values at the path's wavelengths.
@@ -144,11 +143,7 @@ impl Sampled {
                 poly.eval4(lambda.lambda) * illuminant.sample(lambda.lambda) * *scale
             }
             Sampled::Dense { table, scale } => table.sample(lambda.lambda) * *scale,
-            Sampled::Blackbody { t, scale } => {
-                let l = lambda.lambda;
-                let p = |l: f32| planck(f64::from(l), f64::from(*t)) as f32;
-                Vec4::new(p(l.x), p(l.y), p(l.z), p(l.w)) * *scale
-            }
+            Sampled::Blackbody { t, scale } => normalized_planck4(lambda.lambda, *t) * *scale,
         }
     }
 
@@ -188,10 +183,8 @@ impl Sampled {
             Sampled::Sigmoid { poly, scale } => poly.max_value() * scale,
             Sampled::Illuminant { poly, scale, illuminant } => poly.max_value() * scale * illuminant.max_value(),
             Sampled::Dense { table, scale } => table.max_value() * scale,
-            Sampled::Blackbody { scale, t } => {
-                // The peak is at Wien's wavelength.
-                scale * planck(2.8977721e-3 / f64::from(*t) * 1e9, f64::from(*t)) as f32
-            }
+            // The peak, at Wien's wavelength, is 1.
+            Sampled::Blackbody { scale, .. } => *scale,
         }
     }
 }

@@ -171,7 +171,8 @@ fn spectral_bands(scene: &Scene) -> Option<(usize, f32, f32)> {
 /// The camera sample of sample `s` of `pixel`: the same values [`camera_ray`] uses.
 fn camera_sample(scene: &Scene, sampler: &mut Sampler, pixel: UVec2, s: u32) -> CameraSample {
     sampler.start_pixel_sample(pixel, s, 0);
-    sampler.get_1d();
+    // The wavelength dimension, unused here.
+    sampler.skip_1d();
     get_camera_sample(sampler, pixel, &scene.filter, scene.camera_sample_use)
 }
 

@@ -134,6 +134,11 @@ impl Camera {
         }
     }
 
+    /// Camera space from world space (at the start of its motion).
+    pub fn camera_from_world(&self) -> Affine3A {
+        self.camera_from_world
+    }
+
     /// Camera position in world space (at the start of its motion).
     pub fn position(&self) -> Vec3 {
         self.world_from_camera.translation.into()

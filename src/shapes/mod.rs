@@ -14,7 +14,10 @@ pub use curve::{
 };
 pub use cylinder::Cylinder;
 pub use disk::Disk;
-pub use mesh::{Mesh, barycentrics, intersect_triangle, triangle_derivatives, triangle_hit, triangle_sample};
+pub use mesh::{
+    Mesh, PbrtTriangleHit, barycentrics, intersect_triangle, pbrt_intersect_triangle, triangle_derivatives,
+    triangle_hit, triangle_sample,
+};
 pub use sphere::Sphere;
 
 use glam::{Affine3A, Vec2, Vec3};

@@ -223,6 +223,11 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions, needs: &SceneNe
         alphas: std::mem::take(&mut sb.alphas),
         textures: tb.textures.clone(),
         hulls,
+        render_from_world: match desc.options.render_coord_sys.as_deref() {
+            Some("world") => glam::Affine3A::IDENTITY,
+            Some("camera") => camera.camera_from_world(),
+            _ => glam::Affine3A::from_translation(-camera.position()),
+        },
     };
     let interfaces = interfaces.into_inner();
     let has_chromatic_media = media.iter().any(|m| m.chromatic);

@@ -24,6 +24,7 @@ mod zsobol;
 use glam::{UVec2, Vec2};
 
 use crate::samplers::settings::{SamplerKind, SamplerSettings};
+use crate::sampling::rng::hash_sample;
 
 pub use camera_sample::{CameraSample, CameraSampleUse, get_camera_sample};
 pub(crate) use halton::radical_inverse;
@@ -145,6 +146,20 @@ impl Sampler {
             _ => {
                 self.get_1d();
             }
+        }
+    }
+
+    /// Two 64-bit seeds for a random stream of the path's own (a medium walk's tentative
+    /// collisions), in place of the next two dimensions. pbrt-v4 hashes two sampled values
+    /// into its seeds; a seed gains nothing from stratification, so ZSobol hashes the pixel
+    /// sample's index and the dimension instead of generating the values (their digit
+    /// permutations and scrambles were a third of the sampler's work on graph-cloud). The
+    /// other samplers hash their values, as pbrt-v4 does.
+    #[inline]
+    pub fn stream_seeds(&mut self) -> (u64, u64) {
+        match self {
+            Sampler::ZSobol(s) => (s.seed(), s.seed()),
+            _ => (hash_sample(self.get_1d(), Vec2::ZERO), hash_sample(self.get_1d(), Vec2::ONE)),
         }
     }
 

@@ -177,6 +177,38 @@ fn skipped_dimensions_are_the_drawn_ones() {
     }
 }
 
+/// Stream seeds take the place of two dimensions (the values after them are those after two
+/// draws). ZSobol's differ between dimensions, samples and pixels (no two walks share a
+/// stream); the other samplers hash their values, as pbrt-v4 does, and pmj02bn's values
+/// repeat across dimensions.
+#[test]
+fn stream_seeds_stand_for_two_dimensions() {
+    for (name, mut s) in all(16) {
+        let mut seen = std::collections::HashSet::new();
+        for pixel in [UVec2::new(5, 3), UVec2::new(6, 3), UVec2::new(5, 4)] {
+            for sample in [0, 1, 7] {
+                s.start_pixel_sample(pixel, sample, 0);
+                let mut drawn = Vec::new();
+                for _ in 0..40 {
+                    s.get_1d();
+                    s.get_1d();
+                    drawn.push(s.get_2d());
+                }
+                s.start_pixel_sample(pixel, sample, 0);
+                for (k, &b) in drawn.iter().enumerate() {
+                    let (seed, stream) = s.stream_seeds();
+                    let unique = seen.insert((seed, stream));
+                    assert!(
+                        unique || !name.starts_with("zsobol"),
+                        "{name}: seeds repeat at {pixel}, sample {sample}, pair {k}"
+                    );
+                    assert_eq!(s.get_2d(), b, "{name}: dimensions after the seeds, pair {k}");
+                }
+            }
+        }
+    }
+}
+
 /// Counts per cell of a `n`×`n` grid.
 fn cell_counts(points: &[Vec2], n: usize) -> Vec<u32> {
     let mut counts = vec![0; n * n];

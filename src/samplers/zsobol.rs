@@ -291,6 +291,15 @@ impl ZSobolSampler {
         self.dimension += n;
     }
 
+    /// A 64-bit seed in place of the next dimension, unique to the pixel sample, dimension
+    /// and sampler seed (see [`super::Sampler::stream_seeds`]).
+    #[inline]
+    pub fn seed(&mut self) -> u64 {
+        let key = ((self.dimension as u64) << 32) | self.seed as u32 as u64;
+        self.dimension += 1;
+        mix_bits(self.morton_index ^ mix_bits(key ^ 0x5bd1_e995_0000_0000))
+    }
+
     /// The next value.
     #[inline]
     pub fn get_1d(&mut self) -> f32 {

@@ -7,7 +7,7 @@
 //! wavelengths, one of them (`hero`, chosen per path, or per segment for path graphs)
 //! driving distance sampling.
 
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 
 use super::camera_line::{line_direct, line_emission};
 use super::direct::{LightRandoms, Scatterer, extra_direct, sample_direct};
@@ -25,7 +25,7 @@ use crate::math::Frame;
 use crate::media::MediumView;
 use crate::media::phase::HenyeyGreenstein;
 use crate::samplers::Sampler;
-use crate::sampling::rng::{Pcg32, hash_sample};
+use crate::sampling::rng::Pcg32;
 use crate::scene::Scene;
 use crate::textures::TexContext;
 
@@ -353,8 +353,8 @@ impl<C: Channels, O: PathObserver<C>> Tracer<'_, C, O> {
         let m = &self.scene.media[w.medium as usize];
         let view = MediumView { medium: m, entered: w.st.entered };
         let hero = w.st.hero;
-        let mut rng =
-            Pcg32::new(hash_sample(self.sampler.get_1d(), Vec2::ZERO), hash_sample(self.sampler.get_1d(), Vec2::ONE));
+        let (seed, stream) = self.sampler.stream_seeds();
+        let mut rng = Pcg32::new(seed, stream);
         let u = self.sampler.get_1d();
         let (mut scattered, mut terminated) = (false, false);
         let mut scatter_p = Vec3::ZERO;

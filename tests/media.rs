@@ -295,25 +295,33 @@ fn guided_media_scenes_match_pbrt_v4() {
 /// tolerance, the pairs' mean excess below its tolerance.
 fn media_scenes_match_pbrt_v4_with(guided: Option<&str>, pairs: i32, only: &[&str]) {
     let dir = reference_scenes_dir();
-    let scenes: [(&str, u32, f64, f64); 8] = [
-        ("homogeneous-sphere", 16, 0.01, 1.5),
-        ("grid-cloud", 16, 0.01, 1.5),
-        ("graph-cloud", 16, 0.01, 1.5),
-        ("fog-spotlight", 16, 0.01, 1.5),
+    // (scene, spp, pairs at least, mean tolerance, excess tolerance)
+    let scenes: [(&str, u32, i32, f64, f64); 8] = [
+        ("homogeneous-sphere", 16, 1, 0.01, 1.5),
+        ("grid-cloud", 16, 1, 0.01, 1.5),
+        // One pair's excess spreads widely here at 16 spp: its error sits in a few bright
+        // blocks at the cloud's lit edge (volpath, seeds 1–12 as six pairs: 0.77–1.97 before
+        // f2a1ac4, 0.71–1.76 after, means 1.13 and 1.04). Three pairs, as for guided.
+        ("graph-cloud", 16, 3, 0.01, 1.5),
+        ("fog-spotlight", 16, 1, 0.01, 1.5),
         // Emission inside the cloud is heavy-tailed: judged at the README's 32 spp. The
-        // medium's box also sits in the floor's plane (its bottom face at y = −1, as the
-        // floor), a tie nimbus and pbrt-v4 resolve differently: with the emission switched
-        // off, at 256 spp × 2 seeds a side, nimbus is 1.7 % darker on the floor and 0.85 % in
-        // the medium (up to 6 % in 8×16 blocks at the box's bottom). The emission's noise
-        // hides it here; an estimator with half the noise lifts the excess to 1.75.
-        ("emissive-grid", 32, 0.01, 1.5),
-        ("vdb-cloud", 16, 0.01, 1.5),
+        // medium's box sits in the floor's plane (its bottom face at y = −1, as the floor):
+        // ties that nimbus decides with pbrt-v4's own triangle arithmetic (`accel/tie.rs`).
+        ("emissive-grid", 32, 1, 0.01, 1.5),
+        // Likewise at the lit edge of this cloud (g = 0.7): one pair at 16 spp read 0.56–1.54
+        // before f2a1ac4 and 0.57–1.79 after (14 pairs each, means 1.01 and 1.17; the two
+        // versions against each other at 256 spp × 2 seeds: excess 0.85, means within
+        // 0.01 %). Judged as the README says, at 32 spp, over three pairs.
+        ("vdb-cloud", 32, 3, 0.01, 1.5),
         // Chromatic media: spectral transport in `auto` mode, judged like the others (RGB
         // transport was 2.5 % off on the wax and needed 3 %).
-        ("rgbgrid-smoke", 16, 0.01, 1.5),
-        ("wax-dielectric", 32, 0.01, 1.5),
+        ("rgbgrid-smoke", 16, 1, 0.01, 1.5),
+        // The caustics through the dielectric: guided (which guides the wax by default), one
+        // pair at 32 spp read 0.67–1.43 before f2a1ac4 and 0.64–1.71 after (4 pairs each).
+        ("wax-dielectric", 32, 3, 0.01, 1.5),
     ];
-    for (name, spp, mean_tol, excess_tol) in scenes {
+    for (name, spp, scene_pairs, mean_tol, excess_tol) in scenes {
+        let pairs = pairs.max(scene_pairs);
         if !only.is_empty() && !only.contains(&name) {
             continue;
         }

@@ -52,27 +52,67 @@ pub struct RgbGridMedium {
 /// kept, and every voxel converted for the current medium and wavelengths sits in a
 /// direct-mapped cache (6 % of the smoke's render time saved). Both are exact: the values are
 /// a function of the medium, the voxel and the wavelengths, all in the keys.
-struct Memo {
+struct Memo<const N: usize> {
     /// [`RgbGridMedium::id`] of the medium the values belong to (0: none yet).
     grid: u64,
     /// The wavelengths they were converted at.
     lambda: Vec4,
-    /// The cell of `values`.
+    /// The cell of `corners`.
     cell: IVec3,
-    /// σa, σs and Le at the eight corners of `cell`, as lanes.
-    values: [[Vec4; 8]; 3],
+    /// σa, σs (and Le) at each of the eight corners of `cell`: one corner's values side by
+    /// side, so a cached voxel is one copy and the interpolation weighs them all at once.
+    corners: [Coefficients<N>; 8],
     /// Generation of (`grid`, `lambda`): a cache slot is valid while its tag holds it.
     stamp: u32,
-    /// Per slot, the stamp (high half) and voxel index (low half) its values belong to.
-    tags: Vec<u64>,
-    /// Per slot, σa, σs and Le of its voxel.
-    slots: Vec<[Vec4; 3]>,
+    /// The voxel cache, allocated on a thread's first spectral lookup.
+    cache: Option<Box<VoxelCache<N>>>,
 }
 
 /// Slots of the voxel cache (48 KiB of values per thread); a path converts a few dozen voxels.
+const SLOTS: usize = 1 << CACHE_BITS;
 const CACHE_BITS: u32 = 10;
 
-impl Memo {
+/// A direct-mapped cache of converted voxels. Fixed-size arrays: a slot index is provably in
+/// range, so the lookups carry no bounds checks.
+struct VoxelCache<const N: usize> {
+    /// Per slot, the stamp (high half) and voxel index (low half) its values belong to.
+    tags: [u64; SLOTS],
+    /// Per slot, σa, σs (and Le) of its voxel.
+    slots: [Coefficients<N>; SLOTS],
+}
+
+/// σa, σs (and Le, for N = 3) of one voxel or point, as lanes; interpolated lane by lane with
+/// the arithmetic of [`trilinear`] on each (so the result is the same, bit for bit). A medium
+/// without an Le grid (most) keeps two, and interpolates no zeros.
+#[derive(Clone, Copy)]
+struct Coefficients<const N: usize>([Vec4; N]);
+
+impl<const N: usize> std::ops::Add for Coefficients<N> {
+    type Output = Self;
+    #[inline(always)]
+    fn add(self, o: Self) -> Self {
+        Coefficients(std::array::from_fn(|i| self.0[i] + o.0[i]))
+    }
+}
+
+impl<const N: usize> std::ops::Mul<f32> for Coefficients<N> {
+    type Output = Self;
+    #[inline(always)]
+    fn mul(self, t: f32) -> Self {
+        Coefficients(std::array::from_fn(|i| self.0[i] * t))
+    }
+}
+
+impl<const N: usize> Memo<N> {
+    const EMPTY: Memo<N> = Memo {
+        grid: 0,
+        lambda: Vec4::ZERO,
+        cell: IVec3::ZERO,
+        corners: [Coefficients([Vec4::ZERO; N]); 8],
+        stamp: 0,
+        cache: None,
+    };
+
     /// The slot of voxel `i`: Fibonacci hashing, since plain low bits would put the z and
     /// z + 1 corners of a grid whose x·y size is a multiple of the cache into one slot.
     #[inline]
@@ -103,17 +143,10 @@ pub(super) fn new_id() -> u64 {
 }
 
 thread_local! {
-    static MEMO: RefCell<Memo> = const {
-        RefCell::new(Memo {
-            grid: 0,
-            lambda: Vec4::ZERO,
-            cell: IVec3::ZERO,
-            values: [[Vec4::ZERO; 8]; 3],
-            stamp: 0,
-            tags: Vec::new(),
-            slots: Vec::new(),
-        })
-    };
+    /// The memo of media without an Le grid (σa and σs per voxel).
+    static MEMO_2: RefCell<Memo<2>> = const { RefCell::new(Memo::<2>::EMPTY) };
+    /// The memo of media with one (σa, σs and Le).
+    static MEMO_3: RefCell<Memo<3>> = const { RefCell::new(Memo::<3>::EMPTY) };
 }
 
 impl RgbGridMedium {
@@ -137,15 +170,60 @@ impl RgbGridMedium {
             });
             return MediumPoint { sigma_a, sigma_s, le: le * self.le_scale };
         };
+        let grids = [
+            grids[0].0.as_ref().map(|g| (g, grids[0].1)),
+            grids[1].0.as_ref().map(|g| (g, grids[1].1)),
+            grids[2].0.as_ref().map(|g| (g, grids[2].1)),
+        ];
+        let [sigma_a, sigma_s, le] = if grids[2].is_some() {
+            let v = self.memoised::<C, 3>(&MEMO_3, key, any, cell, d, grids, lambda);
+            [v[0], v[1], v[2]]
+        } else {
+            let v = self.memoised::<C, 2>(&MEMO_2, key, any, cell, d, [grids[0], grids[1]], lambda);
+            [v[0], v[1], Vec4::ZERO]
+        };
+        let [sigma_a, sigma_s, le] =
+            std::array::from_fn(
+                |i| if grids[i].is_some() { C::from_lanes([sigma_a, sigma_s, le][i]) } else { absent[i] },
+            );
+        MediumPoint { sigma_a, sigma_s, le: le * self.le_scale }
+    }
+
+    /// The first N coefficients' values at the point in `cell` at `d`, as lanes (absent grids'
+    /// lanes meaningless), through `memo` (converted at `key`, the wavelengths of `lambda`).
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    fn memoised<C: Channels, const N: usize>(
+        &self,
+        memo: &'static std::thread::LocalKey<RefCell<Memo<N>>>,
+        key: Vec4,
+        any: &DenseGrid<Vec4>,
+        cell: IVec3,
+        d: Vec3,
+        grids: [Option<(&DenseGrid<Vec4>, RgbRole)>; N],
+        lambda: &C::Lambda,
+    ) -> [Vec4; N] {
         let id = self.id;
-        MEMO.with_borrow_mut(|m| {
+        // Converts voxel `v` of each present grid (`v` must be a voxel of the grids).
+        let convert = |v: usize| {
+            Coefficients(std::array::from_fn(|i| match grids[i] {
+                // SAFETY: the grids share one resolution, and `v` is one of their voxels.
+                Some((g, role)) => {
+                    C::from_voxel(unsafe { *g.values().get_unchecked(v) }, role, self.space, lambda).to_lanes()
+                }
+                None => Vec4::ZERO,
+            }))
+        };
+        memo.with_borrow_mut(|m| {
             if m.grid != id || m.lambda != key {
                 // Other wavelengths or another medium: every slot is stale.
                 (m.grid, m.lambda, m.cell) = (id, key, IVec3::MIN);
                 m.stamp = m.stamp.wrapping_add(1);
-                if m.stamp == 0 || m.tags.is_empty() {
-                    m.tags = vec![u64::MAX; 1 << CACHE_BITS];
-                    m.slots = vec![[Vec4::ZERO; 3]; 1 << CACHE_BITS];
+                if m.stamp == 0 || m.cache.is_none() {
+                    let cache = m.cache.get_or_insert_with(|| {
+                        Box::new(VoxelCache { tags: [0; SLOTS], slots: [Coefficients([Vec4::ZERO; N]); SLOTS] })
+                    });
+                    cache.tags = [u64::MAX; SLOTS];
                     m.stamp = 1;
                 }
             }
@@ -153,37 +231,31 @@ impl RgbGridMedium {
                 m.cell = cell;
                 match any.corner_indices(cell) {
                     Some(corners) => {
+                        let cache = m.cache.as_mut().expect("allocated with the stamp");
                         for (k, &v) in corners.iter().enumerate() {
-                            let slot = Memo::slot(v);
+                            let slot = Memo::<N>::slot(v);
                             let tag = (m.stamp as u64) << 32 | v as u64;
-                            if m.tags[slot] != tag {
-                                m.tags[slot] = tag;
-                                for (value, (grid, role)) in m.slots[slot].iter_mut().zip(grids) {
-                                    if let Some(g) = grid {
-                                        *value = C::from_voxel(g.values()[v], role, self.space, lambda).to_lanes();
-                                    }
-                                }
+                            if cache.tags[slot] != tag {
+                                cache.tags[slot] = tag;
+                                cache.slots[slot] = convert(v);
                             }
-                            for i in 0..3 {
-                                m.values[i][k] = m.slots[slot][i];
-                            }
+                            m.corners[k] = cache.slots[slot];
                         }
                     }
                     // A cell on the grid's edge: its outer corners are zero, not voxels.
                     None => {
-                        for (values, (grid, role)) in m.values.iter_mut().zip(grids) {
-                            if let Some(g) = grid {
-                                *values = g.corners(cell, |v| C::from_voxel(v, role, self.space, lambda).to_lanes());
+                        for (i, grid) in grids.iter().enumerate() {
+                            if let Some((g, role)) = grid {
+                                let c = g.corners(cell, |v| C::from_voxel(v, *role, self.space, lambda).to_lanes());
+                                for (corner, value) in m.corners.iter_mut().zip(c) {
+                                    corner.0[i] = value;
+                                }
                             }
                         }
                     }
                 }
             }
-            let [sigma_a, sigma_s, le] = std::array::from_fn(|i| match grids[i].0 {
-                Some(_) => C::from_lanes(trilinear(&m.values[i], d)),
-                None => absent[i],
-            });
-            MediumPoint { sigma_a, sigma_s, le: le * self.le_scale }
+            trilinear(&m.corners, d).0
         })
     }
 }
@@ -246,16 +318,21 @@ mod tests {
         MediumPoint {
             sigma_a: look(g.sigma_a.as_ref().unwrap(), RgbRole::Unbounded),
             sigma_s: look(g.sigma_s.as_ref().unwrap(), RgbRole::Unbounded),
-            le: look(g.le.as_ref().unwrap(), RgbRole::Illuminant) * 2.0,
+            le: g.le.as_ref().map_or(SampledSpectrum::ZERO, |le| look(le, RgbRole::Illuminant) * 2.0),
         }
     }
 
     /// The memo never returns another cell's, medium's or wavelengths' values:
     /// lookups that walk through neighbouring cells, jump, come back, and alternate between
-    /// two media and two wavelength sets all equal the direct evaluation.
+    /// three media (one without an Le grid, memoised apart) and two wavelength sets all equal
+    /// the direct evaluation.
     #[test]
     fn memoised_lookups_equal_direct_evaluation() {
-        let media = [medium(1.0, true), medium(0.5, true)];
+        let mut no_le = medium(0.8, true);
+        if let MediumKind::RgbGrid(g) = &mut no_le.kind {
+            g.le = None;
+        }
+        let media = [medium(1.0, true), medium(0.5, true), no_le];
         let lambdas = [SampledWavelengths::sample_visible(0.2), SampledWavelengths::sample_visible(0.7)];
         let check = |m: &Medium, p: Vec3, lambda: &SampledWavelengths| {
             let got = m.sample_point::<SampledSpectrum>(p, lambda);
@@ -264,11 +341,11 @@ mod tests {
                 assert!((g - w).abs().max_element() <= 1e-6 * w.abs().max_element().max(1e-3), "{g} vs {w} at {p}");
             }
         };
-        for round in 0..4 {
+        for round in 0..12 {
             // A ray's tentative collisions: same cell, the next cell, a few cells on, past the
-            // edge; then the same walk with the other medium or wavelengths.
+            // edge; then the same walk with another medium or the other wavelengths.
             let lambda = &lambdas[round % 2];
-            let m = &media[round / 2 % 2];
+            let m = &media[round / 2 % 3];
             let (o, d) = (Vec3::new(-0.01, 0.13 + 0.1 * round as f32, 0.31), Vec3::new(1.0, 0.37, 0.21).normalize());
             for t in [0.0, 0.004, 0.01, 0.02, 0.045, 0.046, 0.3, 0.31, 0.305, 0.9, 0.02, 1.2] {
                 check(m, o + d * t, lambda);

@@ -70,7 +70,7 @@ pub(super) fn light(
     spectra: &SpectrumResolver<'_>,
     transport: Transport,
     medium: u32,
-    render_origin: Vec3,
+    render_from_world: &glam::Affine3A,
     warnings: &mut Vec<Warning>,
 ) -> Result<Option<Light>, Error> {
     let e = &l.entity;
@@ -79,7 +79,7 @@ pub(super) fn light(
     // directions up by another (see `direction_frames`); the others are placed by the affine.
     let (world, lookup) = match &settings.kind {
         LightSpec::Infinite { filename, .. } => {
-            let f = direction_frames(&l.world_from_light.start, render_origin, &e.loc)?;
+            let f = direction_frames(&l.world_from_light.start, render_from_world, &e.loc)?;
             // A uniform sky, or a portal's 1x1 image of L, has no orientation to get wrong.
             if f.bent && filename.is_some() {
                 warnings.push(Warning::new(

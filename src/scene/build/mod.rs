@@ -214,6 +214,14 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions, needs: &SceneNe
     let triangles = sb.triangles;
     let mesh_bytes = sb.mesh_bytes;
     let mut lights = std::mem::take(&mut sb.lights);
+    // pbrt-v4's render space (`Option "rendercoordsys"`): world space moved to the camera by
+    // default. Surfaces decide coplanar ties in it, and infinite lights' projective transforms
+    // depend on it.
+    let render_from_world = match desc.options.render_coord_sys.as_deref() {
+        Some("world") => glam::Affine3A::IDENTITY,
+        Some("camera") => camera.camera_from_world(),
+        _ => glam::Affine3A::from_translation(-camera.position()),
+    };
     let surfaces = Surfaces {
         shapes: sb.store,
         top,
@@ -223,11 +231,7 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions, needs: &SceneNe
         alphas: std::mem::take(&mut sb.alphas),
         textures: tb.textures.clone(),
         hulls,
-        render_from_world: match desc.options.render_coord_sys.as_deref() {
-            Some("world") => glam::Affine3A::IDENTITY,
-            Some("camera") => camera.camera_from_world(),
-            _ => glam::Affine3A::from_translation(-camera.position()),
-        },
+        render_from_world,
     };
     let interfaces = interfaces.into_inner();
     let has_chromatic_media = media.iter().any(|m| m.chromatic);
@@ -242,10 +246,8 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions, needs: &SceneNe
     };
     for l in &desc.lights {
         let medium = l.medium.as_deref().map_or(NONE, |n| media_ids.get(n).copied().unwrap_or(NONE));
-        // pbrt-v4's render space is world space moved to the camera: an infinite light's
-        // projective transform depends on where that is.
-        let render_origin = camera.position();
-        if let Some(light) = light(l, &spectra, transport.transport, medium, render_origin, &mut warnings)? {
+        // An infinite light's projective transform depends on where render space is.
+        if let Some(light) = light(l, &spectra, transport.transport, medium, &render_from_world, &mut warnings)? {
             lights.push(light);
         }
     }

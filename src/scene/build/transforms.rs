@@ -35,8 +35,8 @@ pub(super) fn affine(m: &DMat4, loc: &FileLoc) -> Result<Affine3A, Error> {
 
 /// The frames of an infinite light. pbrt-v4 transforms only its directions: it looks a
 /// direction up through the upper 3×3 of R⁻¹, R its render-from-light matrix (render space
-/// being world space moved to the camera, `render_origin`), and places light samples through
-/// the upper 3×3 of R without normalising them. For an affine transform these are a rotation
+/// being world space moved to the camera by default, as `render_from_world` says), and places
+/// light samples through the upper 3×3 of R without normalising them. For an affine transform these are a rotation
 /// and its inverse, translation playing no part. A projective last row (published scenes
 /// rotate environment maps with one: sssdragon) leaves the lookup a rotation but bends and
 /// scales pbrt-v4's samples (unless the camera is at the origin), so its light samples and its
@@ -51,7 +51,11 @@ pub(super) struct DirectionFrames {
     pub bent: bool,
 }
 
-pub(super) fn direction_frames(m: &DMat4, render_origin: glam::Vec3, loc: &FileLoc) -> Result<DirectionFrames, Error> {
+pub(super) fn direction_frames(
+    m: &DMat4,
+    render_from_world: &Affine3A,
+    loc: &FileLoc,
+) -> Result<DirectionFrames, Error> {
     let row3 = m.row(3);
     if (row3.x, row3.y, row3.z, row3.w) == (0.0, 0.0, 0.0, 1.0) {
         // Affine: the rotation and its inverse, exactly as every other light's frame is made.
@@ -61,13 +65,18 @@ pub(super) fn direction_frames(m: &DMat4, render_origin: glam::Vec3, loc: &FileL
         }
         return Ok(DirectionFrames { forward: a, inverse: a.inverse(), bent: false });
     }
-    let r = DMat4::from_translation(-render_origin.as_dvec3()) * *m;
-    let inverse = glam::DMat3::from_mat4(r.inverse());
-    if !inverse.is_finite() || inverse.determinant() == 0.0 || m.determinant() == 0.0 {
+    let render = DMat4::from(glam::DAffine3::from_cols_array(&render_from_world.to_cols_array().map(f64::from)));
+    let r = render * *m;
+    // Directions go between world and render space through the render frame's rotation (the
+    // identity unless render space is camera space).
+    let rotation = glam::DMat3::from_mat4(render);
+    let lookup = glam::DMat3::from_mat4(r.inverse());
+    if !lookup.is_finite() || lookup.determinant() == 0.0 || m.determinant() == 0.0 {
         return Err(err(loc, "the infinite light's transform is singular or not finite"));
     }
+    let inverse = lookup * rotation;
     let forward = inverse.inverse();
-    let pbrt_forward = glam::DMat3::from_mat4(r);
+    let pbrt_forward = rotation.inverse() * glam::DMat3::from_mat4(r);
     let bent =
         (0..3).any(|c| (forward.col(c) - pbrt_forward.col(c)).length() > 1e-6 * forward.col(c).length().max(1.0));
     Ok(DirectionFrames {
@@ -87,7 +96,7 @@ mod tests {
         let v = glam::Vec3::new(0.3, -0.5, 0.8);
         // An affine transform: its rotation and the inverse, translation and camera aside.
         let rot = DMat4::from_rotation_translation(glam::DQuat::from_rotation_y(0.7), glam::DVec3::new(1.0, 2.0, 3.0));
-        let f = direction_frames(&rot, glam::Vec3::new(4.0, 5.0, 6.0), &loc).unwrap();
+        let f = direction_frames(&rot, &Affine3A::from_translation(-glam::Vec3::new(4.0, 5.0, 6.0)), &loc).unwrap();
         let expected = glam::Quat::from_rotation_y(0.7) * v;
         assert!((f.forward.transform_vector3(v) - expected).length() < 1e-5);
         assert!((f.inverse.transform_vector3(expected) - v).length() < 1e-5);
@@ -98,14 +107,23 @@ mod tests {
             -0.224951, 0.0, -0.97437, 0.0, -0.97437, 0.0, 0.224951, 0.0, 0.0, 1.0, 0.0, 8.87, 0.0, 0.0, 0.0, 1.0,
         ]);
         assert!(affine(&m, &loc).is_err());
-        let at_origin = direction_frames(&m, glam::Vec3::ZERO, &loc).unwrap();
+        let at_origin = direction_frames(&m, &Affine3A::IDENTITY, &loc).unwrap();
         assert!((at_origin.forward.transform_vector3(glam::Vec3::Z) - glam::Vec3::Y).length() < 1e-6);
         assert!((at_origin.inverse.transform_vector3(glam::Vec3::Y) - glam::Vec3::Z).length() < 1e-5);
         assert!(!at_origin.bent && !f.bent);
-        let moved = direction_frames(&m, glam::Vec3::new(0.0, 1.0, -4.0), &loc).unwrap();
+        let moved = direction_frames(&m, &Affine3A::from_translation(-glam::Vec3::new(0.0, 1.0, -4.0)), &loc).unwrap();
         assert!((moved.inverse.transform_vector3(glam::Vec3::Y) - glam::Vec3::Z).length() < 1e-5);
         assert!((moved.forward.transform_vector3(glam::Vec3::Z) - glam::Vec3::Y).length() < 1e-5);
         assert!(moved.bent, "pbrt-v4 bends this one's samples");
-        assert!(direction_frames(&DMat4::ZERO, glam::Vec3::ZERO, &loc).is_err());
+        // Render space = camera space (`rendercoordsys "camera"`): rotated as well as moved.
+        // World directions still look up through the rotation; pbrt-v4's samples, taken in
+        // render space and rotated back to the world, bend as they do for the moved camera.
+        let camera_from_world =
+            Affine3A::from_rotation_y(1.1) * Affine3A::from_translation(-glam::Vec3::new(0.0, 1.0, -4.0));
+        let rotated = direction_frames(&m, &camera_from_world, &loc).unwrap();
+        assert!((rotated.inverse.transform_vector3(glam::Vec3::Y) - glam::Vec3::Z).length() < 1e-5);
+        assert!((rotated.forward.transform_vector3(glam::Vec3::Z) - glam::Vec3::Y).length() < 1e-5);
+        assert!(rotated.bent);
+        assert!(direction_frames(&DMat4::ZERO, &Affine3A::IDENTITY, &loc).is_err());
     }
 }

@@ -5,9 +5,10 @@
 //! reference images at that spp) and `pbrt-scenes/disney-cloud` (the real Disney cloud at 16 spp,
 //! MSE against two independent reference halves with their own noise removed).
 //!
-//! With `--pbrt PATH` pbrt-v4 itself is timed in the same run instead, scene by scene just
-//! before nimbus, on the same seeds, spp and thread count: ratios that the machine's speed on
-//! the day does not move.
+//! With `--pbrt PATH` pbrt-v4 itself is timed in the same run instead, on the same seeds, spp
+//! and thread count, in rounds with nimbus's transports (each round of a scene runs every one
+//! once, starting with the next): ratios that the machine's speed on the day does not move,
+//! nor its drifts within a scene's runs favour whichever runs first.
 //!
 //! Equal error: for an unbiased Monte Carlo estimator MSE ∝ 1/time, so nimbus needs
 //! `t × mse / mse_pbrt` seconds to reach pbrt-v4's MSE, and its speed-up at equal error is
@@ -52,7 +53,7 @@ pub struct BenchArgs {
     /// training, counts in the time), against pbrt-v4's VolPath figures.
     #[arg(long)]
     integrator: Option<String>,
-    /// A pbrt-v4 executable to time in this run, interleaved scene by scene with nimbus
+    /// A pbrt-v4 executable to time in this run, in rounds with nimbus on each scene
     /// (`--quiet --nthreads N --spp S --seed 1|2 --outfile ...`, wall seconds, MSE against
     /// the same references), instead of the speed.json figures from another day.
     #[arg(long)]
@@ -209,47 +210,55 @@ fn run_once(path: &Path, opts: &BuildOptions) -> Result<(f64, nimbus::imageio::I
     Ok((t.elapsed().as_secs_f64(), r.image, scene.transport.transport.name()))
 }
 
-/// pbrt-v4 run `repeat` (at least 2) times on `scene`, seeds 1 and 2 alternating: the fastest
-/// wall time (start-up and exit included, as the stored figures) and the MSE of the first two
-/// images against `reference`.
-fn run_pbrt(
+/// One pbrt-v4 run on `scene` with seed `seed`: its wall time (start-up and exit included, as
+/// the stored figures) and image.
+fn pbrt_once(
     pbrt: &Path,
     scene: &Path,
     spp: u32,
-    args: &BenchArgs,
-    reference: &[PathBuf],
-) -> Result<PbrtFigures, String> {
+    nthreads: usize,
+    seed: i32,
+) -> Result<(f64, nimbus::imageio::Image), String> {
     let scene = std::fs::canonicalize(scene).map_err(|e| format!("{}: {e}", scene.display()))?;
     let dir = scene.parent().unwrap_or(Path::new("."));
-    let mut times = Vec::new();
-    let mut images = Vec::new();
-    for k in 0..args.repeat.max(2) {
-        let out = std::env::temp_dir().join(format!("nimbus-bench-pbrt-{}-{k}.exr", std::process::id()));
-        let t = Instant::now();
-        let output = std::process::Command::new(pbrt)
-            .current_dir(dir)
-            .args(["--quiet", "--nthreads", &args.nthreads.to_string(), "--spp", &spp.to_string()])
-            .args(["--seed", &(1 + k % 2).to_string(), "--outfile"])
-            .arg(&out)
-            .arg(&scene)
-            .stdout(std::process::Stdio::null())
-            .output()
-            .map_err(|e| format!("{}: cannot run: {e}", pbrt.display()))?;
-        times.push(t.elapsed().as_secs_f64());
-        let image = nimbus::imageio::read_exr(&out);
-        let _ = std::fs::remove_file(&out);
-        if !output.status.success() {
-            let err = String::from_utf8_lossy(&output.stderr);
-            let last = err.lines().last().unwrap_or("").trim().to_string();
-            return Err(format!("{} exited with {}: {last}", pbrt.display(), output.status));
-        }
-        let image = image.map_err(|e| format!("{}: no image: {e}", pbrt.display()))?;
-        if k < 2 {
-            images.push(image);
-        }
+    let out = std::env::temp_dir().join(format!("nimbus-bench-pbrt-{}-{seed}.exr", std::process::id()));
+    let t = Instant::now();
+    let output = std::process::Command::new(pbrt)
+        .current_dir(dir)
+        .args(["--quiet", "--nthreads", &nthreads.to_string(), "--spp", &spp.to_string()])
+        .args(["--seed", &seed.to_string(), "--outfile"])
+        .arg(&out)
+        .arg(&scene)
+        .stdout(std::process::Stdio::null())
+        .output()
+        .map_err(|e| format!("{}: cannot run: {e}", pbrt.display()))?;
+    let seconds = t.elapsed().as_secs_f64();
+    let image = nimbus::imageio::read_exr(&out);
+    let _ = std::fs::remove_file(&out);
+    if !output.status.success() {
+        let err = String::from_utf8_lossy(&output.stderr);
+        let last = err.lines().last().unwrap_or("").trim().to_string();
+        return Err(format!("{} exited with {}: {last}", pbrt.display(), output.status));
     }
-    let mse = mse_against(&images, reference)?;
-    Ok(PbrtFigures { seconds: fastest(&times), mse })
+    let image = image.map_err(|e| format!("{}: no image: {e}", pbrt.display()))?;
+    Ok((seconds, image))
+}
+
+/// What is timed on a scene: pbrt-v4, or nimbus in one transport.
+#[derive(Clone, Copy)]
+enum Runner {
+    Pbrt,
+    Nimbus(SpectralMode),
+}
+
+/// A runner's runs of one scene: wall times, the images of seeds 1 and 2, nimbus's transport,
+/// or the error that stopped it.
+#[derive(Default)]
+struct Tally {
+    times: Vec<f64>,
+    images: Vec<nimbus::imageio::Image>,
+    transport: &'static str,
+    failed: Option<String>,
 }
 
 /// One scene and transport, measured.
@@ -349,7 +358,7 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode> {
     let spp_note = args.spp.map_or("each speed.json's spp".to_string(), |s| format!("{s} spp"));
     println!("baseline (fixed CPU workload): {base:.3} s; {} threads, {spp_note}", args.nthreads);
     match &args.pbrt {
-        Some(p) => println!("pbrt-v4: {} timed in this run, before nimbus on each scene", p.display()),
+        Some(p) => println!("pbrt-v4: {} timed in this run, in rounds with nimbus on each scene", p.display()),
         None => println!("pbrt-v4: the speed.json figures (measured on another day: compare within one run)"),
     }
     if let Some(i) = &args.integrator {
@@ -370,51 +379,78 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode> {
         if let Some(p) = missing {
             eprintln!("note: {name}: no MSE ({}: no such file)", p.display());
         }
+        // Every runner once per round, seeds 1 and 2 alternating between rounds (the first two
+        // give the MSE), each round starting with the next runner: whatever the machine does
+        // meanwhile falls on all of them alike, not on whichever always comes last.
+        let mut runners = Vec::new();
+        if args.pbrt.is_some() && missing.is_none() {
+            runners.push(Runner::Pbrt);
+        }
+        runners.extend(args.spectral.iter().map(|&m| Runner::Nimbus(m)));
+        let mut tallies: Vec<Tally> = runners.iter().map(|_| Tally::default()).collect();
+        for k in 0..args.repeat.max(2) {
+            let seed = 1 + (k % 2) as i32;
+            for j in 0..runners.len() {
+                let i = (j + k) % runners.len();
+                let tally = &mut tallies[i];
+                if tally.failed.is_some() {
+                    continue;
+                }
+                let run = match (runners[i], &args.pbrt) {
+                    (Runner::Pbrt, Some(pbrt)) => {
+                        pbrt_once(pbrt, path, spp, args.nthreads, seed).map(|(t, img)| (t, img, ""))
+                    }
+                    (Runner::Pbrt, None) => unreachable!("pbrt-v4 is timed only when given"),
+                    (Runner::Nimbus(mode), _) => {
+                        pool.install(|| run_once(path, &options(spp, seed, mode, args.integrator.as_deref())))
+                    }
+                };
+                match run {
+                    Ok((t, img, transport)) => {
+                        tally.times.push(t);
+                        tally.transport = transport;
+                        if k < 2 {
+                            tally.images.push(img);
+                        }
+                    }
+                    Err(e) => tally.failed = Some(e),
+                }
+            }
+        }
         let figures = match (&args.pbrt, missing) {
             (None, _) => entry.figures,
             (Some(_), Some(_)) => None,
-            (Some(pbrt), None) => match run_pbrt(pbrt, path, spp, args, &entry.reference) {
-                Ok(f) => Some(f),
-                Err(e) => {
-                    println!("| {name} | {spp} | pbrt-v4 | failed: {e} | | | | | |");
-                    failures.push(serde_json::json!({ "scene": name, "mode": "pbrt-v4", "error": e }));
-                    continue;
-                }
-            },
-        };
-        for &mode in &args.spectral {
-            // Seeds 1 and 2 as pbrt-v4's MSE figure; the timed runs alternate them.
-            let mut times = Vec::new();
-            let mut images = Vec::new();
-            let mut transport = "";
-            let mut failed = None;
-            for k in 0..args.repeat.max(2) {
-                match pool
-                    .install(|| run_once(path, &options(spp, 1 + (k % 2) as i32, mode, args.integrator.as_deref())))
-                {
-                    Ok((t, img, tr)) => {
-                        times.push(t);
-                        transport = tr;
-                        if k < 2 {
-                            images.push(img);
-                        }
-                    }
+            (Some(pbrt), None) => {
+                let tally = &tallies[0];
+                let figures = match &tally.failed {
+                    Some(e) => Err(e.clone()),
+                    None => mse_against(&tally.images, &entry.reference)
+                        .map(|mse| PbrtFigures { seconds: fastest(&tally.times), mse })
+                        .map_err(|e| format!("{}: {e}", pbrt.display())),
+                };
+                match figures {
+                    Ok(f) => Some(f),
                     Err(e) => {
-                        failed = Some(e);
-                        break;
+                        println!("| {name} | {spp} | pbrt-v4 | failed: {e} | | | | | |");
+                        failures.push(serde_json::json!({ "scene": name, "mode": "pbrt-v4", "error": e }));
+                        continue;
                     }
                 }
             }
-            if let Some(e) = failed {
+        };
+        for (runner, tally) in runners.iter().zip(&tallies) {
+            let Runner::Nimbus(mode) = *runner else { continue };
+            let (times, images, transport) = (&tally.times, &tally.images, tally.transport);
+            if let Some(e) = &tally.failed {
                 println!("| {name} | {spp} | {mode} | failed: {e} | | | | | |");
                 failures.push(serde_json::json!({ "scene": name, "mode": mode.to_string(), "error": e }));
                 continue;
             }
-            let seconds = fastest(&times);
+            let seconds = fastest(times);
             let mse = if missing.is_some() {
                 None
             } else {
-                match mse_against(&images, &entry.reference) {
+                match mse_against(images, &entry.reference) {
                     Ok(m) => Some(m),
                     Err(e) => {
                         eprintln!("note: {name}: no MSE: {e}");

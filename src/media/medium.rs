@@ -335,7 +335,8 @@ impl Medium {
 
     /// An `rgbgrid` medium (voxels packed for the transport, see [`RgbGridMedium`]; `spectral`
     /// says which); builds its 16³ majorant grid, per RGB channel where a voxel's σ is colored
-    /// (`chromatic`) and the transport is RGB.
+    /// (`chromatic`) and the transport is RGB. Panics if the grids differ in resolution (the
+    /// scene builder makes them from one nx, ny, nz).
     #[allow(clippy::too_many_arguments)] // mirrors pbrt-v4's RGBGridMedium constructor
     pub fn rgb_grid(
         name: String,
@@ -350,6 +351,9 @@ impl Medium {
         chromatic: bool,
         spectral: bool,
     ) -> Medium {
+        // A lookup reads every grid at the same voxel indices (unchecked in the spectral memo).
+        let resolutions: Vec<UVec3> = [&sigma_a, &sigma_s, &le].into_iter().flatten().map(|g| g.resolution()).collect();
+        assert!(resolutions.windows(2).all(|w| w[0] == w[1]), "an rgbgrid's grids share one resolution");
         // Per channel for RGB transport; spectral keeps one value (see `Bands`).
         let bands = if chromatic && !spectral { Bands::Rgb } else { Bands::Gray };
         let majorant = MajorantGrid::banded(bounds, UVec3::splat(16), bands, |lo, hi, out| {

@@ -207,7 +207,8 @@ impl RgbGridMedium {
         // Converts voxel `v` of each present grid (`v` must be a voxel of the grids).
         let convert = |v: usize| {
             Coefficients(std::array::from_fn(|i| match grids[i] {
-                // SAFETY: the grids share one resolution, and `v` is one of their voxels.
+                // SAFETY: the grids share one resolution (`Medium::rgb_grid` asserts it), and `v` is
+                // one of their voxels (`corner_indices` gives only those).
                 Some((g, role)) => {
                     C::from_voxel(unsafe { *g.values().get_unchecked(v) }, role, self.space, lambda).to_lanes()
                 }

@@ -244,10 +244,10 @@ fn pbrt_once(
     Ok((seconds, image))
 }
 
-/// What is timed on a scene: pbrt-v4, or nimbus in one transport.
+/// What is timed on a scene: the pbrt-v4 executable, or nimbus in one transport.
 #[derive(Clone, Copy)]
-enum Runner {
-    Pbrt,
+enum Runner<'a> {
+    Pbrt(&'a Path),
     Nimbus(SpectralMode),
 }
 
@@ -383,8 +383,8 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode> {
         // give the MSE), each round starting with the next runner: whatever the machine does
         // meanwhile falls on all of them alike, not on whichever always comes last.
         let mut runners = Vec::new();
-        if args.pbrt.is_some() && missing.is_none() {
-            runners.push(Runner::Pbrt);
+        if let (Some(pbrt), None) = (&args.pbrt, missing) {
+            runners.push(Runner::Pbrt(pbrt));
         }
         runners.extend(args.spectral.iter().map(|&m| Runner::Nimbus(m)));
         let mut tallies: Vec<Tally> = runners.iter().map(|_| Tally::default()).collect();
@@ -396,12 +396,9 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode> {
                 if tally.failed.is_some() {
                     continue;
                 }
-                let run = match (runners[i], &args.pbrt) {
-                    (Runner::Pbrt, Some(pbrt)) => {
-                        pbrt_once(pbrt, path, spp, args.nthreads, seed).map(|(t, img)| (t, img, ""))
-                    }
-                    (Runner::Pbrt, None) => unreachable!("pbrt-v4 is timed only when given"),
-                    (Runner::Nimbus(mode), _) => {
+                let run = match runners[i] {
+                    Runner::Pbrt(pbrt) => pbrt_once(pbrt, path, spp, args.nthreads, seed).map(|(t, img)| (t, img, "")),
+                    Runner::Nimbus(mode) => {
                         pool.install(|| run_once(path, &options(spp, seed, mode, args.integrator.as_deref())))
                     }
                 };
@@ -421,6 +418,7 @@ pub fn run(args: &BenchArgs) -> Result<ExitCode> {
             (None, _) => entry.figures,
             (Some(_), Some(_)) => None,
             (Some(pbrt), None) => {
+                // The pbrt-v4 runner is the first.
                 let tally = &tallies[0];
                 let figures = match &tally.failed {
                     Some(e) => Err(e.clone()),

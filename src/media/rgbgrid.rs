@@ -160,32 +160,27 @@ impl RgbGridMedium {
             return MediumPoint { sigma_a: C::ONE, sigma_s: C::ONE, le: C::ZERO };
         };
         let (cell, d) = any.cell(pu);
-        let grids =
-            [(&self.sigma_a, RgbRole::Unbounded), (&self.sigma_s, RgbRole::Unbounded), (&self.le, RgbRole::Illuminant)];
-        let absent = [C::ONE, C::ONE, C::ZERO];
-        let Some(key) = C::voxel_memo_key(lambda) else {
-            let [sigma_a, sigma_s, le] = std::array::from_fn(|i| match grids[i].0 {
-                Some(g) => trilinear(&g.corners(cell, |v| C::from_voxel(v, grids[i].1, self.space, lambda)), d),
-                None => absent[i],
-            });
-            return MediumPoint { sigma_a, sigma_s, le: le * self.le_scale };
-        };
         let grids = [
-            grids[0].0.as_ref().map(|g| (g, grids[0].1)),
-            grids[1].0.as_ref().map(|g| (g, grids[1].1)),
-            grids[2].0.as_ref().map(|g| (g, grids[2].1)),
+            self.sigma_a.as_ref().map(|g| (g, RgbRole::Unbounded)),
+            self.sigma_s.as_ref().map(|g| (g, RgbRole::Unbounded)),
+            self.le.as_ref().map(|g| (g, RgbRole::Illuminant)),
         ];
-        let [sigma_a, sigma_s, le] = if grids[2].is_some() {
-            let v = self.memoised::<C, 3>(&MEMO_3, key, any, cell, d, grids, lambda);
-            [v[0], v[1], v[2]]
-        } else {
-            let v = self.memoised::<C, 2>(&MEMO_2, key, any, cell, d, [grids[0], grids[1]], lambda);
-            [v[0], v[1], Vec4::ZERO]
+        let absent = [C::ONE, C::ONE, C::ZERO];
+        let [sigma_a, sigma_s, le] = match C::voxel_memo_key(lambda) {
+            None => std::array::from_fn(|i| match grids[i] {
+                Some((g, role)) => trilinear(&g.corners(cell, |v| C::from_voxel(v, role, self.space, lambda)), d),
+                None => absent[i],
+            }),
+            Some(key) => {
+                let lanes = if grids[2].is_some() {
+                    self.memoised::<C, 3>(&MEMO_3, key, any, cell, d, grids, lambda)
+                } else {
+                    let [a, s] = self.memoised::<C, 2>(&MEMO_2, key, any, cell, d, [grids[0], grids[1]], lambda);
+                    [a, s, Vec4::ZERO]
+                };
+                std::array::from_fn(|i| if grids[i].is_some() { C::from_lanes(lanes[i]) } else { absent[i] })
+            }
         };
-        let [sigma_a, sigma_s, le] =
-            std::array::from_fn(
-                |i| if grids[i].is_some() { C::from_lanes([sigma_a, sigma_s, le][i]) } else { absent[i] },
-            );
         MediumPoint { sigma_a, sigma_s, le: le * self.le_scale }
     }
 

@@ -154,6 +154,14 @@ pub trait PathStrategy {
 /// What a method learns from the path loop as it happens (observing hooks: they change
 /// nothing), in the channels the path carries (RGB or the path's sampled wavelengths).
 pub trait PathRecorder<C: Channels> {
+    /// Whether this recorder sees the vertex a path leaves after its last counted scattering
+    /// event. Where it does not, and nothing can add to the path after that event (no light
+    /// is found by hitting or escaping, no subsurface medium scatters for free), the loop ends
+    /// the path there instead of tracing a continuation that cannot contribute.
+    #[inline]
+    fn records_vertices(&self) -> bool {
+        true
+    }
     /// A scattering vertex was sampled.
     #[inline]
     fn on_vertex(&mut self, _v: &VertexEvent<C>) {}
@@ -188,4 +196,9 @@ pub struct NoObserver;
 
 impl PathStrategy for NoObserver {}
 
-impl<C: Channels> PathRecorder<C> for NoObserver {}
+impl<C: Channels> PathRecorder<C> for NoObserver {
+    #[inline]
+    fn records_vertices(&self) -> bool {
+        false
+    }
+}

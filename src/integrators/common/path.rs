@@ -13,7 +13,7 @@ use super::camera_line::{line_direct, line_emission};
 use super::direct::{LightRandoms, Scatterer, extra_direct, sample_direct};
 use super::media::{Collision, Tracking};
 use super::observer::{EmissionEvent, PathObserver, VertexEvent};
-use super::state::PathState;
+use super::state::{PathState, end_segment, rr};
 use super::{MAX_SUBSURFACE_EVENTS, RayStats};
 use crate::accel::{Found, Hit, NONE};
 use crate::camera::Differentials;
@@ -205,6 +205,14 @@ struct Tracer<'a, C: Channels, O> {
     /// A new hero channel at every vertex ([`PathConfig::hero_per_segment`] in chromatic media).
     per_segment: bool,
     camera_ray: Ray,
+    /// After the last scattering event `maxdepth` allows, nothing can add to the path: no
+    /// light is found by hitting or escaping (no area or infinite light), medium emission
+    /// counts only before that event (pbrt-v4's `depth < maxDepth`), no subsurface medium
+    /// scatters without counting, and the observer records no vertices. The path then ends
+    /// after that event's light sample; its continuation would be traced for nothing.
+    /// Every pixel is unchanged: the continuation's random numbers are drawn after all
+    /// that the path adds.
+    end_at_last_event: bool,
     /// The estimate so far.
     l: C,
     pending: [Option<Branch<C>>; MAX_PENDING],
@@ -243,6 +251,7 @@ pub fn trace_path<C: Channels, O: PathObserver<C>>(
         camera_diff: scene.footprint.is_some(),
         diff: None,
     };
+    let end_at_last_event = !observer.records_vertices() && !scene.continues_past_max_depth;
     let mut tracer = Tracer {
         scene,
         config,
@@ -251,6 +260,7 @@ pub fn trace_path<C: Channels, O: PathObserver<C>>(
         observer,
         stats,
         per_segment: config.hero_per_segment && scene.has_chromatic_media,
+        end_at_last_event,
         camera_ray: ray,
         l: C::ZERO,
         pending: [None; MAX_PENDING],
@@ -492,6 +502,9 @@ impl<C: Channels, O: PathObserver<C>> Tracer<'_, C, O> {
         if config.next_event && (nee_prob >= 1.0 || self.sampler.get_1d() < nee_prob) {
             self.next_event(w, p, None, &Scatterer::Medium { phase, wo }, nee_prob);
         }
+        if self.end_at_last_event && w.depth - w.free >= config.max_depth {
+            return false;
+        }
         // Splitting where the observer guides and asks for it: the path continues in several
         // independent directions, each with its share of β (roulette's test below sees β as
         // it was before the split).
@@ -680,6 +693,9 @@ impl<C: Channels, O: PathObserver<C>> Tracer<'_, C, O> {
         if config.next_event && bxdf.flags().is_non_specular() {
             self.next_event(w, s.p, Some(&hit), &Scatterer::Surface { bxdf: &bxdf, frame: &frame, wo_local }, 1.0);
         }
+        if self.end_at_last_event && w.depth - w.free >= config.max_depth {
+            return false;
+        }
 
         // Continue the path by sampling the BSDF (a BxDF of one lobe has no lobe to choose:
         // its dimension is skipped).
@@ -731,44 +747,4 @@ impl<C: Channels, O: PathObserver<C>> Tracer<'_, C, O> {
         w.ray = hit.spawn_ray(wi);
         !rr(&mut w.st, w.eta_scale, w.depth, self.sampler)
     }
-}
-
-/// Ends a segment of a path in chromatic media ([`PathConfig::hero_per_segment`]): the spectral
-/// MIS over the segment's hero choice (the balance heuristic, f / mean of the channels'
-/// densities = β / mean of r_u), then a new hero for the next segment.
-#[inline]
-fn end_segment<C: Channels>(st: &mut PathState<C>, sampler: &mut Sampler) {
-    let a = st.r_u.average();
-    if a > 0.0 {
-        st.beta /= a;
-    }
-    // The segment's densities are accounted for: the next one starts its own ratios, with a
-    // hero drawn uniformly among the channels (the path's wavelengths are fixed by now, so
-    // the next segment's one-sample MIS needs its own uniform choice; for the first segment
-    // pbrt's random first wavelength is that choice).
-    st.r_u = C::ONE;
-    st.hero = ((sampler.get_1d() * C::CHANNELS as f32) as usize).min(C::CHANNELS - 1);
-}
-
-/// Russian roulette on the throughput with refraction's radiance scaling undone; true
-/// when the path ends.
-#[inline]
-fn rr<C: Channels>(st: &mut PathState<C>, eta_scale: f32, depth: u32, sampler: &mut Sampler) -> bool {
-    if st.beta.is_zero() || !st.beta.is_finite() {
-        return true;
-    }
-    let rr_beta = st.beta * (eta_scale * st.rr_scale) / st.r_u.average();
-    let rr_max = rr_beta.max_element();
-    // pbrt-v4 draws the roulette's dimension at every vertex; where no roulette is played it
-    // is skipped, not generated.
-    if rr_max < 1.0 && depth > 1 {
-        let q = (1.0 - rr_max).max(0.0);
-        if sampler.get_1d() < q {
-            return true;
-        }
-        st.beta /= 1.0 - q;
-    } else {
-        sampler.skip_1d();
-    }
-    false
 }

@@ -1,8 +1,10 @@
 //! What a path carries from event to event: its throughput and pbrt-v4's rescaled path
-//! probabilities, and the ratios a collision in a medium applies to them.
+//! probabilities, the ratios a collision in a medium applies to them, Russian roulette on
+//! them and the end of a segment's spectral MIS.
 
 use crate::channels::Channels;
 use crate::media::MediumPoint;
+use crate::samplers::Sampler;
 
 /// Per-path state shared by the loop and its helpers.
 #[derive(Clone, Copy)]
@@ -49,4 +51,44 @@ impl<C: Channels> PathState<C> {
         }
         pdf
     }
+}
+
+/// Ends a segment of a path in chromatic media ([`super::PathConfig::hero_per_segment`]): the spectral
+/// MIS over the segment's hero choice (the balance heuristic, f / mean of the channels'
+/// densities = β / mean of r_u), then a new hero for the next segment.
+#[inline]
+pub(super) fn end_segment<C: Channels>(st: &mut PathState<C>, sampler: &mut Sampler) {
+    let a = st.r_u.average();
+    if a > 0.0 {
+        st.beta /= a;
+    }
+    // The segment's densities are accounted for: the next one starts its own ratios, with a
+    // hero drawn uniformly among the channels (the path's wavelengths are fixed by now, so
+    // the next segment's one-sample MIS needs its own uniform choice; for the first segment
+    // pbrt's random first wavelength is that choice).
+    st.r_u = C::ONE;
+    st.hero = ((sampler.get_1d() * C::CHANNELS as f32) as usize).min(C::CHANNELS - 1);
+}
+
+/// Russian roulette on the throughput with refraction's radiance scaling undone; true
+/// when the path ends.
+#[inline]
+pub(super) fn rr<C: Channels>(st: &mut PathState<C>, eta_scale: f32, depth: u32, sampler: &mut Sampler) -> bool {
+    if st.beta.is_zero() || !st.beta.is_finite() {
+        return true;
+    }
+    let rr_beta = st.beta * (eta_scale * st.rr_scale) / st.r_u.average();
+    let rr_max = rr_beta.max_element();
+    // pbrt-v4 draws the roulette's dimension at every vertex; where no roulette is played it
+    // is skipped, not generated.
+    if rr_max < 1.0 && depth > 1 {
+        let q = (1.0 - rr_max).max(0.0);
+        if sampler.get_1d() < q {
+            return true;
+        }
+        st.beta /= 1.0 - q;
+    } else {
+        sampler.skip_1d();
+    }
+    false
 }

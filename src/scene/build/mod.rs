@@ -253,6 +253,9 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions, needs: &SceneNe
     }
     let infinite_lights = lights.iter().enumerate().filter(|(_, l)| l.is_infinite()).map(|(i, _)| i as u32).collect();
     let light_sampler = LightSampler::new(&lights, &surfaces.shapes, &sphere, needs.light_sampler);
+    let continues_past_max_depth = lights.iter().any(|l| l.is_infinite())
+        || lights.iter().any(|l| matches!(l.kind, LightKind::Area { .. }))
+        || media.iter().any(|m| m.subsurface);
     let bumps = shading.iter().any(|s| matches!(s, ShadingPerturbation::Bump(_)));
     let footprint = (tb.textures.uses_footprint() || bumps)
         .then(|| crate::camera::Footprint::new(&camera, film.resolution, sampler.pixel_samples));
@@ -284,6 +287,7 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions, needs: &SceneNe
         interfaces,
         camera_medium,
         has_chromatic_media,
+        continues_past_max_depth,
         sensor,
         transport,
         disable_wavelength_jitter: desc.options.disable_wavelength_jitter,

@@ -77,6 +77,26 @@ pub fn judge(images: &[Image], spp: u32, reference: &Image) -> (f64, f64) {
     (mean_rel, if den > 0.0 { num / den } else { f64::INFINITY })
 }
 
+/// The image mean of `images` (K renders at `spp`) against the reference's, worst channel:
+/// (|difference| / reference, four standard errors / reference), the standard error measured
+/// from the K renders' own means (the reference's noise counted as theirs at REFERENCE_SPP).
+fn mean_within_noise(images: &[Image], spp: u32, reference: &Image) -> (f64, f64) {
+    let k = images.len() as f64;
+    let mut worst = (0.0f64, f64::INFINITY);
+    for c in 0..3 {
+        let means: Vec<f64> = images.iter().map(|i| i.pixels.iter().map(|p| p[c] as f64).sum::<f64>()).collect();
+        let m = means.iter().sum::<f64>() / k;
+        let var_of_mean = means.iter().map(|v| (v - m).powi(2)).sum::<f64>() / (k - 1.0) / k;
+        let r: f64 = reference.pixels.iter().map(|p| p[c] as f64).sum();
+        let se = (var_of_mean * (1.0 + k * spp as f64 / REFERENCE_SPP)).sqrt();
+        let (rel, bound) = ((m - r).abs() / r.max(1e-12), 4.0 * se / r.max(1e-12));
+        if rel - bound > worst.0 - worst.1 {
+            worst = (rel, bound);
+        }
+    }
+    worst
+}
+
 #[test]
 fn own_parity_scenes_match_pbrt_v4() {
     for name in [
@@ -120,8 +140,16 @@ fn own_parity_scenes_match_pbrt_v4() {
 fn the_disney_cloud_matches_pbrt_v4() {
     let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("pbrt-scenes/disney-cloud");
     let reference = nimbus::imageio::read_exr(&dir.join("references/disney-cloud-small.exr")).unwrap();
-    let images = renders(&dir.join("disney-cloud-small.pbrt"), 32, 1..9);
-    let (mean_rel, excess) = judge(&images, 32, &reference);
-    eprintln!("disney-cloud-small: mean_rel {mean_rel:.4}, excess {excess:.2}");
-    assert!(mean_rel < 0.01 && excess < 2.0, "disney-cloud-small: mean_rel {mean_rel:.4}, excess {excess:.2}");
+    let images = renders(&dir.join("disney-cloud-small.pbrt"), 32, 1..17);
+    let (_, excess) = judge(&images, 32, &reference);
+    // The image mean's noise is large here (one render's mean varies by about 2 %: a few
+    // paths of hundreds of events carry much of it), so the mean is judged against four of
+    // its standard errors measured from the renders, not a fixed 1 % (which 8 unbiased
+    // renders missed at −1.45 % when the sampler's dimensions moved; 64 gave +0.37 ± 0.28 %).
+    let (mean_rel, bound) = mean_within_noise(&images, 32, &reference);
+    eprintln!("disney-cloud-small: mean_rel {mean_rel:.4} (4 standard errors {bound:.4}), excess {excess:.2}");
+    assert!(
+        mean_rel < bound && excess < 2.0,
+        "disney-cloud-small: mean_rel {mean_rel:.4} (4 standard errors {bound:.4}), excess {excess:.2}"
+    );
 }

@@ -317,7 +317,10 @@ fn camera_line_estimates_lights_seen_through_media() {
     assert!((m - want).abs() < 4.0 * se && se > 1e-3, "delta tracking: {m} ± {se} (Le e^-1 = {want})");
 
     // A grid of constant density 0.5: ratio tracking, unbiased, and a fraction of the spread
-    // of arriving by delta tracking (whose per-pixel variance at 8 spp is T (1 − T) Le² / 8).
+    // of arriving by independent delta tracking (whose per-pixel variance at 8 spp is
+    // T (1 − T) Le² / 8). The path's own delta tracking has less than either: its first
+    // collision and event come from the sampler, stratified over a pixel's samples, so about
+    // 8T of a pixel's 8 paths arrive (measured: 0.0008 against the line's 0.010).
     let grid = scene(
         &wall_through_medium(
             r#"MakeNamedMedium "m" "string type" "uniformgrid" "integer nx" 2 "integer ny" 2 "integer nz" 2
@@ -334,7 +337,9 @@ fn camera_line_estimates_lights_seen_through_media() {
     };
     let (m, se) = mean_and_stderr(&line);
     assert!((m - want).abs() < 4.0 * se.max(1e-4), "grid, camera line: {m} ± {se} (Le e^-1 = {want})");
-    assert!(spread(&line) < 0.5 * spread(&tracked), "variance {} against {}", spread(&line), spread(&tracked));
+    let independent = f64::from(t * (1.0 - t) * (le.element_sum() / 3.0).powi(2)) / 8.0;
+    assert!(spread(&line) < 0.5 * independent, "variance {} against {independent}", spread(&line));
+    assert!(spread(&tracked) < 0.5 * independent, "variance {} against {independent}", spread(&tracked));
 
     // With scattering the two estimators differ in every pixel but agree in expectation.
     let fog = scene(

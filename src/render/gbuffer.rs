@@ -96,7 +96,7 @@ fn visible_surface(
                 }
                 _ => {
                     let mut est = ShadowEstimate::<Rgb>::default();
-                    ratio_tracking(m.into(), &ray, t_max, &mut rng, 0, &(), &mut est);
+                    ratio_tracking(None, m.into(), &ray, t_max, &mut rng, 0, &(), &mut est);
                     (est.t_ray / est.r_l.average()).average()
                 }
             };

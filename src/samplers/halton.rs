@@ -99,6 +99,9 @@ pub struct HaltonSampler {
     mult_inverse: [u64; 2],
     halton_index: u64,
     dimension: u32,
+    seed: i32,
+    /// The current pixel, for [`HaltonSampler::get_2d_shifted`].
+    pixel_key: u64,
 }
 
 /// The radical inverse of `a` in base `primes[base_index]` (pbrt-v4's `RadicalInverse`).
@@ -213,6 +216,8 @@ impl HaltonSampler {
             mult_inverse,
             halton_index: 0,
             dimension: 0,
+            seed,
+            pixel_key: 0,
         }
     }
 
@@ -236,6 +241,7 @@ impl HaltonSampler {
         }
         self.halton_index = index + u64::from(sample_index) * stride;
         self.dimension = dimension.max(2);
+        self.pixel_key = (u64::from(pixel.x) << 32) | u64::from(pixel.y);
     }
 
     fn sample_dimension(&self, dimension: u32) -> f32 {
@@ -273,6 +279,28 @@ impl HaltonSampler {
         Vec2::new(self.sample_dimension(d), self.sample_dimension(d + 1))
     }
 
+    /// The next two dimensions, each pixel's rotated (Cranley–Patterson, modulo 1) by a hash
+    /// of the pixel, the dimension and the seed: a pixel's samples stay stratified, and two
+    /// seeds' values no longer share one relation over the whole image (see
+    /// `ZSobolSampler::get_2d_shifted`; the digit permutations are the seed's, global).
+    pub fn get_2d_shifted(&mut self) -> Vec2 {
+        let v = self.get_2d();
+        let h = self.rotation(self.dimension - 2);
+        Vec2::new(rotate(v.x, h as u32), rotate(v.y, (h >> 32) as u32))
+    }
+
+    /// The next dimension, rotated per pixel as [`Self::get_2d_shifted`]'s.
+    pub fn get_1d_shifted(&mut self) -> f32 {
+        let v = self.get_1d();
+        rotate(v, self.rotation(self.dimension - 1) as u32)
+    }
+
+    /// Hash bits of the current pixel, dimension `d` and the seed.
+    fn rotation(&self, d: u32) -> u64 {
+        let key = (u64::from(d) << 32) | self.seed as u32 as u64;
+        mix_bits(self.pixel_key ^ mix_bits(key ^ 0x2545_f491_4f6c_dd1d))
+    }
+
     /// The film position within the pixel: the first two (pixel-scaled) dimensions.
     pub fn get_pixel_2d(&mut self) -> Vec2 {
         Vec2::new(
@@ -280,6 +308,12 @@ impl HaltonSampler {
             radical_inverse(3, self.halton_index / self.base_scales[1]),
         )
     }
+}
+
+/// `v` + `bits` / 2^32, modulo 1.
+fn rotate(v: f32, bits: u32) -> f32 {
+    let r = v + bits as f32 * (1.0 / 4_294_967_296.0);
+    (if r >= 1.0 { r - 1.0 } else { r }).min(ONE_MINUS_EPSILON)
 }
 
 #[cfg(test)]

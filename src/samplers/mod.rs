@@ -149,17 +149,41 @@ impl Sampler {
         }
     }
 
-    /// Two 64-bit seeds for a random stream of the path's own (a medium walk's tentative
-    /// collisions), in place of the next two dimensions. pbrt-v4 hashes two sampled values
-    /// into its seeds; a seed gains nothing from stratification, so ZSobol hashes the pixel
-    /// sample's index and the dimension instead of generating the values (their digit
+    /// A 64-bit seed for a random stream of the path's own (a medium walk's later tentative
+    /// collisions), in place of the next dimension. pbrt-v4 hashes two sampled values into
+    /// its stream's seeds; a seed gains nothing from stratification, so ZSobol hashes the
+    /// pixel sample's index and the dimension instead of generating a value (digit
     /// permutations and scrambles were a third of the sampler's work on graph-cloud). The
-    /// other samplers hash their values, as pbrt-v4 does.
+    /// other samplers hash their value, as pbrt-v4 does.
     #[inline]
-    pub fn stream_seeds(&mut self) -> (u64, u64) {
+    pub fn stream_seed(&mut self) -> u64 {
         match self {
-            Sampler::ZSobol(s) => (s.seed(), s.seed()),
-            _ => (hash_sample(self.get_1d(), Vec2::ZERO), hash_sample(self.get_1d(), Vec2::ONE)),
+            Sampler::ZSobol(s) => s.seed(),
+            _ => hash_sample(self.get_1d(), Vec2::ZERO),
+        }
+    }
+
+    /// The next two dimensions, for decisions whose images must be independent between
+    /// seeds (a medium walk's first collision and its event): ZSobol's and Halton's values,
+    /// randomized once per dimension for the whole image, moved per pixel as well
+    /// ([`ZSobolSampler::get_2d_shifted`], [`HaltonSampler::get_2d_shifted`]); the other
+    /// samplers' as they are (they randomize per pixel and seed, or are random).
+    #[inline]
+    pub fn get_2d_shifted(&mut self) -> Vec2 {
+        match self {
+            Sampler::ZSobol(s) => s.get_2d_shifted(),
+            Sampler::Halton(s) => s.get_2d_shifted(),
+            _ => self.get_2d(),
+        }
+    }
+
+    /// The next dimension, as [`Self::get_2d_shifted`]'s.
+    #[inline]
+    pub fn get_1d_shifted(&mut self) -> f32 {
+        match self {
+            Sampler::ZSobol(s) => s.get_1d_shifted(),
+            Sampler::Halton(s) => s.get_1d_shifted(),
+            _ => self.get_1d(),
         }
     }
 

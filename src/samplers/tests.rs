@@ -177,12 +177,12 @@ fn skipped_dimensions_are_the_drawn_ones() {
     }
 }
 
-/// Stream seeds take the place of two dimensions (the values after them are those after two
-/// draws). ZSobol's differ between dimensions, samples and pixels (no two walks share a
-/// stream); the other samplers hash their values, as pbrt-v4 does, and pmj02bn's values
+/// A stream seed takes the place of one dimension (the values after it are those after one
+/// draw). ZSobol's differ between dimensions, samples and pixels (no two walks share a
+/// stream); the other samplers hash their value, as pbrt-v4 does, and pmj02bn's values
 /// repeat across dimensions.
 #[test]
-fn stream_seeds_stand_for_two_dimensions() {
+fn stream_seed_stands_for_one_dimension() {
     for (name, mut s) in all(16) {
         let mut seen = std::collections::HashSet::new();
         for pixel in [UVec2::new(5, 3), UVec2::new(6, 3), UVec2::new(5, 4)] {
@@ -191,18 +191,17 @@ fn stream_seeds_stand_for_two_dimensions() {
                 let mut drawn = Vec::new();
                 for _ in 0..40 {
                     s.get_1d();
-                    s.get_1d();
                     drawn.push(s.get_2d());
                 }
                 s.start_pixel_sample(pixel, sample, 0);
                 for (k, &b) in drawn.iter().enumerate() {
-                    let (seed, stream) = s.stream_seeds();
-                    let unique = seen.insert((seed, stream));
+                    let seed = s.stream_seed();
+                    let unique = seen.insert(seed);
                     assert!(
                         unique || !name.starts_with("zsobol"),
                         "{name}: seeds repeat at {pixel}, sample {sample}, pair {k}"
                     );
-                    assert_eq!(s.get_2d(), b, "{name}: dimensions after the seeds, pair {k}");
+                    assert_eq!(s.get_2d(), b, "{name}: dimensions after the seed, pair {k}");
                 }
             }
         }
@@ -272,6 +271,44 @@ fn sobol_samplers_fill_every_elementary_interval() {
             }
         }
     }
+}
+
+/// The shifted draws (a medium walk's first collision and event) keep a ZSobol pixel's 64
+/// samples in every 8×8 cell and 1/64 stratum once, as the plain draws do, and differ from
+/// them by a shift that changes from pixel to pixel and from seed to seed.
+#[test]
+fn shifted_draws_stay_stratified_and_move_per_pixel() {
+    let first = |seed: i32, pixel: UVec2| {
+        let settings = SamplerSettings { seed, pixel_samples: 64, ..settings_of("zsobol fastowen") };
+        let mut s = Sampler::new(&settings, UVec2::new(32, 32));
+        let (mut pairs, mut ones, mut plain) = (Vec::new(), Vec::new(), Vec::new());
+        for index in 0..64 {
+            s.start_pixel_sample(pixel, index, 7);
+            pairs.push(s.get_2d_shifted());
+            ones.push(s.get_1d_shifted());
+            s.start_pixel_sample(pixel, index, 7);
+            plain.push(s.get_2d());
+        }
+        (pairs, ones, plain)
+    };
+    let mut shifts = std::collections::HashSet::new();
+    for seed in [1, 2] {
+        for pixel in [UVec2::new(0, 0), UVec2::new(5, 11), UVec2::new(6, 11)] {
+            let (pairs, ones, plain) = first(seed, pixel);
+            assert!(cell_counts(&pairs, 8).iter().all(|&c| c == 1), "seed {seed}, {pixel}");
+            let mut strata = [0u32; 64];
+            ones.iter().for_each(|u| strata[(u * 64.0) as usize] += 1);
+            assert!(strata.iter().all(|&c| c == 1), "seed {seed}, {pixel}: 1D");
+            // The XOR of a shifted and a plain value is the pixel's shift, the same for all
+            // its samples (its leading 12 bits, which f32 rounding rarely reaches).
+            let xor = |a: f32, b: f32| ((a * 4_294_967_296.0) as u64 ^ (b * 4_294_967_296.0) as u64) >> 20;
+            let shift = xor(pairs[0].x, plain[0].x);
+            let same = pairs.iter().zip(&plain).filter(|(p, q)| xor(p.x, q.x) == shift).count();
+            assert!(same >= 60, "seed {seed}, {pixel}: {same} of 64 samples share the shift");
+            shifts.insert(shift);
+        }
+    }
+    assert_eq!(shifts.len(), 6, "every pixel and seed its own shift");
 }
 
 #[test]

@@ -128,8 +128,8 @@ pub(super) fn sample_direct<C: Channels, O: PathObserver<C>>(
     extra: Option<u64>,
 ) -> Option<C> {
     let n_ctx = hit.map_or(Vec3::ZERO, |h| h.surface.ns);
-    let (picked, u_light) = match randoms {
-        LightRandoms::Given(u_pick, u_light) => (scene.light_sampler.sample(p, n_ctx, u_pick), u_light),
+    let (picked, u_light, u_shadow) = match randoms {
+        LightRandoms::Given(u_pick, u_light) => (scene.light_sampler.sample(p, n_ctx, u_pick), u_light, None),
         LightRandoms::Sampler(sampler) => {
             let u_pick = if scene.light_sampler.reads_sample() {
                 sampler.get_1d()
@@ -144,7 +144,10 @@ pub(super) fn sample_direct<C: Channels, O: PathObserver<C>>(
                 sampler.skip_2d();
                 Vec2::splat(0.5)
             };
-            (picked, u_light)
+            // The shadow ray's first tentative collision, stratified as the path's are; a
+            // scene without media keeps pbrt-v4's dimensions.
+            let u_shadow = (!scene.media.is_empty()).then(|| sampler.get_1d_shifted());
+            (picked, u_light, u_shadow)
         }
     };
     let (index, pmf) = picked?;
@@ -181,7 +184,7 @@ pub(super) fn sample_direct<C: Channels, O: PathObserver<C>>(
         n,
         (shadow_medium, entered),
         &ls,
-        (st.hero, st.time, extra.unwrap_or(0)),
+        (st.hero, st.time, extra.unwrap_or(0), u_shadow),
         lambda,
         stats,
     )?;

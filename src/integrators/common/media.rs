@@ -96,17 +96,18 @@ impl<C: Channels> Tracking<'_, '_, C> {
     /// end of each majorant segment whether to go on (`false` stops the walk, as a collision's
     /// `false` does).
     #[inline(always)]
-    pub fn run_with_segment_ends<F, E>(
-        &self,
-        mut u: f32,
-        rng: &mut Pcg32,
-        mut callback: F,
-        mut segment_end: E,
-    ) -> Tail<C>
+    pub fn run_with_segment_ends<F, E>(&self, u: f32, rng: &mut Pcg32, mut callback: F, mut segment_end: E) -> Tail<C>
     where
         F: FnMut(&Collision<C>, &mut Pcg32) -> bool,
         E: FnMut(C, &mut Pcg32) -> bool,
     {
+        // The optical depth to the next tentative collision, Exp(1)-distributed. A sample that
+        // passes a segment's end carries what is left of it into the next segment instead of
+        // being drawn anew: by the exponential's memorylessness the excess is Exp(1) and
+        // independent of the segment, so the distances are distributed as pbrt-v4's, and the
+        // first collision stays a monotone function of the sampler's `u` across segments
+        // (stratified as the sampler stratifies `u`) at one logarithm per collision.
+        let mut tau = -(1.0 - u).ln();
         let mut t_s = C::ONE;
         let mut tau_c = C::ZERO;
         for seg in self.medium.segments(self.ray, self.t_max, self.lambda) {
@@ -124,9 +125,9 @@ impl<C: Channels> Tracking<'_, '_, C> {
             }
             let mut t_min = seg.t_min;
             loop {
-                let t = t_min - (1.0 - u).ln() / sigma;
-                u = rng.uniform();
+                let t = t_min + tau / sigma;
                 if t < seg.t_max {
+                    tau = -(1.0 - rng.uniform()).ln();
                     if !gray {
                         t_s *= (sigma_s * (t - t_min)).exp_neg();
                     }
@@ -148,6 +149,7 @@ impl<C: Channels> Tracking<'_, '_, C> {
                     t_min = t;
                 } else {
                     let dt = seg.t_max - t_min;
+                    tau = (tau - sigma * dt).max(0.0);
                     // An infinite segment with σ > 0 has zero transmittance (avoid inf·0).
                     t_s *= match (dt.is_infinite(), gray) {
                         (true, _) => C::ZERO,
@@ -197,8 +199,14 @@ impl<C: Channels> Default for ShadowEstimate<C> {
 /// `path.rs`, `track_medium`) the same, which keeps the MIS weights those of one path space.
 /// With no minorant (σc = 0) this is ratio tracking, number for number; in a homogeneous
 /// medium (σc = σmaj) it is e^(−σt d) without a step.
+///
+/// The first tentative collision is at optical depth −ln(1 − u) for `first_u` (a sampler's
+/// value, so that a pixel's shadow rays are stratified as its paths are), else for a value of
+/// `rng`.
 #[inline]
+#[allow(clippy::too_many_arguments)]
 pub fn ratio_tracking<C: Channels>(
+    first_u: Option<f32>,
     medium: MediumView<'_, C>,
     ray: &Ray,
     t_max: f32,
@@ -207,7 +215,7 @@ pub fn ratio_tracking<C: Channels>(
     lambda: &C::Lambda,
     est: &mut ShadowEstimate<C>,
 ) {
-    let u = rng.uniform();
+    let u = first_u.unwrap_or_else(|| rng.uniform());
     let walk = Tracking { medium, ray, t_max, hero, lambda, residual: true };
     // e^(−∫σc), 1 without evaluating the exponential where there is no control.
     let control = |tau_c: C| if tau_c.is_zero() { C::ONE } else { tau_c.exp_neg() };
@@ -336,7 +344,7 @@ mod tests {
         let mut rng = Pcg32::new(1, 2);
         for hero in [0, 1, 2] {
             let mut est = ShadowEstimate::default();
-            ratio_tracking((&m).into(), &ray, 0.7, &mut rng, hero, &(), &mut est);
+            ratio_tracking(None, (&m).into(), &ray, 0.7, &mut rng, hero, &(), &mut est);
             let t = est.t_ray / crate::color::average(est.r_l);
             assert!((t - exact).abs().max_element() < 1e-6, "hero {hero}: {t} vs {exact}");
             assert_eq!(est.r_l, Rgb::ONE);
@@ -419,7 +427,7 @@ mod heterogeneous_tests {
         assert!(controlled > 0);
         for _ in 0..n {
             let mut est = ShadowEstimate::default();
-            ratio_tracking((&m).into(), &ray, t_max, &mut rng, 0, &(), &mut est);
+            ratio_tracking(None, (&m).into(), &ray, t_max, &mut rng, 0, &(), &mut est);
             ratio += (est.t_ray / crate::color::average(est.r_l)).x as f64;
             let u = rng.uniform();
             let mut escaped = true;

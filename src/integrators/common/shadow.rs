@@ -27,7 +27,7 @@ pub(super) fn transmittance<C: Channels>(
     (n, p_error): (Vec3, f32),
     (mut medium, entered): (u32, Option<MediumPoint<C>>),
     ls: &LightSample<C>,
-    (hero, time, stream): (usize, f32, u64),
+    (hero, time, stream, mut first_u): (usize, f32, u64, Option<f32>),
     lambda: &C::Lambda,
     stats: &mut RayStats,
 ) -> Option<ShadowEstimate<C>> {
@@ -62,7 +62,8 @@ pub(super) fn transmittance<C: Channels>(
             if m.from_entry && entered.is_none() {
                 return None;
             }
-            ratio_tracking(MediumView { medium: m, entered }, &ray, t_max, &mut rng, hero, lambda, &mut est);
+            let view = MediumView { medium: m, entered };
+            ratio_tracking(first_u.take(), view, &ray, t_max, &mut rng, hero, lambda, &mut est);
             if est.t_ray.is_zero() {
                 return None;
             }

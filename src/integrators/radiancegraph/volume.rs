@@ -447,7 +447,7 @@ impl<'a> Volume<'a> {
 /// (see [`Volume::transmittance`]).
 fn ratio_tracked(medium: &Medium, ray: &Ray, t_max: f32, rng: &mut Pcg32) -> f32 {
     let mut est = ShadowEstimate::<Rgb> { t_ray: Rgb::ONE, r_u: Rgb::ZERO, r_l: Rgb::ONE };
-    ratio_tracking(medium.into(), ray, t_max, rng, 0, &(), &mut est);
+    ratio_tracking(None, medium.into(), ray, t_max, rng, 0, &(), &mut est);
     est.t_ray[0] / est.r_l[0]
 }
 

@@ -100,7 +100,7 @@ pub struct HaltonSampler {
     halton_index: u64,
     dimension: u32,
     seed: i32,
-    /// The current pixel, for [`HaltonSampler::get_2d_shifted`].
+    /// The current pixel, for [`HaltonSampler::get_2d_shifted_y`].
     pixel_key: u64,
 }
 
@@ -279,17 +279,17 @@ impl HaltonSampler {
         Vec2::new(self.sample_dimension(d), self.sample_dimension(d + 1))
     }
 
-    /// The next two dimensions, each pixel's rotated (Cranley–Patterson, modulo 1) by a hash
-    /// of the pixel, the dimension and the seed: a pixel's samples stay stratified, and two
-    /// seeds' values no longer share one relation over the whole image (see
-    /// `ZSobolSampler::get_2d_shifted`; the digit permutations are the seed's, global).
-    pub fn get_2d_shifted(&mut self) -> Vec2 {
+    /// The next two dimensions, the second rotated (Cranley–Patterson, modulo 1) per pixel by
+    /// a hash of the pixel, the dimension and the seed: a pixel's samples stay stratified,
+    /// and two seeds' values no longer share one relation over the whole image (see
+    /// `ZSobolSampler::get_2d_shifted_y`; the digit permutations are the seed's, global).
+    pub fn get_2d_shifted_y(&mut self) -> Vec2 {
         let v = self.get_2d();
         let h = self.rotation(self.dimension - 2);
-        Vec2::new(rotate(v.x, h as u32), rotate(v.y, (h >> 32) as u32))
+        Vec2::new(v.x, rotate(v.y, (h >> 32) as u32))
     }
 
-    /// The next dimension, rotated per pixel as [`Self::get_2d_shifted`]'s.
+    /// The next dimension, rotated per pixel as [`Self::get_2d_shifted_y`]'s second.
     pub fn get_1d_shifted(&mut self) -> f32 {
         let v = self.get_1d();
         rotate(v, self.rotation(self.dimension - 1) as u32)

@@ -163,21 +163,21 @@ impl Sampler {
         }
     }
 
-    /// The next two dimensions, for decisions whose images must be independent between
-    /// seeds (a medium walk's first collision and its event): ZSobol's and Halton's values,
+    /// The next two dimensions, the second for decisions whose images must be independent
+    /// between seeds (a medium walk's first event choice): ZSobol's and Halton's values,
     /// randomized once per dimension for the whole image, moved per pixel as well
-    /// ([`ZSobolSampler::get_2d_shifted`], [`HaltonSampler::get_2d_shifted`]); the other
+    /// ([`ZSobolSampler::get_2d_shifted_y`], [`HaltonSampler::get_2d_shifted_y`]); the other
     /// samplers' as they are (they randomize per pixel and seed, or are random).
     #[inline]
-    pub fn get_2d_shifted(&mut self) -> Vec2 {
+    pub fn get_2d_shifted_y(&mut self) -> Vec2 {
         match self {
-            Sampler::ZSobol(s) => s.get_2d_shifted(),
-            Sampler::Halton(s) => s.get_2d_shifted(),
+            Sampler::ZSobol(s) => s.get_2d_shifted_y(),
+            Sampler::Halton(s) => s.get_2d_shifted_y(),
             _ => self.get_2d(),
         }
     }
 
-    /// The next dimension, as [`Self::get_2d_shifted`]'s.
+    /// The next dimension, moved per pixel as [`Self::get_2d_shifted_y`]'s second.
     #[inline]
     pub fn get_1d_shifted(&mut self) -> f32 {
         match self {

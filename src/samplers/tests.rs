@@ -273,9 +273,10 @@ fn sobol_samplers_fill_every_elementary_interval() {
     }
 }
 
-/// The shifted draws (a medium walk's first collision and event) keep a ZSobol pixel's 64
-/// samples in every 8×8 cell and 1/64 stratum once, as the plain draws do, and differ from
-/// them by a shift that changes from pixel to pixel and from seed to seed.
+/// The shifted draws (a medium walk's first event, a shadow ray's first collision) keep a
+/// ZSobol pixel's 64 samples in every 8×8 cell and 1/64 stratum once, as the plain draws do,
+/// and differ from them by a shift that changes from pixel to pixel and from seed to seed
+/// (the pair's first value is the plain one).
 #[test]
 fn shifted_draws_stay_stratified_and_move_per_pixel() {
     let first = |seed: i32, pixel: UVec2| {
@@ -284,7 +285,7 @@ fn shifted_draws_stay_stratified_and_move_per_pixel() {
         let (mut pairs, mut ones, mut plain) = (Vec::new(), Vec::new(), Vec::new());
         for index in 0..64 {
             s.start_pixel_sample(pixel, index, 7);
-            pairs.push(s.get_2d_shifted());
+            pairs.push(s.get_2d_shifted_y());
             ones.push(s.get_1d_shifted());
             s.start_pixel_sample(pixel, index, 7);
             plain.push(s.get_2d());
@@ -302,8 +303,9 @@ fn shifted_draws_stay_stratified_and_move_per_pixel() {
             // The XOR of a shifted and a plain value is the pixel's shift, the same for all
             // its samples (its leading 12 bits, which f32 rounding rarely reaches).
             let xor = |a: f32, b: f32| ((a * 4_294_967_296.0) as u64 ^ (b * 4_294_967_296.0) as u64) >> 20;
-            let shift = xor(pairs[0].x, plain[0].x);
-            let same = pairs.iter().zip(&plain).filter(|(p, q)| xor(p.x, q.x) == shift).count();
+            assert!(pairs.iter().zip(&plain).all(|(p, q)| p.x == q.x), "seed {seed}, {pixel}: the first is plain");
+            let shift = xor(pairs[0].y, plain[0].y);
+            let same = pairs.iter().zip(&plain).filter(|(p, q)| xor(p.y, q.y) == shift).count();
             assert!(same >= 60, "seed {seed}, {pixel}: {same} of 64 samples share the shift");
             shifts.insert(shift);
         }

@@ -15,7 +15,11 @@ fn many_lights(sampler: &str) -> String {
 
 /// On the 70-light street the BVH's error at equal spp is a fraction of power sampling's
 /// (measured: relMSE 0.13 vs 1.35 at 16 spp, 0.025 vs 0.33 in 4 s), and both estimate the
-/// same image: their means agree within the noise they measure.
+/// same image: their means agree within the noise they measure. Errors are the mean over
+/// three seeds: one render's relMSE is heavy-tailed here (the BVH's 0.10–0.28 over 18 seeds).
+/// Since medium walks draw their first collision and event from the sampler, power
+/// sampling's MSE is lower (three seeds: 0.0150 against 0.0186 over six before), the BVH's
+/// 0.0087: the MSE margin is 1.7×, the relMSE margin 4.4×.
 #[test]
 fn light_bvh_beats_power_sampling_with_many_lights() {
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("pbrt-scenes");
@@ -24,17 +28,17 @@ fn light_bvh_beats_power_sampling_with_many_lights() {
         let opts = BuildOptions { spp: Some(16), seed: Some(seed), ..Default::default() };
         render_scene(&load_scene(&many_lights(sampler), &opts))
     };
-    let (bvh, power) = (render("bvh", 1), render("power", 1));
-    let e_bvh = nimbus::metrics::error_metrics(&bvh, &reference).unwrap();
-    let e_power = nimbus::metrics::error_metrics(&power, &reference).unwrap();
+    let errors = |sampler: &str| {
+        let e: Vec<_> =
+            (1..=3).map(|seed| nimbus::metrics::error_metrics(&render(sampler, seed), &reference).unwrap()).collect();
+        (e.iter().map(|e| e.rel_mse).sum::<f64>() / 3.0, e.iter().map(|e| e.mse).sum::<f64>() / 3.0)
+    };
+    let ((bvh_rel, bvh_mse), (power_rel, power_mse)) = (errors("bvh"), errors("power"));
     assert!(
-        e_bvh.rel_mse * 4.0 < e_power.rel_mse && e_bvh.mse * 2.0 < e_power.mse,
-        "bvh relMSE {} MSE {}, power relMSE {} MSE {}",
-        e_bvh.rel_mse,
-        e_bvh.mse,
-        e_power.rel_mse,
-        e_power.mse
+        bvh_rel * 4.0 < power_rel && bvh_mse * 1.5 < power_mse,
+        "bvh relMSE {bvh_rel} MSE {bvh_mse}, power relMSE {power_rel} MSE {power_mse}"
     );
+    let power = render("power", 1);
     // Power sampling estimates the same image as the BVH's reference: the mean of two seeds
     // within 4 standard errors (from the pixels' (A − B)/2) plus 0.5 %.
     let power2 = render("power", 2);

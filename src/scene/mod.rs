@@ -78,6 +78,10 @@ pub struct Scene {
     pub camera_medium: u32,
     /// Whether any medium is chromatic (paths then pick a hero channel).
     pub has_chromatic_media: bool,
+    /// Whether any medium is tracked by collisions (every kind but homogeneous, whose
+    /// transmittance is closed-form): shadow rays then take a sampler dimension for their
+    /// first collision.
+    pub has_tracked_media: bool,
     /// Whether a path can gain anything after its last counted scattering event: a light it
     /// may hit or escape to (area or infinite), or a subsurface medium, whose events do not
     /// count. Where it cannot, volpath's paths end at that event.

@@ -144,9 +144,11 @@ pub(super) fn sample_direct<C: Channels, O: PathObserver<C>>(
                 sampler.skip_2d();
                 Vec2::splat(0.5)
             };
-            // The shadow ray's first tentative collision, stratified as the path's are; a
-            // scene without media keeps pbrt-v4's dimensions.
-            let u_shadow = (!scene.media.is_empty()).then(|| sampler.get_1d_shifted());
+            // The shadow ray's first tentative collision, stratified as the path's are. A
+            // scene without tracked media keeps pbrt-v4's dimensions: there the value would
+            // go unused, and the extra dimension cost many-lights (homogeneous fog, 70
+            // lights) 8 % of its MSE over 18 seeds.
+            let u_shadow = scene.has_tracked_media.then(|| sampler.get_1d_shifted());
             (picked, u_light, u_shadow)
         }
     };

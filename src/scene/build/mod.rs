@@ -253,6 +253,7 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions, needs: &SceneNe
     }
     let infinite_lights = lights.iter().enumerate().filter(|(_, l)| l.is_infinite()).map(|(i, _)| i as u32).collect();
     let light_sampler = LightSampler::new(&lights, &surfaces.shapes, &sphere, needs.light_sampler);
+    let has_tracked_media = media.iter().any(|m| !matches!(m.kind, crate::media::MediumKind::Homogeneous { .. }));
     let continues_past_max_depth = lights.iter().any(|l| l.is_infinite())
         || lights.iter().any(|l| matches!(l.kind, LightKind::Area { .. }))
         || media.iter().any(|m| m.subsurface);
@@ -287,6 +288,7 @@ pub fn build_scene(desc: &SceneDescription, opts: &BuildOptions, needs: &SceneNe
         interfaces,
         camera_medium,
         has_chromatic_media,
+        has_tracked_media,
         continues_past_max_depth,
         sensor,
         transport,

@@ -374,7 +374,7 @@ impl<C: Channels, O: PathObserver<C>> Tracer<'_, C, O> {
         let seed = self.sampler.stream_seed();
         let mut rng = Pcg32::new(seed, seed ^ 0x9e37_79b9_7f4a_7c15);
         let uv = self.sampler.get_2d_shifted_y();
-        let (u, mut u_event) = (uv.x, uv.y);
+        let (u, mut u_event) = (uv.x, Some(uv.y));
         let mut event_scale = 1.0f32;
         let (mut scattered, mut terminated) = (false, false);
         let mut scatter_p = Vec3::ZERO;
@@ -405,8 +405,8 @@ impl<C: Channels, O: PathObserver<C>> Tracer<'_, C, O> {
             // probabilities.
             let p_absorb = mp.sigma_a[hero] / sigma_maj[hero];
             let p_scatter = mp.sigma_s[hero] / sigma_maj[hero];
-            let from_sampler = u_event >= 0.0;
-            let um = if from_sampler { std::mem::replace(&mut u_event, -1.0) } else { rng.uniform() };
+            let from_sampler = u_event.is_some();
+            let um = u_event.take().unwrap_or_else(|| rng.uniform());
             if um < p_absorb {
                 terminated = true;
                 false
@@ -434,7 +434,7 @@ impl<C: Channels, O: PathObserver<C>> Tracer<'_, C, O> {
                 let p_null = 1.0 - p_absorb - p_scatter;
                 if from_sampler && event_scale * p_null >= 1.0 / 256.0 {
                     event_scale *= p_null;
-                    u_event = ((um - p_absorb - p_scatter) / p_null).clamp(0.0, 1.0 - f32::EPSILON);
+                    u_event = Some(((um - p_absorb - p_scatter) / p_null).clamp(0.0, 1.0 - f32::EPSILON));
                 }
                 let sigma_n = (sigma_maj - mp.sigma_a - mp.sigma_s).max(C::ZERO);
                 let sigma_r = (sigma_maj - c.sigma_c).max(C::ZERO);
